@@ -1,0 +1,105 @@
+// `atmo bench`: times the model's precomputation passes and one CPU frame, repeated.
+//
+// Each repeat runs model->Precompute(), builds the view for a sun at 30 degrees elevation, and
+// renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
+// repeats of the pass's last duration (PassTimings), plus "all_luts" (the sum of the model's
+// "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <map>
+
+#include <oneapi/tbb/global_control.h>
+
+#include "atmo/error.h"
+#include "atmo/render.h"
+#include "commands.h"
+
+namespace atmo::cli {
+
+namespace {
+
+// Named samples in order of first appearance.
+class PassSamples {
+ public:
+  void Add(const std::string& name, double ms) {
+    auto found = std::find_if(passes_.begin(), passes_.end(), [&](const auto& p) { return p.first == name; });
+    if (found == passes_.end()) found = passes_.insert(passes_.end(), {name, {}});
+    found->second.push_back(ms);
+  }
+  const std::vector<std::pair<std::string, std::vector<double>>>& passes() const { return passes_; }
+
+ private:
+  std::vector<std::pair<std::string, std::vector<double>>> passes_;
+};
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+bool EndsWith(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+int RunBench(const CommonOptions& common, const BenchCommand& command) {
+  CheckBackend(common);
+  const AtmosphereParameters parameters = LoadParameters(common);
+  const int repeat = command.quick ? 3 : command.repeat;
+
+  RenderSettings settings;
+  settings.camera.kind = CameraKind::kPerspective;
+  settings.camera.width = command.width;
+  settings.camera.height = command.height;
+  settings.camera.fov_deg = 90.0;
+  settings.camera.yaw_deg = 180.0;
+  settings.camera.pitch_deg = 10.0;
+  settings.altitude_m = parameters.observer_altitude_m;
+  settings.sun_elevation_deg = 30.0;
+  settings.sun_azimuth_deg = 180.0;
+
+  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+  const std::string frame_name = Format("frame_%dx%d", command.width, command.height);
+  PassSamples samples;
+  for (int r = 0; r < repeat; ++r) {
+    // Passes run during this repeat are those whose call count grows.
+    std::map<std::string, int> calls_before;
+    for (const PassTiming& pass : model->timings().entries()) calls_before[pass.name] = pass.calls;
+
+    model->Precompute();
+    const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(30.0, 180.0));
+    const auto start = std::chrono::steady_clock::now();
+    const Image image = Render(*model, settings);
+    const double frame_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    double all_luts_ms = 0.0;
+    for (const PassTiming& pass : model->timings().entries()) {
+      const auto before = calls_before.find(pass.name);
+      if (before != calls_before.end() && pass.calls == before->second) continue;
+      samples.Add(pass.name, pass.last_ms);
+      if (EndsWith(pass.name, "_lut")) all_luts_ms += pass.last_ms;
+    }
+    samples.Add("all_luts", all_luts_ms);
+    samples.Add(frame_name, frame_ms);
+  }
+
+  const std::size_t threads =
+      oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism);
+  std::printf("atmo bench: model %s, preset %s, %zu threads, %d repeats, %dx%d frame\n",
+              std::string(model->name()).c_str(), parameters.name.c_str(), threads, repeat, command.width,
+              command.height);
+  std::size_t width = 4;
+  for (const auto& [name, values] : samples.passes()) width = std::max(width, name.size());
+  std::printf("%-*s  %10s  %10s  %10s\n", static_cast<int>(width), "pass", "median_ms", "min_ms", "max_ms");
+  for (const auto& [name, values] : samples.passes()) {
+    std::printf("%-*s  %10.3f  %10.3f  %10.3f\n", static_cast<int>(width), name.c_str(), Median(values),
+                *std::min_element(values.begin(), values.end()), *std::max_element(values.begin(), values.end()));
+  }
+  return 0;
+}
+
+}  // namespace atmo::cli

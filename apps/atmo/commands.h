@@ -1,0 +1,90 @@
+// The subcommands of the `atmo` program, one function each, behind plain option structs.
+//
+// main.cc owns the command-line parsing (CLI11 lives in that one file only) and fills these
+// structs; each Run* function calls the library and reports. Every Run* function throws
+// atmo::Error with a one-line message for anything the user got wrong, and returns the exit code.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+
+namespace atmo::cli {
+
+// The flags every subcommand takes (DESIGN.md §4).
+struct CommonOptions {
+  std::string model = "hillaire";
+  std::string preset = "earth";
+  std::string config;  // a JSON parameters file; when set, `preset` is not used
+  std::string backend = "cpu";
+  int threads = 0;  // 0: oneTBB's default
+  // Accepted for every model. Deterministic models ignore it; a Monte Carlo model will receive it
+  // (see CreateModelFor).
+  std::uint64_t seed = 0;
+  bool seed_given = false;
+  std::vector<std::string> options;  // KEY=VALUE strings for atmo::ModelOptions
+};
+
+// The parameters named by --preset or --config. Throws atmo::Error.
+AtmosphereParameters LoadParameters(const CommonOptions& common);
+// Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
+ModelOptions ParseModelOptions(const std::vector<std::string>& options);
+// Throws atmo::Error for a backend this build does not have.
+void CheckBackend(const CommonOptions& common);
+// Creates (and so precomputes) the model named by --model with the --option settings.
+std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
+// Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
+// writable, or the path is a folder.
+void CheckOutputWritable(const std::filesystem::path& path);
+// printf-style formatting into a std::string.
+std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
+struct RenderCommand {
+  std::string camera = "perspective";
+  int width = 1280;
+  int height = 720;
+  double fov_deg = 90.0;
+  std::optional<double> yaw_deg;  // default: the sun azimuth (look towards the sun)
+  double pitch_deg = 10.0;
+  double sun_elevation_deg = 10.0;
+  double sun_azimuth_deg = 180.0;
+  std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
+  std::optional<double> exposure;    // default: parameters.exposure
+  std::string tonemap = "exp";
+  double gamma = 2.2;
+  bool no_sun_disc = false;
+  std::string exr_path = "sky.exr";  // empty: no EXR
+  std::string png_path = "sky.png";  // empty: no PNG
+};
+int RunRender(const CommonOptions& common, const RenderCommand& command);
+
+struct SampleCommand {
+  std::string grid_path;  // a CSV grid; empty: the single configuration below
+  std::string out_path;   // empty: stdout
+  std::optional<double> altitude_m;
+  std::optional<double> sun_zenith_deg;
+  std::optional<double> view_zenith_deg;
+  std::optional<double> azimuth_deg;
+};
+int RunSample(const CommonOptions& common, const SampleCommand& command);
+
+struct PresetsCommand {
+  std::string dump;  // a preset name to print as JSON; empty: list the presets
+};
+int RunPresets(const CommonOptions& common, const PresetsCommand& command);
+
+struct BenchCommand {
+  int repeat = 10;
+  bool quick = false;  // repeat 3 times
+  int width = 1920;
+  int height = 1080;
+};
+int RunBench(const CommonOptions& common, const BenchCommand& command);
+
+}  // namespace atmo::cli

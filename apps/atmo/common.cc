@@ -1,0 +1,73 @@
+// Helpers shared by the subcommands of `atmo`: parameters, model options, output checks.
+#include <unistd.h>
+
+#include <cstdarg>
+#include <cstdio>
+#include <system_error>
+
+#include "atmo/error.h"
+#include "commands.h"
+
+namespace atmo::cli {
+
+namespace fs = std::filesystem;
+
+AtmosphereParameters LoadParameters(const CommonOptions& common) {
+  if (!common.config.empty()) return LoadParametersFile(common.config);
+  return Preset(common.preset);
+}
+
+ModelOptions ParseModelOptions(const std::vector<std::string>& options) {
+  ModelOptions parsed;
+  for (const std::string& option : options) {
+    const std::size_t equals = option.find('=');
+    if (equals == std::string::npos || equals == 0) {
+      throw Error("--option expects KEY=VALUE, got '" + option + "'");
+    }
+    const std::string key = option.substr(0, equals);
+    if (!parsed.emplace(key, option.substr(equals + 1)).second) {
+      throw Error("--option " + key + " is given more than once");
+    }
+  }
+  return parsed;
+}
+
+void CheckBackend(const CommonOptions& common) {
+  if (common.backend == "gl") throw Error("the gl backend is not available in this build");
+  if (common.backend != "cpu") throw Error("unknown backend '" + common.backend + "' (known: cpu, gl)");
+}
+
+std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {
+  // Hook for Monte Carlo models: when one exists, pass common.seed to it (for example as the
+  // "seed" option); deterministic models reject unknown options, so it is not passed to them.
+  return CreateModel(common.model, parameters, ParseModelOptions(common.options));
+}
+
+void CheckOutputWritable(const fs::path& path) {
+  fs::path folder = path.parent_path();
+  if (folder.empty()) folder = ".";
+  std::error_code error;
+  const std::string prefix = "cannot write '" + path.string() + "': ";
+  if (!fs::is_directory(folder, error)) {
+    throw Error(prefix + "folder '" + folder.string() + "' does not exist");
+  }
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    throw Error(prefix + "folder '" + folder.string() + "' is not writable");
+  }
+  if (fs::is_directory(path, error)) throw Error(prefix + "it is a folder");
+}
+
+std::string Format(const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  va_list copy;
+  va_copy(copy, args);
+  const int size = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  std::string text(size > 0 ? static_cast<std::size_t>(size) : 0, '\0');
+  if (size > 0) std::vsnprintf(text.data(), text.size() + 1, format, args);
+  va_end(args);
+  return text;
+}
+
+}  // namespace atmo::cli

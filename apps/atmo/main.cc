@@ -1,0 +1,210 @@
+// atmo: the command line of the atmo sky library (DESIGN.md §4).
+//
+//   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [--exr F] [--png F]
+//   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv | --altitude --sun-zenith
+//                --view-zenith --azimuth) [--out OUT.csv]
+//   atmo presets [--dump NAME]
+//   atmo bench   [--repeat N | --quick] [--width W --height H]
+// Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
+//
+// This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
+// structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
+// for a command line that does not parse, 1 for anything else.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <oneapi/tbb/global_control.h>
+
+#include "atmo/error.h"
+#include "atmo/render.h"
+#include "commands.h"
+
+namespace {
+
+using atmo::cli::CommonOptions;
+
+// Prints `atmo: error: <message>` as one line on stderr.
+void PrintError(const std::string& message) {
+  std::string line = message;
+  for (char& c : line) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  std::fprintf(stderr, "atmo: error: %s\n", line.c_str());
+}
+
+// Rejects "nan", "inf" and anything that is not a number (CLI11 would accept nan and inf).
+const CLI::Validator kFinite(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      const double value = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
+      if (!std::isfinite(value)) return "must be a finite number, got '" + text + "'";
+      return {};
+    },
+    "FINITE", "FINITE");
+
+const CLI::Validator kPositive(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      const double value = std::strtod(text.c_str(), &end);
+      if (!(value > 0.0)) return "must be positive, got '" + text + "'";
+      return {};
+    },
+    "POSITIVE", "POSITIVE");
+
+// Adds a floating-point option that must be finite.
+CLI::Option* AddNumber(CLI::App* app, const std::string& name, double& value, const std::string& help) {
+  return app->add_option(name, value, help)->check(kFinite)->capture_default_str();
+}
+
+// An option whose default depends on other values: set only when given.
+CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::optional<double>& value,
+                               const std::string& help) {
+  return app
+      ->add_option_function<double>(
+          name, [&value](const double& v) { value = v; }, help)
+      ->check(kFinite);
+}
+
+void AddCommonOptions(CLI::App* app, CommonOptions& common) {
+  app->add_option("--model", common.model, "sky model (hillaire, ...)")->capture_default_str();
+  CLI::Option* preset =
+      app->add_option("--preset", common.preset, "parameter preset (see `atmo presets`)")->capture_default_str();
+  CLI::Option* config = app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
+  preset->excludes(config);
+  app->add_option("--backend", common.backend, "cpu or gl")
+      ->check(CLI::IsMember({"cpu", "gl"}))
+      ->capture_default_str();
+  app->add_option("--threads", common.threads, "worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  app->add_option_function<std::uint64_t>(
+      "--seed",
+      [&common](const std::uint64_t& seed) {
+        common.seed = seed;
+        common.seed_given = true;
+      },
+      "random seed for Monte Carlo models (deterministic models ignore it)");
+  app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")->expected(1)->take_all();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"atmo: physically based sky rendering", "atmo"};
+  app.set_version_flag("--version", std::string("atmo ") + ATMO_VERSION);
+  app.require_subcommand(0, 1);
+
+  CommonOptions common;
+
+  atmo::cli::RenderCommand render;
+  CLI::App* render_app = app.add_subcommand("render", "render a sky image (EXR + tone-mapped PNG)");
+  AddCommonOptions(render_app, common);
+  render_app->add_option("--camera", render.camera, "perspective, fisheye or equirect")
+      ->check(CLI::IsMember({"perspective", "fisheye", "equirect"}))
+      ->capture_default_str();
+  const std::string side_help = " in pixels, 1.." + std::to_string(atmo::kMaxImageSide);
+  render_app->add_option("--width", render.width, "image width" + side_help)
+      ->check(CLI::Range(1, atmo::kMaxImageSide))
+      ->capture_default_str();
+  render_app->add_option("--height", render.height, "image height" + side_help)
+      ->check(CLI::Range(1, atmo::kMaxImageSide))
+      ->capture_default_str();
+  AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
+      ->check(CLI::Range(0.0, 180.0));
+  AddOptionalNumber(render_app, "--yaw", render.yaw_deg, "compass azimuth of the view in degrees [default: the sun's]");
+  AddNumber(render_app, "--pitch", render.pitch_deg, "elevation of the view in degrees")->check(CLI::Range(-90.0, 90.0));
+  AddNumber(render_app, "--sun-elevation", render.sun_elevation_deg, "sun elevation in degrees")
+      ->check(CLI::Range(-90.0, 90.0));
+  AddNumber(render_app, "--sun-azimuth", render.sun_azimuth_deg, "sun compass azimuth in degrees");
+  AddOptionalNumber(render_app, "--altitude", render.altitude_m,
+                    "observer altitude in metres [default: the preset's]");
+  AddOptionalNumber(render_app, "--exposure", render.exposure, "tone-mapping exposure [default: the preset's]")
+      ->check(kPositive);
+  render_app->add_option("--tonemap", render.tonemap, "exp, aces or none")
+      ->check(CLI::IsMember({"exp", "aces", "none"}))
+      ->capture_default_str();
+  AddNumber(render_app, "--gamma", render.gamma, "display gamma")->check(CLI::Range(0.1, 10.0));
+  render_app->add_flag("--no-sun-disc", render.no_sun_disc, "leave the sun disc out");
+  render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
+  render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")->capture_default_str();
+
+  atmo::cli::SampleCommand sample;
+  CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
+  AddCommonOptions(sample_app, common);
+  CLI::Option* grid = sample_app->add_option(
+      "--grid", sample.grid_path, "CSV with header altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg");
+  sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
+  CLI::Option* single[] = {
+      AddOptionalNumber(sample_app, "--altitude", sample.altitude_m, "observer altitude in metres"),
+      AddOptionalNumber(sample_app, "--sun-zenith", sample.sun_zenith_deg, "sun zenith angle in degrees [0, 180]")
+          ->check(CLI::Range(0.0, 180.0)),
+      AddOptionalNumber(sample_app, "--view-zenith", sample.view_zenith_deg, "view zenith angle in degrees [0, 180]")
+          ->check(CLI::Range(0.0, 180.0)),
+      AddOptionalNumber(sample_app, "--azimuth", sample.azimuth_deg,
+                        "azimuth between view and sun in degrees (0: towards the sun)"),
+  };
+  for (CLI::Option* option : single) grid->excludes(option);
+
+  atmo::cli::PresetsCommand presets;
+  CLI::App* presets_app = app.add_subcommand("presets", "list the presets, or print one as JSON");
+  AddCommonOptions(presets_app, common);
+  presets_app->add_option("--dump", presets.dump, "print this preset as JSON (accepted back by --config)");
+
+  atmo::cli::BenchCommand bench;
+  CLI::App* bench_app = app.add_subcommand("bench", "time the precomputation passes and a frame");
+  AddCommonOptions(bench_app, common);
+  CLI::Option* repeat =
+      bench_app->add_option("--repeat", bench.repeat, "repetitions")->check(CLI::Range(1, 100000))->capture_default_str();
+  bench_app->add_flag("--quick", bench.quick, "3 repetitions")->excludes(repeat);
+  bench_app->add_option("--width", bench.width, "frame width" + side_help)
+      ->check(CLI::Range(1, atmo::kMaxImageSide))
+      ->capture_default_str();
+  bench_app->add_option("--height", bench.height, "frame height" + side_help)
+      ->check(CLI::Range(1, atmo::kMaxImageSide))
+      ->capture_default_str();
+
+  try {
+    app.parse(argc, argv);
+    if (sample_app->parsed() && sample.grid_path.empty()) {
+      for (CLI::Option* option : single) {
+        if (option->count() == 0) {
+          throw CLI::RequiredError("without --grid, " + option->get_name() +
+                                   " is required (give --altitude, --sun-zenith, --view-zenith and --azimuth)");
+        }
+      }
+    }
+  } catch (const CLI::Success& success) {
+    return app.exit(success);  // --help, --version
+  } catch (const CLI::ParseError& error) {
+    PrintError(error.what());
+    return 2;
+  }
+
+  if (app.get_subcommands().empty()) {
+    std::fputs(app.help().c_str(), stderr);
+    return 2;
+  }
+
+  try {
+    std::optional<oneapi::tbb::global_control> thread_limit;
+    if (common.threads > 0) {
+      thread_limit.emplace(oneapi::tbb::global_control::max_allowed_parallelism,
+                           static_cast<std::size_t>(common.threads));
+    }
+    if (render_app->parsed()) return atmo::cli::RunRender(common, render);
+    if (sample_app->parsed()) return atmo::cli::RunSample(common, sample);
+    if (presets_app->parsed()) return atmo::cli::RunPresets(common, presets);
+    if (bench_app->parsed()) return atmo::cli::RunBench(common, bench);
+    return 2;
+  } catch (const atmo::Error& error) {
+    PrintError(error.what());
+  } catch (const std::exception& error) {
+    PrintError(error.what());
+  }
+  return 1;
+}

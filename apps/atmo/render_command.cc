@@ -1,0 +1,94 @@
+// `atmo render`: one frame of a model through a camera, written as EXR (linear, with metadata)
+// and PNG (tone-mapped).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "atmo/error.h"
+#include "atmo/image.h"
+#include "atmo/render.h"
+#include "commands.h"
+
+namespace atmo::cli {
+
+namespace {
+
+// "v0, v1, v2" with %.10g per value.
+std::string JoinValues(const std::vector<double>& values) {
+  std::string text;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) text += ", ";
+    text += Format("%.10g", values[i]);
+  }
+  return text;
+}
+
+}  // namespace
+
+int RunRender(const CommonOptions& common, const RenderCommand& command) {
+  CheckBackend(common);
+  const AtmosphereParameters parameters = LoadParameters(common);
+
+  RenderSettings settings;
+  settings.camera.kind = ParseCameraKind(command.camera);
+  settings.camera.width = command.width;
+  settings.camera.height = command.height;
+  settings.camera.fov_deg = command.fov_deg;
+  settings.camera.yaw_deg = command.yaw_deg.value_or(command.sun_azimuth_deg);
+  settings.camera.pitch_deg = command.pitch_deg;
+  settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
+  settings.sun_elevation_deg = command.sun_elevation_deg;
+  settings.sun_azimuth_deg = command.sun_azimuth_deg;
+  settings.sun_disc = !command.no_sun_disc;
+  if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
+
+  ToneMapping mapping;
+  mapping.op = ParseToneMapper(command.tonemap);
+  mapping.exposure = command.exposure.value_or(parameters.exposure);
+  mapping.gamma = command.gamma;
+
+  // Fail fast, before precomputing anything, when an output cannot be written.
+  if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
+  if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
+
+  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+
+  const auto start = std::chrono::steady_clock::now();
+  const Image image = Render(*model, settings);
+  const double render_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<std::string> written;
+  if (!command.exr_path.empty()) {
+    const ImageMetadata metadata = {
+        {"atmo:version", ATMO_VERSION},
+        {"atmo:model", std::string(model->name())},
+        {"atmo:preset", parameters.name},
+        {"atmo:parameterHash", ParameterHashHex(parameters)},
+        {"atmo:radianceUnit", "sr^-1 per unit solar irradiance, times solar_irradiance (" +
+                                  JoinValues(parameters.solar_irradiance) + ")"},
+        {"atmo:renderTimeMs", Format("%.3f", render_ms)},
+        {"atmo:camera", std::string(ToString(settings.camera.kind))},
+        {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
+        {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
+        {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
+        {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
+    };
+    WriteExr(command.exr_path, image, metadata);
+    written.push_back(command.exr_path);
+  }
+  if (!command.png_path.empty()) {
+    WritePng(command.png_path, image, mapping);
+    written.push_back(command.png_path);
+  }
+
+  std::string files;
+  for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
+  std::printf("%s %s (%dx%d %s, %s, %s) in %.1f ms\n", written.empty() ? "rendered" : "wrote",
+              written.empty() ? "nothing" : files.c_str(), image.width, image.height,
+              std::string(ToString(settings.camera.kind)).c_str(), std::string(model->name()).c_str(),
+              parameters.name.c_str(), render_ms);
+  return 0;
+}
+
+}  // namespace atmo::cli

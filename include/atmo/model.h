@@ -1,0 +1,110 @@
+// The model interface that every sky model implements (DESIGN.md §1).
+//
+// To use it:
+//   auto model = atmo::CreateModel("hillaire", atmo::Preset("earth"));   // precomputes its tables
+//   glm::dvec3 sun = atmo::DirectionFromZenithAzimuth(glm::radians(60.0), 0.0);
+//   auto sky = model->View(/*altitude_m=*/0.0, sun);                     // per-observer state
+//   std::vector<double> L(model->channel_count());
+//   sky->Radiance(atmo::DirectionFromZenithAzimuth(glm::radians(80.0), glm::radians(90.0)), L);
+//
+// Frame: the observer's local frame, x = east, y = north, z = up; directions are unit vectors.
+// Units (DESIGN.md §2): radiance per unit solar irradiance at the top of the atmosphere (sr^-1),
+// per channel; transmittance unitless. Radiance excludes the sun disc and, for rays that meet the
+// ground, the ground's own reflected light.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "atmo/parameters.h"
+#include "atmo/timing.h"
+
+namespace atmo {
+
+// Model settings as key=value strings (`--option key=value` on the command line); each model
+// documents its keys and rejects unknown ones.
+using ModelOptions = std::map<std::string, std::string>;
+
+// A model bound to one observer altitude and one sun direction: what a frame needs. Creating it
+// may precompute per-view tables (the sky-view table of `hillaire`). Thread-safe for queries.
+class SkyView {
+ public:
+  virtual ~SkyView() = default;
+
+  // Scattered radiance towards the observer along `view`, all orders the model has; one value
+  // per channel into `out` (size channel_count()).
+  virtual void Radiance(const glm::dvec3& view, std::span<double> out) const = 0;
+  // Transmittance along `view` to the top of the atmosphere; 0 where the ray meets the ground.
+  virtual void Transmittance(const glm::dvec3& view, std::span<double> out) const = 0;
+  // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance.
+  virtual void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const = 0;
+
+  // Radiance (plus the sun disc when asked) for many directions, written as floats with
+  // channel_count() values per direction. The default loops over Radiance; models override it
+  // with a faster path. Directions of length 0 are skipped (left at 0).
+  virtual void RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const;
+
+  // Aerial perspective: the radiance scattered towards the observer between it and the point at
+  // `distance_m` along `view`, and the transmittance over that segment. Throws atmo::Error for a
+  // model that does not provide it.
+  virtual void ScatteringAlongSegment(const glm::dvec3& view, double distance_m, std::span<double> radiance,
+                                      std::span<double> transmittance) const;
+
+  double altitude_m() const { return altitude_m_; }
+  const glm::dvec3& sun_direction() const { return sun_direction_; }
+  std::size_t channel_count() const { return channel_count_; }
+
+ protected:
+  SkyView(double altitude_m, const glm::dvec3& sun_direction, std::size_t channel_count)
+      : altitude_m_(altitude_m), sun_direction_(sun_direction), channel_count_(channel_count) {}
+
+ private:
+  double altitude_m_;
+  glm::dvec3 sun_direction_;
+  std::size_t channel_count_;
+};
+
+class Model {
+ public:
+  virtual ~Model() = default;
+
+  virtual std::string_view name() const = 0;
+  // (Re)computes the model's tables; CreateModel calls it once. Timed per pass in timings().
+  virtual void Precompute() = 0;
+  // State for one observer altitude (metres; negative below the boundary plane of a half-space)
+  // and one sun direction (unit, towards the sun). Throws atmo::Error for a non-finite input.
+  virtual std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const = 0;
+
+  const AtmosphereParameters& parameters() const { return parameters_; }
+  std::size_t channel_count() const { return parameters_.channel_count(); }
+  // Per-pass times of Precompute() and of the per-view tables View() builds.
+  const PassTimings& timings() const { return timings_; }
+
+ protected:
+  explicit Model(AtmosphereParameters parameters) : parameters_(std::move(parameters)) {}
+  // Adds a pass time; safe to call from const methods and from several threads.
+  void RecordPass(std::string_view pass, double ms) const;
+
+ private:
+  AtmosphereParameters parameters_;
+  mutable std::mutex timings_mutex_;
+  mutable PassTimings timings_;
+};
+
+// Creates and precomputes a model by name. Throws atmo::Error for an unknown model (listing the
+// known ones), an unknown or invalid option, or parameters the model cannot handle.
+std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParameters& parameters,
+                                   const ModelOptions& options = {});
+std::vector<std::string> ModelNames();
+
+// Unit direction with the given zenith angle and compass azimuth (radians) in the local frame.
+glm::dvec3 DirectionFromZenithAzimuth(double zenith_rad, double azimuth_rad);
+
+}  // namespace atmo

@@ -1,0 +1,50 @@
+// Named pass timings: every parallel pass of atmo has a name and a timer.
+//
+// To use it: { ScopedPassTimer t(timings, "transmittance_lut"); ...work... }  then read
+// timings.entries() (in order of first use; a pass run again accumulates calls and time).
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace atmo {
+
+struct PassTiming {
+  std::string name;
+  double total_ms = 0.0;
+  int calls = 0;
+  double last_ms = 0.0;
+};
+
+class PassTimings {
+ public:
+  void Add(std::string_view name, double ms);
+  const std::vector<PassTiming>& entries() const { return entries_; }
+  // Last duration of the named pass in milliseconds, or -1 if it never ran.
+  double LastMs(std::string_view name) const;
+  void Clear() { entries_.clear(); }
+
+ private:
+  std::vector<PassTiming> entries_;
+};
+
+class ScopedPassTimer {
+ public:
+  ScopedPassTimer(PassTimings& timings, std::string_view name)
+      : timings_(timings), name_(name), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedPassTimer() {
+    const auto end = std::chrono::steady_clock::now();
+    timings_.Add(name_, std::chrono::duration<double, std::milli>(end - start_).count());
+  }
+  ScopedPassTimer(const ScopedPassTimer&) = delete;
+  ScopedPassTimer& operator=(const ScopedPassTimer&) = delete;
+
+ private:
+  PassTimings& timings_;
+  std::string name_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace atmo

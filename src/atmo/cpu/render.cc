@@ -1,0 +1,107 @@
+// CPU rendering: camera rays from the shared camera kernel, radiance from the model, rows in
+// parallel with oneTBB.
+#include "atmo/render.h"
+
+#include <cmath>
+#include <string>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "cpu/camera.h"
+
+namespace atmo {
+namespace {
+
+void CheckFinite(double value, const char* name) {
+  if (!std::isfinite(value)) throw Error(std::string(name) + " must be finite");
+}
+
+}  // namespace
+
+shared::CameraParameters ToSharedCamera(const Camera& camera) {
+  shared::CameraParameters c;
+  c.kind = camera.kind == CameraKind::kFisheye    ? shared::kCameraFisheye
+           : camera.kind == CameraKind::kEquirect ? shared::kCameraEquirect
+                                                  : shared::kCameraPerspective;
+  c.width = camera.width;
+  c.height = camera.height;
+  c.horizontal_fov = glm::radians(camera.fov_deg);
+  c.yaw = glm::radians(camera.yaw_deg);
+  c.pitch = glm::radians(camera.pitch_deg);
+  return c;
+}
+
+void ValidateCamera(const Camera& camera) {
+  if (camera.width < 1 || camera.height < 1 || camera.width > kMaxImageSide || camera.height > kMaxImageSide) {
+    throw Error("image size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                " is outside 1.." + std::to_string(kMaxImageSide) + " pixels per side");
+  }
+  CheckFinite(camera.fov_deg, "fov");
+  CheckFinite(camera.yaw_deg, "yaw");
+  CheckFinite(camera.pitch_deg, "pitch");
+  if (camera.kind == CameraKind::kPerspective && (camera.fov_deg <= 0.0 || camera.fov_deg >= 180.0)) {
+    throw Error("fov must be in (0, 180) degrees for a perspective camera");
+  }
+}
+
+glm::dvec3 SunDirection(double elevation_deg, double azimuth_deg) {
+  return DirectionFromZenithAzimuth(glm::radians(90.0 - elevation_deg), glm::radians(azimuth_deg));
+}
+
+Image Render(const Model& model, const RenderSettings& settings) {
+  ValidateCamera(settings.camera);
+  CheckFinite(settings.altitude_m, "altitude");
+  CheckFinite(settings.sun_elevation_deg, "sun elevation");
+  CheckFinite(settings.sun_azimuth_deg, "sun azimuth");
+  const std::size_t channels = model.channel_count();
+  if (channels != 3) {
+    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
+                std::to_string(channels));
+  }
+  const std::unique_ptr<SkyView> sky =
+      model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
+  const shared::CameraParameters camera = ToSharedCamera(settings.camera);
+  const std::vector<double>& irradiance = model.parameters().solar_irradiance;
+  const int width = settings.camera.width;
+  Image image(width, settings.camera.height, 3);
+  const bool has_alpha = settings.camera.kind == CameraKind::kFisheye;
+  if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
+
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
+    std::vector<glm::dvec3> views(width);
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < width; ++x) {
+        shared::vec3 direction;
+        const bool seen = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), direction);
+        views[x] = seen ? direction : glm::dvec3(0.0);
+        if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
+      }
+      float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
+      sky->RadianceBatch(views, settings.sun_disc, std::span<float>(row, static_cast<std::size_t>(width) * 3));
+      for (int x = 0; x < width; ++x) {
+        for (int c = 0; c < 3; ++c) row[3 * x + c] *= static_cast<float>(irradiance[c]);
+      }
+    }
+  });
+  return image;
+}
+
+CameraKind ParseCameraKind(std::string_view name) {
+  if (name == "perspective") return CameraKind::kPerspective;
+  if (name == "fisheye") return CameraKind::kFisheye;
+  if (name == "equirect") return CameraKind::kEquirect;
+  throw Error("unknown camera '" + std::string(name) + "' (use perspective, fisheye or equirect)");
+}
+
+std::string_view ToString(CameraKind kind) {
+  switch (kind) {
+    case CameraKind::kPerspective: return "perspective";
+    case CameraKind::kFisheye: return "fisheye";
+    case CameraKind::kEquirect: return "equirect";
+  }
+  return "perspective";
+}
+
+}  // namespace atmo

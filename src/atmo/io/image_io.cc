@@ -1,0 +1,347 @@
+// Image files: atomic writes, tone mapping, float EXR (OpenEXR) and 8-bit PNG (libpng).
+//
+// Contracts (see include/atmo/image.h):
+// - Every writer goes through WriteFileAtomically: the format code writes a temporary file beside
+//   the target and only a complete file is renamed onto it. Format code reports a failure by
+//   throwing any std::exception whose what() is the bare reason; WriteFileAtomically adds
+//   "cannot write 'path': ".
+// - ReadExr returns the string attributes sorted by name: OpenEXR keeps a header's attributes in a
+//   map, so the order in which they were written is not stored in the file.
+// - Every message is one line (newlines in library messages are replaced by spaces).
+#include <png.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include <ImfChannelList.h>
+#include <ImfCompression.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStdIO.h>
+#include <ImfStringAttribute.h>
+
+#include "atmo/error.h"
+#include "atmo/image.h"
+
+namespace atmo {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Our messages are one line; user input and library messages (Iex in particular) may hold newlines.
+std::string OneLine(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  std::replace(text.begin(), text.end(), '\r', ' ');
+  return text;
+}
+
+// A library's reason, on one line without trailing blanks.
+std::string Reason(const std::string& text) {
+  std::string line = OneLine(text);
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  return line;
+}
+
+std::string WriteError(const fs::path& path, const std::string& reason) {
+  return "cannot write '" + OneLine(path.string()) + "': " + Reason(reason);
+}
+
+std::string ReadError(const fs::path& path, const std::string& reason) {
+  return "cannot read '" + OneLine(path.string()) + "': " + Reason(reason);
+}
+
+// Checks the layout invariants of Image; returns the first violation, or nothing.
+std::optional<std::string> ImageProblem(const Image& image) {
+  if (image.width <= 0 || image.height <= 0) {
+    return "invalid image size " + std::to_string(image.width) + "x" + std::to_string(image.height);
+  }
+  if (image.channels <= 0) return "invalid channel count " + std::to_string(image.channels);
+  const std::size_t pixel_count = static_cast<std::size_t>(image.width) * image.height;
+  const std::size_t expected = pixel_count * image.channels;
+  if (image.pixels.size() != expected) {
+    return "image has " + std::to_string(image.pixels.size()) + " values, expected " + std::to_string(expected) +
+           " (" + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+           std::to_string(image.channels) + ")";
+  }
+  if (!image.alpha.empty() && image.alpha.size() != pixel_count) {
+    return "alpha has " + std::to_string(image.alpha.size()) + " values, expected " + std::to_string(pixel_count);
+  }
+  return std::nullopt;
+}
+
+// EXR channel name of image channel c: R, G, B for an RGB image, else C0, C1, ...
+std::string ExrChannelName(int channel, int channel_count) {
+  if (channel_count == 3) return std::string(1, "RGB"[channel]);
+  // Appending rather than "C" + to_string(...): g++ 12 -O3 gives a false -Wrestrict on the latter.
+  std::string name = "C";
+  name += std::to_string(channel);
+  return name;
+}
+
+// Alpha in [0, 1]; NaN counts as 0 (no coverage).
+float ClampAlpha(float a) { return a > 0.0f ? std::min(a, 1.0f) : 0.0f; }
+
+// 8-bit code of a display value in [0, 1]: round(255 * v).
+png_byte ToByte(float display_value) {
+  return static_cast<png_byte>(std::lround(255.0 * static_cast<double>(display_value)));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Tone mapping.
+
+float ToneMapValue(float linear, const ToneMapping& mapping) {
+  // `!(linear > 0)` also catches NaN.
+  if (!(linear > 0.0f)) return 0.0f;
+  const double v = mapping.exposure * static_cast<double>(linear);
+  if (std::isnan(v) || v <= 0.0) return 0.0f;
+  double t = 0.0;
+  switch (mapping.op) {
+    case ToneMapper::kExponential:
+      t = 1.0 - std::exp(-v);
+      break;
+    case ToneMapper::kAces:
+      // Narkowicz 2015, "ACES Filmic Tone Mapping Curve": x(a x + b) / (x(c x + d) + e). It is
+      // increasing for x >= 0 and reaches 1 near x = 7.24; for huge x the ratio is inf/inf, whose
+      // limit 2.51/2.43 > 1 clamps to 1.
+      t = (v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14);
+      if (std::isnan(t)) t = 1.0;
+      break;
+    case ToneMapper::kNone:
+      t = v;
+      break;
+  }
+  t = std::clamp(t, 0.0, 1.0);
+  if (mapping.gamma != 1.0) t = std::pow(t, 1.0 / mapping.gamma);
+  return static_cast<float>(t);
+}
+
+ToneMapper ParseToneMapper(const std::string& name) {
+  if (name == "exp" || name == "exponential") return ToneMapper::kExponential;
+  if (name == "aces") return ToneMapper::kAces;
+  if (name == "none") return ToneMapper::kNone;
+  throw Error("unknown tone mapper '" + OneLine(name) + "' (use exp, aces or none)");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Atomic writes.
+
+void WriteFileAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (path.empty()) throw Error("cannot write '': empty path");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error(WriteError(path, "is a directory"));
+  if (!path.has_filename()) throw Error(WriteError(path, "the path names no file"));
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (!fs::exists(dir, ec)) {
+    throw Error(WriteError(path, "directory '" + dir.string() + "' does not exist"));
+  }
+  if (!fs::is_directory(dir, ec)) {
+    throw Error(WriteError(path, "'" + dir.string() + "' is not a directory"));
+  }
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+    throw Error(WriteError(path, "directory '" + dir.string() + "' is not writable"));
+  }
+
+  // Hidden, unique per process and call, in the same directory so that rename is atomic.
+  static std::atomic<unsigned> counter{0};
+  std::string temporary_name = ".";
+  temporary_name += path.filename().string();
+  temporary_name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
+  const fs::path temporary = dir / temporary_name;
+  auto discard = [&] {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+  };
+
+  try {
+    write(temporary);
+  } catch (const std::exception& e) {
+    discard();
+    throw Error(WriteError(path, e.what()));
+  } catch (...) {
+    discard();
+    throw Error(WriteError(path, "unknown error"));
+  }
+  if (!fs::is_regular_file(temporary, ec)) {
+    discard();
+    throw Error(WriteError(path, "the writer produced no file"));
+  }
+  fs::rename(temporary, path, ec);
+  if (ec) {
+    discard();
+    throw Error(WriteError(path, ec.message()));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// EXR.
+
+void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& metadata) {
+  if (auto problem = ImageProblem(image)) throw Error(WriteError(path, *problem));
+
+  // Build the header before touching the file system, so that bad metadata creates nothing.
+  Imf::Header header(image.width, image.height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  std::vector<std::string> names;
+  for (int c = 0; c < image.channels; ++c) names.push_back(ExrChannelName(c, image.channels));
+  for (const std::string& name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+  if (!image.alpha.empty()) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
+  std::set<std::string> seen;
+  for (const auto& [name, value] : metadata) {
+    if (name.empty()) throw Error(WriteError(path, "metadata with an empty name"));
+    if (!seen.insert(name).second) throw Error(WriteError(path, "duplicate metadata name '" + name + "'"));
+    try {
+      header.insert(name, Imf::StringAttribute(value));
+    } catch (const std::exception& e) {
+      // e.g. a name that is a standard attribute of another type ("channels").
+      throw Error(WriteError(path, "metadata '" + name + "': " + e.what()));
+    }
+  }
+
+  WriteFileAtomically(path, [&](const fs::path& temporary) {
+    std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
+    if (!stream) throw std::runtime_error("cannot create '" + temporary.string() + "'");
+    {
+      Imf::StdOFStream exr_stream(stream, temporary.c_str());
+      Imf::OutputFile file(exr_stream, header);
+      Imf::FrameBuffer frame;
+      const std::size_t x_stride = sizeof(float) * image.channels;
+      const std::size_t y_stride = x_stride * image.width;
+      const Imath::Box2i window = header.dataWindow();
+      for (int c = 0; c < image.channels; ++c) {
+        frame.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, window, x_stride, y_stride));
+      }
+      if (!image.alpha.empty()) {
+        frame.insert("A", Imf::Slice::Make(Imf::FLOAT, image.alpha.data(), window, sizeof(float),
+                                           sizeof(float) * image.width));
+      }
+      file.setFrameBuffer(frame);
+      file.writePixels(image.height);
+    }  // ~OutputFile writes the line-offset table.
+    stream.close();
+    if (!stream) throw std::runtime_error("error while writing '" + temporary.string() + "'");
+  });
+}
+
+Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(ReadError(path, "no such file"));
+  if (fs::is_directory(path, ec)) throw Error(ReadError(path, "is a directory"));
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Imath::Box2i window = header.dataWindow();
+    const std::int64_t width = std::int64_t{window.max.x} - window.min.x + 1;
+    const std::int64_t height = std::int64_t{window.max.y} - window.min.y + 1;
+    if (width <= 0 || height <= 0) throw Error(ReadError(path, "empty data window"));
+
+    // Channels: R, G, B if present, else C0, C1, ... up to the first missing index.
+    const Imf::ChannelList& list = header.channels();
+    std::vector<std::string> names;
+    if (list.findChannel("R") && list.findChannel("G") && list.findChannel("B")) {
+      names = {"R", "G", "B"};
+    } else {
+      for (int c = 0;; ++c) {
+        std::string name = ExrChannelName(c, /*channel_count=*/0);  // C0, C1, ...
+        if (!list.findChannel(name)) break;
+        names.push_back(std::move(name));
+      }
+    }
+    if (names.empty()) throw Error(ReadError(path, "no R, G, B or C0.. channels"));
+    for (const std::string& name : names) {
+      const Imf::Channel* channel = list.findChannel(name);
+      if (channel->xSampling != 1 || channel->ySampling != 1) {
+        throw Error(ReadError(path, "subsampled channel '" + name + "'"));
+      }
+    }
+    const bool has_alpha = list.findChannel("A") != nullptr;
+
+    // Refuse sizes that cannot be allocated sensibly (a corrupt or hostile header).
+    constexpr std::int64_t kMaxValues = std::int64_t{1} << 32;
+    if (width > kMaxValues / height || width * height > kMaxValues / static_cast<std::int64_t>(names.size() + 1)) {
+      throw Error(ReadError(path, "image too large (" + std::to_string(width) + "x" + std::to_string(height) + ")"));
+    }
+
+    Image image(static_cast<int>(width), static_cast<int>(height), static_cast<int>(names.size()));
+    if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width * height), 0.0f);
+    Imf::FrameBuffer frame;
+    const std::size_t x_stride = sizeof(float) * image.channels;
+    const std::size_t y_stride = x_stride * image.width;
+    for (int c = 0; c < image.channels; ++c) {
+      frame.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, window, x_stride, y_stride));
+    }
+    if (has_alpha) {
+      frame.insert("A", Imf::Slice::Make(Imf::FLOAT, image.alpha.data(), window, sizeof(float),
+                                         sizeof(float) * image.width));
+    }
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+
+    if (metadata != nullptr) {
+      metadata->clear();
+      for (auto it = header.begin(); it != header.end(); ++it) {
+        if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) {
+          metadata->emplace_back(it.name(), text->value());
+        }
+      }
+    }
+    return image;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(ReadError(path, e.what()));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// PNG.
+
+void WritePng(const fs::path& path, const Image& image, const ToneMapping& mapping) {
+  if (auto problem = ImageProblem(image)) throw Error(WriteError(path, *problem));
+  if (image.channels != 3) {
+    throw Error(WriteError(path, "PNG needs a 3-channel image, got " + std::to_string(image.channels)));
+  }
+  if (!std::isfinite(mapping.exposure) || !(mapping.gamma > 0.0) || !std::isfinite(mapping.gamma)) {
+    throw Error(WriteError(path, "invalid tone mapping (exposure must be finite, gamma > 0)"));
+  }
+
+  const bool has_alpha = !image.alpha.empty();
+  const int out_channels = has_alpha ? 4 : 3;
+  const std::size_t pixel_count = static_cast<std::size_t>(image.width) * image.height;
+  std::vector<png_byte> bytes(pixel_count * out_channels);
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    for (int c = 0; c < 3; ++c) bytes[i * out_channels + c] = ToByte(ToneMapValue(image.pixels[i * 3 + c], mapping));
+    if (has_alpha) bytes[i * out_channels + 3] = ToByte(ClampAlpha(image.alpha[i]));
+  }
+
+  WriteFileAtomically(path, [&](const fs::path& temporary) {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    png.width = static_cast<png_uint_32>(image.width);
+    png.height = static_cast<png_uint_32>(image.height);
+    png.format = has_alpha ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB;
+    const int ok = png_image_write_to_file(&png, temporary.c_str(), /*convert_to_8bit=*/0, bytes.data(),
+                                           /*row_stride=*/0, /*colormap=*/nullptr);
+    const std::string message = png.message;
+    png_image_free(&png);
+    if (!ok) throw std::runtime_error("libpng: " + message);
+  });
+}
+
+}  // namespace atmo

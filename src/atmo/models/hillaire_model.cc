@@ -1,0 +1,246 @@
+#include "models/hillaire_model.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+int ParseInt(const std::string& key, const std::string& value, int lo, int hi) {
+  char* end = nullptr;
+  const long v = std::strtol(value.c_str(), &end, 10);
+  if (value.empty() || *end != '\0' || v < lo || v > hi) {
+    throw Error("option " + key + "=" + value + ": expected an integer in [" + std::to_string(lo) + ", " +
+                std::to_string(hi) + "]");
+  }
+  return static_cast<int>(v);
+}
+
+// "WxH" (or a single "N" for N x N).
+glm::ivec2 ParseSize(const std::string& key, const std::string& value, int lo, int hi) {
+  const std::size_t x = value.find('x');
+  if (x == std::string::npos) {
+    const int n = ParseInt(key, value, lo, hi);
+    return {n, n};
+  }
+  return {ParseInt(key, value.substr(0, x), lo, hi), ParseInt(key, value.substr(x + 1), lo, hi)};
+}
+
+// Fills every texel of `texture` with kernel(frag_coord) in parallel over rows.
+template <typename Kernel>
+void FillTexture(shared::Texture2D& texture, const Kernel& kernel) {
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, texture.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < texture.width; ++x) {
+        texture.at(x, y) = glm::vec3(kernel(shared::vec2(x + 0.5, y + 0.5)));
+      }
+    }
+  });
+}
+
+void CheckDirection(const glm::dvec3& v, const char* what) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z) || glm::length(v) == 0.0) {
+    throw Error(std::string(what) + " must be a finite, non-zero direction");
+  }
+}
+
+}  // namespace
+
+HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
+  HillaireSettings s;
+  for (const auto& [key, value] : options) {
+    if (key == "transmittance_lut") s.transmittance_lut = ParseSize(key, value, 2, 4096);
+    else if (key == "transmittance_samples") s.transmittance_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "multiple_scattering_lut") s.multiple_scattering_lut = ParseSize(key, value, 2, 4096);
+    else if (key == "multiple_scattering_directions") s.multiple_scattering_directions = ParseInt(key, value, 2, 65536);
+    else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "sky_view_lut") s.sky_view_lut = ParseSize(key, value, 2, 8192);
+    else if (key == "sky_view_samples") s.sky_view_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "ray_march_samples") s.ray_march_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "sky_view") {
+      if (value != "auto" && value != "off") throw Error("option sky_view=" + value + ": expected auto or off");
+      s.use_sky_view_lut = value == "auto";
+    } else {
+      throw Error("unknown option '" + key + "' for model hillaire (known: transmittance_lut, transmittance_samples, "
+                  "multiple_scattering_lut, multiple_scattering_directions, multiple_scattering_samples, "
+                  "sky_view_lut, sky_view_samples, ray_march_samples, sky_view)");
+    }
+  }
+  return s;
+}
+
+HillaireModel::HillaireModel(const AtmosphereParameters& parameters, const HillaireSettings& settings)
+    : Model(parameters), settings_(settings) {
+  Validate(parameters);
+  if (parameters.geometry != Geometry::kSpherical) {
+    throw Error("model hillaire needs a spherical atmosphere; the half-space of preset '" + parameters.name +
+                "' is the geometry of the simple model");
+  }
+  for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
+    batches_.push_back(Batch{ToSharedParameters(parameters, b), {}, {}});
+  }
+}
+
+void HillaireModel::ComputeTransmittanceLut(Batch& batch) const {
+  const glm::ivec2 size = settings_.transmittance_lut;
+  batch.transmittance = shared::Texture2D(size.x, size.y);
+  FillTexture(batch.transmittance, [&](const shared::vec2& frag_coord) {
+    return shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel(batch.atmosphere, size, frag_coord,
+                                                                   settings_.transmittance_samples);
+  });
+}
+
+void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
+  const glm::ivec2 size = settings_.multiple_scattering_lut;
+  batch.multiple_scattering = shared::Texture2D(size.x, size.y);
+  FillTexture(batch.multiple_scattering, [&](const shared::vec2& frag_coord) {
+    return shared::ComputeMultiScatteringTexel(batch.atmosphere, batch.transmittance, size, frag_coord,
+                                               settings_.multiple_scattering_directions,
+                                               settings_.multiple_scattering_samples);
+  });
+}
+
+void HillaireModel::Precompute() {
+  auto start = Clock::now();
+  for (Batch& batch : batches_) ComputeTransmittanceLut(batch);
+  RecordPass("transmittance_lut", MillisecondsSince(start));
+  start = Clock::now();
+  for (Batch& batch : batches_) ComputeMultipleScatteringLut(batch);
+  RecordPass("multiple_scattering_lut", MillisecondsSince(start));
+}
+
+shared::Texture2D HillaireModel::ComputeSkyViewLut(const Batch& batch, double r, double mu_s) const {
+  const glm::ivec2 size = settings_.sky_view_lut;
+  shared::Texture2D sky_view(size.x, size.y, /*repeat=*/true);
+  FillTexture(sky_view, [&](const shared::vec2& frag_coord) {
+    return shared::ComputeSkyViewTexel(batch.atmosphere, batch.transmittance, batch.multiple_scattering, size,
+                                       frag_coord, r, mu_s, settings_.sky_view_samples);
+  });
+  return sky_view;
+}
+
+// The per-view state: the observer's radius and the sun, and the sky-view tables when they serve.
+class HillaireSkyView final : public SkyView {
+ public:
+  HillaireSkyView(const HillaireModel& model, double altitude_m, const glm::dvec3& sun)
+      : SkyView(altitude_m, sun, model.channel_count()),
+        model_(model),
+        r_(model.parameters().ground_radius_m + altitude_m),
+        mu_s_(shared::ClampCosine(sun.z)) {
+    const auto& batches = model.batches();
+    if (model.settings().use_sky_view_lut && r_ <= batches.front().atmosphere.top_radius) {
+      const auto start = Clock::now();
+      for (const auto& batch : batches) sky_view_.push_back(model.ComputeSkyViewLut(batch, r_, mu_s_));
+      model.RecordPass("sky_view_lut", MillisecondsSince(start));
+    }
+  }
+
+  void Radiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = glm::dot(view, sun_direction());
+    const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+    ForEachBatch(out, [&](std::size_t b, const HillaireModel::Batch& batch) {
+      if (!sky_view_.empty()) {
+        return shared::GetSkyRadianceFromSkyView(batch.atmosphere, sky_view_[b], r_, view.z, azimuth);
+      }
+      shared::vec3 transmittance;
+      return shared::IntegrateScatteredRadiance(batch.atmosphere, batch.transmittance, batch.multiple_scattering, r_,
+                                                view.z, mu_s_, nu, 1e300, model_.settings().ray_march_samples,
+                                                transmittance);
+    });
+  }
+
+  void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
+    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+      return shared::GetViewTransmittance(batch.atmosphere, batch.transmittance, r_, view.z);
+    });
+  }
+
+  void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = glm::dot(view, sun_direction());
+    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+      return shared::GetSunDiscRadiance(batch.atmosphere, batch.transmittance, r_, view.z, nu);
+    });
+  }
+
+  void ScatteringAlongSegment(const glm::dvec3& view, double distance_m, std::span<double> radiance,
+                              std::span<double> transmittance) const override {
+    const double nu = glm::dot(view, sun_direction());
+    const auto& batches = model_.batches();
+    for (std::size_t b = 0; b < batches.size(); ++b) {
+      shared::vec3 t;
+      const shared::vec3 l = shared::IntegrateScatteredRadiance(batches[b].atmosphere, batches[b].transmittance,
+                                                                batches[b].multiple_scattering, r_, view.z, mu_s_, nu,
+                                                                distance_m, model_.settings().ray_march_samples, t);
+      for (std::size_t i = 0; i < 3 && 3 * b + i < radiance.size(); ++i) {
+        radiance[3 * b + i] = l[static_cast<int>(i)];
+        transmittance[3 * b + i] = t[static_cast<int>(i)];
+      }
+    }
+  }
+
+  void RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const override {
+    const std::size_t n = channel_count();
+    const auto& batches = model_.batches();
+    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
+    std::vector<double> values(n);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const glm::dvec3& view = views[i];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) continue;
+      if (sky_view_.empty()) {
+        Radiance(view, values);
+      } else {
+        const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+        for (std::size_t b = 0; b < batches.size(); ++b) {
+          const shared::vec3 l = shared::GetSkyRadianceFromSkyView(batches[b].atmosphere, sky_view_[b], r_, view.z, azimuth);
+          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) values[3 * b + c] = l[static_cast<int>(c)];
+        }
+      }
+      if (include_sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
+        std::vector<double> disc(n);
+        SunDiscRadiance(view, disc);
+        for (std::size_t c = 0; c < n; ++c) values[c] += disc[c];
+      }
+      for (std::size_t c = 0; c < n; ++c) out[i * n + c] = static_cast<float>(values[c]);
+    }
+  }
+
+ private:
+  // Evaluates f(batch index, batch) -> vec3 for every batch and scatters it into out.
+  template <typename F>
+  void ForEachBatch(std::span<double> out, const F& f) const {
+    const auto& batches = model_.batches();
+    for (std::size_t b = 0; b < batches.size(); ++b) {
+      const shared::vec3 v = f(b, batches[b]);
+      for (std::size_t c = 0; c < 3 && 3 * b + c < out.size(); ++c) out[3 * b + c] = v[static_cast<int>(c)];
+    }
+  }
+
+  const HillaireModel& model_;
+  double r_;
+  double mu_s_;
+  std::vector<shared::Texture2D> sky_view_;  // one per batch; empty where the table does not serve
+};
+
+std::unique_ptr<SkyView> HillaireModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
+  if (!std::isfinite(altitude_m) || altitude_m < 0.0) {
+    throw Error("altitude_m must be finite and >= 0 for model hillaire (got " + std::to_string(altitude_m) + ")");
+  }
+  CheckDirection(sun_direction, "the sun direction");
+  return std::make_unique<HillaireSkyView>(*this, altitude_m, glm::normalize(sun_direction));
+}
+
+}  // namespace atmo

@@ -1,0 +1,72 @@
+// Model `hillaire`: "A Scalable and Production Ready Sky and Atmosphere Rendering Technique"
+// (Hillaire 2020), as in the seed "Sky Atmosphere in XEngine".
+//
+// Tables (sizes and sample counts are options, `--option key=value`):
+//   transmittance_lut=256x64          transmittance to the top, Bruneton's (r, mu) mapping
+//   transmittance_samples=40          trapezoidal intervals per texel
+//   multiple_scattering_lut=32x32     Psi_ms(mu_s, r), isotropic orders >= 2, 1/(1 - f_ms) sum
+//   multiple_scattering_directions=64 directions over the sphere (Fibonacci lattice; 2 = the
+//                                     seed's up/down variant)
+//   multiple_scattering_samples=20    ray-march steps per direction
+//   sky_view_lut=192x108              per observer and sun: 360 degrees of azimuth x latitude with
+//                                     the horizon-following non-linear mapping
+//   sky_view_samples=30               ray-march steps per sky-view texel
+//   ray_march_samples=30              steps of the per-pixel ray march
+//   sky_view=auto|off                 auto: use the sky-view table inside the atmosphere and ray
+//                                     march per pixel above it; off: always ray march per pixel
+// The sun disc is evaluated per pixel at full resolution, attenuated by the view transmittance.
+// Channels are computed three at a time: a preset with N channels keeps ceil(N/3) sets of tables.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "atmo/model.h"
+#include "shared/shared.h"
+
+namespace atmo {
+
+struct HillaireSettings {
+  glm::ivec2 transmittance_lut{256, 64};
+  int transmittance_samples = 40;
+  glm::ivec2 multiple_scattering_lut{32, 32};
+  int multiple_scattering_directions = 64;
+  int multiple_scattering_samples = 20;
+  glm::ivec2 sky_view_lut{192, 108};
+  int sky_view_samples = 30;
+  int ray_march_samples = 30;
+  bool use_sky_view_lut = true;
+
+  // Throws atmo::Error for an unknown key or a value out of range.
+  static HillaireSettings FromOptions(const ModelOptions& options);
+};
+
+class HillaireModel final : public Model {
+ public:
+  HillaireModel(const AtmosphereParameters& parameters, const HillaireSettings& settings);
+
+  std::string_view name() const override { return "hillaire"; }
+  void Precompute() override;
+  std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const override;
+
+  // The tables of one batch of three channels.
+  struct Batch {
+    shared::AtmosphereParameters atmosphere;
+    shared::Texture2D transmittance;
+    shared::Texture2D multiple_scattering;
+  };
+  const std::vector<Batch>& batches() const { return batches_; }
+  const HillaireSettings& settings() const { return settings_; }
+  // Builds the sky-view table of one batch for an observer radius and sun zenith cosine.
+  shared::Texture2D ComputeSkyViewLut(const Batch& batch, double r, double mu_s) const;
+
+ private:
+  void ComputeTransmittanceLut(Batch& batch) const;
+  void ComputeMultipleScatteringLut(Batch& batch) const;
+
+  HillaireSettings settings_;
+  std::vector<Batch> batches_;
+  friend class HillaireSkyView;
+};
+
+}  // namespace atmo

@@ -1,0 +1,56 @@
+#include "atmo/model.h"
+
+#include <cmath>
+
+#include "atmo/error.h"
+#include "models/hillaire_model.h"
+
+namespace atmo {
+
+void Model::RecordPass(std::string_view pass, double ms) const {
+  std::lock_guard<std::mutex> lock(timings_mutex_);
+  timings_.Add(pass, ms);
+}
+
+void SkyView::RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const {
+  const std::size_t n = channel_count();
+  std::vector<double> radiance(n);
+  std::vector<double> disc(n);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const glm::dvec3& view = views[i];
+    if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) continue;
+    Radiance(view, radiance);
+    if (include_sun_disc) {
+      SunDiscRadiance(view, disc);
+      for (std::size_t c = 0; c < n; ++c) radiance[c] += disc[c];
+    }
+    for (std::size_t c = 0; c < n; ++c) out[i * n + c] = static_cast<float>(radiance[c]);
+  }
+}
+
+void SkyView::ScatteringAlongSegment(const glm::dvec3&, double, std::span<double>, std::span<double>) const {
+  throw Error("this model does not provide aerial perspective");
+}
+
+std::vector<std::string> ModelNames() { return {"hillaire"}; }
+
+std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParameters& parameters,
+                                   const ModelOptions& options) {
+  std::unique_ptr<Model> model;
+  if (name == "hillaire") {
+    model = std::make_unique<HillaireModel>(parameters, HillaireSettings::FromOptions(options));
+  } else {
+    std::string known;
+    for (const std::string& n : ModelNames()) known += (known.empty() ? "" : ", ") + n;
+    throw Error("unknown model '" + std::string(name) + "' (known: " + known + ")");
+  }
+  model->Precompute();
+  return model;
+}
+
+glm::dvec3 DirectionFromZenithAzimuth(double zenith_rad, double azimuth_rad) {
+  return {std::sin(zenith_rad) * std::sin(azimuth_rad), std::sin(zenith_rad) * std::cos(azimuth_rad),
+          std::cos(zenith_rad)};
+}
+
+}  // namespace atmo

@@ -1,0 +1,236 @@
+// Atmosphere parameters: density profiles, validation, hashing and enum names.
+//
+// Validation reports the first invalid value it meets as one line that names the JSON key path of
+// docs/parameters.md (`rayleigh.scattering_per_m[1]`, `mie.density.upper.exp_term`, ...), so that a
+// user who edited a config file can find the value to fix.
+#include "atmo/parameters.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+
+#include "atmo/error.h"
+
+namespace atmo {
+namespace {
+
+// The most channels a parameter set may have: spectral rendering samples the visible range at
+// 1 nm (about 400 channels); 4096 leaves room and still bounds per-channel allocations.
+constexpr std::size_t kMaxChannelCount = 4096;
+
+// A number as a user would write it: integers without exponent or fraction (6360000, -1), other
+// values in the shortest form that reads back exactly (0.004675, 1e-300), and nan / inf / -inf.
+std::string FormatNumber(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0.0 ? "inf" : "-inf";
+  if (value == std::floor(value) && std::fabs(value) < 1e15) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.0f", value);
+    return buffer;
+  }
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string Indexed(const std::string& key, std::size_t index) {
+  return key + "[" + std::to_string(index) + "]";
+}
+
+[[noreturn]] void Fail(const std::string& message) { throw Error(message); }
+
+void CheckFinite(const std::string& key, double value) {
+  if (!std::isfinite(value)) Fail(key + " must be finite (got " + FormatNumber(value) + ")");
+}
+
+void CheckChannelCount(const std::string& key, const std::vector<double>& values,
+                       std::size_t channel_count) {
+  if (values.size() == channel_count) return;
+  Fail(key + " has " + std::to_string(values.size()) +
+       (values.size() == 1 ? " value" : " values") + " but there " +
+       (channel_count == 1 ? "is 1 channel" : "are " + std::to_string(channel_count) + " channels"));
+}
+
+// Every value finite and >= 0, one per channel.
+void CheckNonNegativePerChannel(const std::string& key, const std::vector<double>& values,
+                                std::size_t channel_count) {
+  CheckChannelCount(key, values, channel_count);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i]) || values[i] < 0.0) {
+      Fail(Indexed(key, i) + " must be finite and >= 0 (got " + FormatNumber(values[i]) + ")");
+    }
+  }
+}
+
+void ValidateLayer(const std::string& key, const DensityLayer& layer) {
+  CheckFinite(key + ".width_m", layer.width_m);
+  CheckFinite(key + ".exp_term", layer.exp_term);
+  CheckFinite(key + ".exp_scale_per_m", layer.exp_scale_per_m);
+  CheckFinite(key + ".linear_term_per_m", layer.linear_term_per_m);
+  CheckFinite(key + ".constant_term", layer.constant_term);
+  if (layer.width_m < 0.0) {
+    Fail(key + ".width_m must be >= 0 (got " + FormatNumber(layer.width_m) + ")");
+  }
+}
+
+void ValidateMedium(const std::string& key, const Medium& medium, std::size_t channel_count) {
+  CheckNonNegativePerChannel(key + ".scattering_per_m", medium.scattering_per_m, channel_count);
+  CheckNonNegativePerChannel(key + ".absorption_per_m", medium.absorption_per_m, channel_count);
+  if (!std::isfinite(medium.phase_g) || !(std::fabs(medium.phase_g) < 1.0)) {
+    Fail(key + ".phase_g must satisfy |g| < 1 (got " + FormatNumber(medium.phase_g) + ")");
+  }
+  ValidateLayer(key + ".density.lower", medium.density.lower);
+  ValidateLayer(key + ".density.upper", medium.density.upper);
+}
+
+}  // namespace
+
+// Bruneton 2017's layer: exp_term e^{exp_scale h} + linear_term h + constant_term, clamped to [0, 1].
+// A zero exp_term skips the exponential so that exp_scale may be anything without overflow.
+double DensityProfile::Evaluate(double altitude_m) const {
+  const DensityLayer& layer = altitude_m < lower.width_m ? lower : upper;
+  const double exponential =
+      layer.exp_term == 0.0 ? 0.0 : layer.exp_term * std::exp(layer.exp_scale_per_m * altitude_m);
+  const double density = exponential + layer.linear_term_per_m * altitude_m + layer.constant_term;
+  return std::clamp(density, 0.0, 1.0);
+}
+
+// Both layers hold exp(-h / H) (the lower one is zero wide), so that altitudes below 0, such as
+// an observer inside a half-space, still get the exponential clamped to 1 rather than 0.
+DensityProfile DensityProfile::Exponential(double scale_height_m) {
+  DensityLayer layer;
+  layer.exp_term = 1.0;
+  layer.exp_scale_per_m = -1.0 / scale_height_m;
+  return DensityProfile{layer, layer};
+}
+
+// Lower layer (h < peak): rises linearly from 0 at bottom to 1 at peak; upper layer falls from 1
+// at peak to 0 at top; the clamp keeps it 0 outside [bottom, top].
+DensityProfile DensityProfile::Tent(double bottom_m, double peak_m, double top_m) {
+  if (!(bottom_m < peak_m && peak_m < top_m)) {
+    Fail("a density tent needs bottom < peak < top (got " + FormatNumber(bottom_m) + ", " +
+         FormatNumber(peak_m) + ", " + FormatNumber(top_m) + ")");
+  }
+  DensityProfile profile;
+  profile.lower.width_m = peak_m;
+  profile.lower.linear_term_per_m = 1.0 / (peak_m - bottom_m);
+  profile.lower.constant_term = -bottom_m / (peak_m - bottom_m);
+  profile.upper.linear_term_per_m = -1.0 / (top_m - peak_m);
+  profile.upper.constant_term = top_m / (top_m - peak_m);
+  return profile;
+}
+
+DensityProfile DensityProfile::Constant() {
+  DensityLayer layer;
+  layer.constant_term = 1.0;
+  return DensityProfile{layer, layer};
+}
+
+bool Medium::present() const {
+  for (double value : scattering_per_m) {
+    if (value != 0.0) return true;
+  }
+  for (double value : absorption_per_m) {
+    if (value != 0.0) return true;
+  }
+  return false;
+}
+
+void Validate(const AtmosphereParameters& p) {
+  const std::size_t channel_count = p.channel_count();
+  if (channel_count == 0) Fail("wavelengths_nm must have at least one channel");
+  if (channel_count > kMaxChannelCount) {
+    Fail("wavelengths_nm has " + std::to_string(channel_count) + " channels, more than the " +
+         std::to_string(kMaxChannelCount) + " allowed");
+  }
+  for (std::size_t i = 0; i < channel_count; ++i) {
+    const double wavelength = p.wavelengths_nm[i];
+    if (!std::isfinite(wavelength) || wavelength <= 0.0) {
+      Fail(Indexed("wavelengths_nm", i) + " must be finite and > 0 (got " +
+           FormatNumber(wavelength) + ")");
+    }
+  }
+
+  CheckFinite("ground_radius_m", p.ground_radius_m);
+  CheckFinite("top_radius_m", p.top_radius_m);
+  if (p.geometry == Geometry::kSpherical) {
+    if (p.ground_radius_m <= 0.0) {
+      Fail("ground_radius_m must be > 0 (got " + FormatNumber(p.ground_radius_m) + ")");
+    }
+    if (p.top_radius_m <= p.ground_radius_m) {
+      Fail("top_radius_m (" + FormatNumber(p.top_radius_m) +
+           ") must be greater than ground_radius_m (" + FormatNumber(p.ground_radius_m) + ")");
+    }
+  }
+
+  ValidateMedium("rayleigh", p.rayleigh, channel_count);
+  ValidateMedium("mie", p.mie, channel_count);
+  ValidateMedium("ozone", p.ozone, channel_count);
+
+  CheckChannelCount("ground_albedo", p.ground_albedo, channel_count);
+  for (std::size_t i = 0; i < channel_count; ++i) {
+    const double albedo = p.ground_albedo[i];
+    if (!(albedo >= 0.0 && albedo <= 1.0)) {  // also rejects NaN
+      Fail(Indexed("ground_albedo", i) + " must be in [0, 1] (got " + FormatNumber(albedo) + ")");
+    }
+  }
+
+  const double sun_radius = p.sun_angular_radius_rad;
+  if (!(sun_radius > 0.0 && sun_radius < std::numbers::pi / 2.0)) {
+    Fail("sun_angular_radius_rad must be in (0, pi/2) (got " + FormatNumber(sun_radius) + ")");
+  }
+
+  CheckNonNegativePerChannel("solar_irradiance", p.solar_irradiance, channel_count);
+
+  if (!std::isfinite(p.exposure) || p.exposure <= 0.0) {
+    Fail("exposure must be finite and > 0 (got " + FormatNumber(p.exposure) + ")");
+  }
+
+  CheckFinite("observer_altitude_m", p.observer_altitude_m);
+  if (p.geometry == Geometry::kSpherical && p.observer_altitude_m < 0.0) {
+    Fail("observer_altitude_m must be >= 0 for spherical geometry (got " +
+         FormatNumber(p.observer_altitude_m) + ")");
+  }
+}
+
+// FNV-1a, 64 bit (Fowler, Noll, Vo): offset basis 14695981039346656037, prime 1099511628211,
+// over the bytes of the canonical JSON, which holds every value exactly.
+std::uint64_t ParameterHash(const AtmosphereParameters& parameters) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const char c : ToJson(parameters)) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+std::string ParameterHashHex(const AtmosphereParameters& parameters) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof buffer, "%016llx",
+                static_cast<unsigned long long>(ParameterHash(parameters)));
+  return buffer;
+}
+
+std::string_view ToString(PhaseFunction phase) {
+  switch (phase) {
+    case PhaseFunction::kIsotropic: return "isotropic";
+    case PhaseFunction::kRayleigh: return "rayleigh";
+    case PhaseFunction::kModifiedRayleigh: return "modified_rayleigh";
+    case PhaseFunction::kCornetteShanks: return "cornette_shanks";
+    case PhaseFunction::kHenyeyGreenstein: return "henyey_greenstein";
+  }
+  return "unknown";
+}
+
+std::string_view ToString(Geometry geometry) {
+  switch (geometry) {
+    case Geometry::kSpherical: return "spherical";
+    case Geometry::kHalfSpace: return "half_space";
+  }
+  return "unknown";
+}
+
+}  // namespace atmo

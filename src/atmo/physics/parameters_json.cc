@@ -1,0 +1,277 @@
+// Atmosphere parameters as JSON: the keys of docs/parameters.md.
+//
+// ToJson writes every key in a fixed order, so its output is canonical (ParameterHash hashes it)
+// and reads back to the same parameters. FromJson starts from a preset and overrides only what the
+// document holds; nested objects merge key by key, and a per-channel key may be a single number
+// that applies to every channel.
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "atmo/error.h"
+#include "atmo/parameters.h"
+
+namespace atmo {
+namespace {
+
+using Json = nlohmann::json;
+using OrderedJson = nlohmann::ordered_json;
+
+// The name a config's "preset" key may hold for parameters that match no preset: FromJson then
+// starts from `earth`, which the keys of the document override.
+constexpr std::string_view kCustomName = "custom";
+constexpr std::string_view kDefaultPreset = "earth";
+
+constexpr PhaseFunction kPhaseFunctions[] = {
+    PhaseFunction::kIsotropic, PhaseFunction::kRayleigh, PhaseFunction::kModifiedRayleigh,
+    PhaseFunction::kCornetteShanks, PhaseFunction::kHenyeyGreenstein};
+constexpr Geometry kGeometries[] = {Geometry::kSpherical, Geometry::kHalfSpace};
+
+// ---------------------------------------------------------------------------------------------
+// Writing.
+
+OrderedJson LayerToJson(const DensityLayer& layer) {
+  OrderedJson j;
+  j["width_m"] = layer.width_m;
+  j["exp_term"] = layer.exp_term;
+  j["exp_scale_per_m"] = layer.exp_scale_per_m;
+  j["linear_term_per_m"] = layer.linear_term_per_m;
+  j["constant_term"] = layer.constant_term;
+  return j;
+}
+
+OrderedJson MediumToJson(const Medium& medium) {
+  OrderedJson j;
+  j["scattering_per_m"] = medium.scattering_per_m;
+  j["absorption_per_m"] = medium.absorption_per_m;
+  j["phase_function"] = std::string(ToString(medium.phase));
+  j["phase_g"] = medium.phase_g;
+  j["density"]["lower"] = LayerToJson(medium.density.lower);
+  j["density"]["upper"] = LayerToJson(medium.density.upper);
+  return j;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading. Each reader takes the key path it reports in errors ("rayleigh.density.lower").
+
+[[noreturn]] void Fail(const std::string& message) { throw Error(message); }
+
+std::string Join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+// Throws for the first key of `object` that is not in `known`.
+void CheckKeys(const Json& object, const std::string& path,
+               std::initializer_list<std::string_view> known) {
+  for (const auto& item : object.items()) {
+    bool found = false;
+    for (std::string_view k : known) found = found || item.key() == k;
+    if (!found) Fail("unknown key '" + Join(path, item.key()) + "'");
+  }
+}
+
+void CheckObject(const Json& value, const std::string& path) {
+  if (!value.is_object()) Fail(path + " must be an object");
+}
+
+void ReadNumber(const Json& object, const std::string& path, const char* key, double& out) {
+  const auto it = object.find(key);
+  if (it == object.end()) return;
+  if (!it->is_number()) Fail(Join(path, key) + " must be a number");
+  out = it->get<double>();
+}
+
+// A per-channel vector: an array of numbers, or one number for every channel.
+void ReadPerChannel(const Json& object, const std::string& path, const char* key,
+                    std::size_t channel_count, std::vector<double>& out) {
+  const auto it = object.find(key);
+  if (it == object.end()) return;
+  const std::string full_key = Join(path, key);
+  if (it->is_number()) {
+    out.assign(channel_count, it->get<double>());
+    return;
+  }
+  const std::string type_error = full_key + " must be a number or an array of numbers";
+  if (!it->is_array()) Fail(type_error);
+  std::vector<double> values;
+  values.reserve(it->size());
+  for (const Json& element : *it) {
+    if (!element.is_number()) Fail(type_error);
+    values.push_back(element.get<double>());
+  }
+  out = std::move(values);
+}
+
+void ReadLayer(const Json& object, const std::string& path, DensityLayer& layer) {
+  CheckObject(object, path);
+  CheckKeys(object, path,
+            {"width_m", "exp_term", "exp_scale_per_m", "linear_term_per_m", "constant_term"});
+  ReadNumber(object, path, "width_m", layer.width_m);
+  ReadNumber(object, path, "exp_term", layer.exp_term);
+  ReadNumber(object, path, "exp_scale_per_m", layer.exp_scale_per_m);
+  ReadNumber(object, path, "linear_term_per_m", layer.linear_term_per_m);
+  ReadNumber(object, path, "constant_term", layer.constant_term);
+}
+
+PhaseFunction ParsePhaseFunction(const Json& value, const std::string& key) {
+  if (!value.is_string()) Fail(key + " must be a string");
+  const std::string name = value.get<std::string>();
+  std::string known;
+  for (PhaseFunction phase : kPhaseFunctions) {
+    if (name == ToString(phase)) return phase;
+    known += (known.empty() ? "" : ", ") + std::string(ToString(phase));
+  }
+  Fail(key + ": unknown phase function '" + name + "' (known: " + known + ")");
+}
+
+Geometry ParseGeometry(const Json& value, const std::string& key) {
+  if (!value.is_string()) Fail(key + " must be a string");
+  const std::string name = value.get<std::string>();
+  std::string known;
+  for (Geometry geometry : kGeometries) {
+    if (name == ToString(geometry)) return geometry;
+    known += (known.empty() ? "" : ", ") + std::string(ToString(geometry));
+  }
+  Fail(key + ": unknown geometry '" + name + "' (known: " + known + ")");
+}
+
+void ReadMedium(const Json& object, const std::string& path, std::size_t channel_count,
+                Medium& medium) {
+  CheckObject(object, path);
+  CheckKeys(object, path,
+            {"scattering_per_m", "absorption_per_m", "phase_function", "phase_g", "density"});
+  ReadPerChannel(object, path, "scattering_per_m", channel_count, medium.scattering_per_m);
+  ReadPerChannel(object, path, "absorption_per_m", channel_count, medium.absorption_per_m);
+  if (const auto it = object.find("phase_function"); it != object.end()) {
+    medium.phase = ParsePhaseFunction(*it, Join(path, "phase_function"));
+  }
+  ReadNumber(object, path, "phase_g", medium.phase_g);
+  if (const auto it = object.find("density"); it != object.end()) {
+    const std::string density_path = Join(path, "density");
+    CheckObject(*it, density_path);
+    CheckKeys(*it, density_path, {"lower", "upper"});
+    if (const auto lower = it->find("lower"); lower != it->end()) {
+      ReadLayer(*lower, Join(density_path, "lower"), medium.density.lower);
+    }
+    if (const auto upper = it->find("upper"); upper != it->end()) {
+      ReadLayer(*upper, Join(density_path, "upper"), medium.density.upper);
+    }
+  }
+}
+
+// nlohmann's message without its "[json.exception.parse_error.101] " tag, on one line.
+std::string ParseErrorMessage(const Json::parse_error& error) {
+  std::string message = error.what();
+  if (!message.empty() && message.front() == '[') {
+    const std::size_t end = message.find("] ");
+    if (end != std::string::npos) message.erase(0, end + 2);
+  }
+  for (char& c : message) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return "malformed JSON (byte " + std::to_string(error.byte) + "): " + message;
+}
+
+}  // namespace
+
+std::string ToJson(const AtmosphereParameters& p) {
+  OrderedJson j;
+  j["preset"] = p.name;
+  j["geometry"] = std::string(ToString(p.geometry));
+  j["ground_radius_m"] = p.ground_radius_m;
+  j["top_radius_m"] = p.top_radius_m;
+  j["wavelengths_nm"] = p.wavelengths_nm;
+  j["rayleigh"] = MediumToJson(p.rayleigh);
+  j["mie"] = MediumToJson(p.mie);
+  j["ozone"] = MediumToJson(p.ozone);
+  j["ground_albedo"] = p.ground_albedo;
+  j["sun_angular_radius_rad"] = p.sun_angular_radius_rad;
+  j["solar_irradiance"] = p.solar_irradiance;
+  j["exposure"] = p.exposure;
+  j["observer_altitude_m"] = p.observer_altitude_m;
+  return j.dump(2) + "\n";
+}
+
+AtmosphereParameters FromJson(std::string_view json_text) {
+  Json root;
+  try {
+    root = Json::parse(json_text.begin(), json_text.end());
+  } catch (const Json::parse_error& error) {
+    Fail(ParseErrorMessage(error));
+  }
+  if (!root.is_object()) Fail("the parameters must be a JSON object");
+  CheckKeys(root, "",
+            {"preset", "geometry", "ground_radius_m", "top_radius_m", "wavelengths_nm", "rayleigh",
+             "mie", "ozone", "ground_albedo", "sun_angular_radius_rad", "solar_irradiance",
+             "exposure", "observer_altitude_m"});
+
+  std::string preset_name(kDefaultPreset);
+  if (const auto it = root.find("preset"); it != root.end()) {
+    if (!it->is_string()) Fail("preset must be a string");
+    preset_name = it->get<std::string>();
+  }
+  const AtmosphereParameters preset =
+      Preset(preset_name == kCustomName ? kDefaultPreset : std::string_view(preset_name));
+  AtmosphereParameters p = preset;
+
+  if (const auto it = root.find("geometry"); it != root.end()) {
+    p.geometry = ParseGeometry(*it, "geometry");
+  }
+  ReadNumber(root, "", "ground_radius_m", p.ground_radius_m);
+  ReadNumber(root, "", "top_radius_m", p.top_radius_m);
+  // Wavelengths first: they fix the channel count that single numbers broadcast to.
+  ReadPerChannel(root, "", "wavelengths_nm", 1, p.wavelengths_nm);
+  const std::size_t channel_count = p.channel_count();
+  if (const auto it = root.find("rayleigh"); it != root.end()) {
+    ReadMedium(*it, "rayleigh", channel_count, p.rayleigh);
+  }
+  if (const auto it = root.find("mie"); it != root.end()) {
+    ReadMedium(*it, "mie", channel_count, p.mie);
+  }
+  if (const auto it = root.find("ozone"); it != root.end()) {
+    ReadMedium(*it, "ozone", channel_count, p.ozone);
+  }
+  ReadPerChannel(root, "", "ground_albedo", channel_count, p.ground_albedo);
+  ReadNumber(root, "", "sun_angular_radius_rad", p.sun_angular_radius_rad);
+  ReadPerChannel(root, "", "solar_irradiance", channel_count, p.solar_irradiance);
+  ReadNumber(root, "", "exposure", p.exposure);
+  ReadNumber(root, "", "observer_altitude_m", p.observer_altitude_m);
+
+  // The name says which preset the values are: the preset's name when every value equals it
+  // (whatever keys the document repeats), "custom" as soon as one differs.
+  p.name = preset.name;
+  if (!(p == preset)) p.name = std::string(kCustomName);
+
+  Validate(p);
+  return p;
+}
+
+AtmosphereParameters LoadParametersFile(const std::filesystem::path& path) {
+  const std::string shown = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    Fail("cannot read config '" + shown + "': is a directory");
+  }
+  errno = 0;
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    const int error = errno;
+    Fail("cannot read config '" + shown + "': " +
+         (error != 0 ? std::strerror(error) : "cannot open file"));
+  }
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) Fail("cannot read config '" + shown + "': read error");
+  try {
+    return FromJson(text.str());
+  } catch (const Error& error) {
+    Fail("config '" + shown + "': " + error.what());
+  }
+}
+
+}  // namespace atmo

@@ -1,0 +1,71 @@
+#include "physics/shared_parameters.h"
+
+#include <algorithm>
+
+#include "atmo/error.h"
+
+namespace atmo {
+namespace {
+
+int ToSharedPhase(PhaseFunction phase) {
+  switch (phase) {
+    case PhaseFunction::kIsotropic: return shared::kPhaseIsotropic;
+    case PhaseFunction::kRayleigh: return shared::kPhaseRayleigh;
+    case PhaseFunction::kModifiedRayleigh: return shared::kPhaseModifiedRayleigh;
+    case PhaseFunction::kCornetteShanks: return shared::kPhaseCornetteShanks;
+    case PhaseFunction::kHenyeyGreenstein: return shared::kPhaseHenyeyGreenstein;
+  }
+  return shared::kPhaseIsotropic;
+}
+
+shared::DensityProfileLayer ToSharedLayer(const DensityLayer& layer, double unit) {
+  // Altitudes scale with the unit; exp_scale and linear_term are per length.
+  return shared::DensityProfileLayer{layer.width_m / unit, layer.exp_term, layer.exp_scale_per_m * unit,
+                                     layer.linear_term_per_m * unit, layer.constant_term};
+}
+
+shared::DensityProfile ToSharedProfile(const DensityProfile& profile, double unit) {
+  shared::DensityProfile result;
+  result.layers[0] = ToSharedLayer(profile.lower, unit);
+  result.layers[1] = ToSharedLayer(profile.upper, unit);
+  return result;
+}
+
+// Per-length coefficients of channels [first, first + 3), in the target unit.
+glm::dvec3 Batch(const std::vector<double>& values, std::size_t first, double scale) {
+  glm::dvec3 v;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t c = std::min(first + i, values.size() - 1);
+    v[i] = values[c] * scale;
+  }
+  return v;
+}
+
+}  // namespace
+
+shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, std::size_t batch,
+                                                double unit) {
+  for (double s : p.ozone.scattering_per_m) {
+    if (s != 0.0) throw Error("ozone.scattering_per_m must be 0: the ozone layer only absorbs in this model");
+  }
+  const std::size_t first = 3 * batch;
+  shared::AtmosphereParameters a;
+  a.bottom_radius = p.ground_radius_m / unit;
+  a.top_radius = p.top_radius_m / unit;
+  a.rayleigh_density = ToSharedProfile(p.rayleigh.density, unit);
+  a.rayleigh_scattering = Batch(p.rayleigh.scattering_per_m, first, unit);
+  a.rayleigh_extinction = a.rayleigh_scattering + Batch(p.rayleigh.absorption_per_m, first, unit);
+  a.rayleigh_phase = ToSharedPhase(p.rayleigh.phase);
+  a.mie_density = ToSharedProfile(p.mie.density, unit);
+  a.mie_scattering = Batch(p.mie.scattering_per_m, first, unit);
+  a.mie_extinction = a.mie_scattering + Batch(p.mie.absorption_per_m, first, unit);
+  a.mie_phase = ToSharedPhase(p.mie.phase);
+  a.mie_g = p.mie.phase_g;
+  a.absorption_density = ToSharedProfile(p.ozone.density, unit);
+  a.absorption_extinction = Batch(p.ozone.absorption_per_m, first, unit);
+  a.ground_albedo = Batch(p.ground_albedo, first, 1.0);
+  a.sun_angular_radius = p.sun_angular_radius_rad;
+  return a;
+}
+
+}  // namespace atmo

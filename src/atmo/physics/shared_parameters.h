@@ -1,0 +1,21 @@
+// Conversion of the public AtmosphereParameters to the struct of the GLSL/C++ common subset.
+#pragma once
+
+#include <cstddef>
+
+#include "atmo/parameters.h"
+#include "shared/shared.h"
+
+namespace atmo {
+
+// Channels are evaluated three at a time (a vec3); this many batches cover all channels.
+inline std::size_t ChannelBatchCount(std::size_t channel_count) { return (channel_count + 2) / 3; }
+
+// The shared parameters for channels [3 * batch, 3 * batch + 3) of a spherical atmosphere; a batch
+// with fewer than three channels repeats its last one. `length_unit_m` is the length unit of the
+// result in metres (1 on the CPU, 1000 for the km of the GPU). Throws atmo::Error for what the
+// common subset cannot express (a scattering ozone layer).
+shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& parameters, std::size_t batch,
+                                                double length_unit_m = 1.0);
+
+}  // namespace atmo

@@ -1,0 +1,62 @@
+// Host/GPU structs of atmo, in the GLSL/C++ common subset (see glsl_cpp.h).
+//
+// Every length is in the unit of the parameters (metres on the CPU, km on the GPU); every
+// coefficient is per that unit. Per-channel quantities are vec3: a model evaluates channels in
+// batches of three wavelengths.
+
+const Number kPi = 3.14159265358979323846;
+
+// Phase-function identifiers (DESIGN.md §2). All are normalised to 1 over the sphere and take
+// nu = cos(angle between the view direction and the sun direction).
+const int kPhaseIsotropic = 0;
+const int kPhaseRayleigh = 1;           // 3/(16 pi) (1 + nu^2)
+const int kPhaseModifiedRayleigh = 2;   // Atmosphere Plus: 0.8 (1.4 + 0.5 nu^2) / (4 pi)
+const int kPhaseCornetteShanks = 3;     // 3/(8 pi) (1-g^2)(1+nu^2) / ((2+g^2)(1+g^2-2 g nu)^1.5)
+const int kPhaseHenyeyGreenstein = 4;   // (1-g^2) / (4 pi (1+g^2-2 g nu)^1.5)
+
+// One layer of a density profile, after Bruneton 2017: at altitude h the density is
+// exp_term * exp(exp_scale * h) + linear_term * h + constant_term, clamped to [0, 1].
+struct DensityProfileLayer {
+  Number width;          // thickness of the layer (length); ignored for the top layer
+  Number exp_term;       // unitless
+  Number exp_scale;      // per length (negative: -1 / scale height)
+  Number linear_term;    // per length
+  Number constant_term;  // unitless
+};
+
+// Two layers: layers[0] below altitude layers[0].width, layers[1] above it.
+struct DensityProfile {
+  DensityProfileLayer layers[2];
+};
+
+struct AtmosphereParameters {
+  Number bottom_radius;           // ground sphere radius (length)
+  Number top_radius;              // top of the atmosphere (length)
+  DensityProfile rayleigh_density;
+  vec3 rayleigh_scattering;       // per length, at density 1
+  vec3 rayleigh_extinction;       // per length, at density 1 (scattering + absorption)
+  int rayleigh_phase;             // kPhaseRayleigh or kPhaseModifiedRayleigh
+  DensityProfile mie_density;
+  vec3 mie_scattering;            // per length, at density 1
+  vec3 mie_extinction;            // per length, at density 1 (scattering + absorption)
+  int mie_phase;                  // kPhaseCornetteShanks or kPhaseHenyeyGreenstein
+  Number mie_g;                   // asymmetry, g > 0: forward peak towards the sun
+  DensityProfile absorption_density;
+  vec3 absorption_extinction;     // ozone absorption per length, at density 1
+  vec3 ground_albedo;             // Lambertian, unitless
+  Number sun_angular_radius;      // radians
+};
+
+// Cameras (camera.glsl turns a pixel into a view direction).
+const int kCameraPerspective = 0;  // pinhole: horizontal field of view, yaw (azimuth), pitch (elevation)
+const int kCameraFisheye = 1;      // all-sky, equidistant: zenith at the centre, horizon on the circle, north up, east left
+const int kCameraEquirect = 2;     // full-sphere lat-long: azimuth across (yaw at the centre), elevation +90..-90 down
+
+struct CameraParameters {
+  int kind;
+  int width;               // pixels
+  int height;              // pixels
+  Number horizontal_fov;   // radians (perspective)
+  Number yaw;              // radians, compass azimuth of the view centre
+  Number pitch;            // radians, elevation of the view centre (perspective)
+};

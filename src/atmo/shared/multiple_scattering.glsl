@@ -1,0 +1,105 @@
+// The multiple-scattering table of Hillaire 2020 (section 5.5.2): for a point at radius r lit by a
+// sun at zenith cosine mu_s, the radiance that orders >= 2 scatter towards any direction, per unit
+// scattering coefficient, assuming an isotropic phase function for those orders and that the
+// neighbourhood of the point receives the same second-order light:
+//   Psi_ms = L_2nd / (1 - f_ms),
+//   L_2nd  = 1/(4 pi) * integral over the sphere of L(x, w) dw   (L: single scattering, isotropic
+//            phase, plus the sunlight reflected once by the Lambertian ground),
+//   f_ms   = 1/(4 pi) * integral over the sphere of integral_0^d sigma_s T dt dw
+// and 1 / (1 - f_ms) sums the geometric series of all higher orders.
+// The table is indexed linearly by x = (mu_s + 1) / 2 and y = (r - bottom) / (top - bottom).
+
+vec2 GetMultiScatteringTextureUvFromRMuS(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size,
+    Number r, Number mu_s) {
+  Number x_mu_s = clamp(0.5 * mu_s + 0.5, 0.0, 1.0);
+  Number x_r = clamp((r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
+  return vec2(GetTextureCoordFromUnitRange(x_mu_s, texture_size.x),
+              GetTextureCoordFromUnitRange(x_r, texture_size.y));
+}
+
+void GetRMuSFromMultiScatteringTextureUv(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size,
+    IN(vec2) uv, OUT(Number) r, OUT(Number) mu_s) {
+  Number x_mu_s = clamp(GetUnitRangeFromTextureCoord(uv.x, texture_size.x), 0.0, 1.0);
+  Number x_r = clamp(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
+  mu_s = 2.0 * x_mu_s - 1.0;
+  r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
+}
+
+vec3 GetMultiScattering(IN(AtmosphereParameters) atmosphere, IN(MultiScatteringTexture) multiple_scattering_texture,
+    Number r, Number mu_s) {
+  vec2 uv = GetMultiScatteringTextureUvFromRMuS(atmosphere, textureSize(multiple_scattering_texture, 0), r, mu_s);
+  return vec3(texture(multiple_scattering_texture, uv));
+}
+
+// Direction k of `count` over the unit sphere (z up). For count == 2 the seed's variant: straight
+// up and straight down. Otherwise a Fibonacci lattice: equal-area, uniformly distributed points,
+// each standing for a solid angle of 4 pi / count.
+vec3 GetMultiScatteringDirection(int k, int count) {
+  if (count == 2) {
+    return vec3(0.0, 0.0, k == 0 ? 1.0 : -1.0);
+  }
+  Number z = 1.0 - (2.0 * Number(k) + 1.0) / Number(count);
+  Number phi = Number(k) * kPi * (3.0 - sqrt(5.0));  // golden angle
+  Number s = SafeSqrt(1.0 - z * z);
+  return vec3(s * cos(phi), s * sin(phi), z);
+}
+
+// Integrates, along the ray from radius r in direction `direction` (z up; the sun is
+// `sun_direction`), the isotropically single-scattered light L (with the ground bounce) and the
+// transfer term f = integral of sigma_s T dt.
+void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, OUT(vec3) luminance,
+    OUT(vec3) transfer) {
+  Number mu = direction.z;
+  Number mu_s = sun_direction.z;
+  Number nu = dot(direction, sun_direction);
+  bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
+  Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  Number dt = t_max / Number(sample_count);
+  vec3 throughput = vec3(1.0);
+  luminance = vec3(0.0);
+  transfer = vec3(0.0);
+  for (int i = 0; i < sample_count; ++i) {
+    Number t = (Number(i) + 0.5) * dt;
+    Number r_i = sqrt(t * t + 2.0 * r * mu * t + r * r);
+    Number mu_s_i = ClampCosine((r * mu_s + t * nu) / r_i);
+    MediumSample medium = SampleMedium(atmosphere, r_i);
+    vec3 step_transmittance = exp(-medium.extinction * dt);
+    vec3 step_integral = throughput * IntegrateStep(medium.extinction, step_transmittance, dt);
+    vec3 sun_transmittance = GetTransmittanceToSun(atmosphere, transmittance_texture, r_i, mu_s_i);
+    luminance += step_integral * medium.scattering * sun_transmittance * IsotropicPhaseFunction();
+    transfer += step_integral * medium.scattering;
+    throughput *= step_transmittance;
+  }
+  if (ray_r_mu_intersects_ground) {
+    // Sunlight reflected by the Lambertian ground at the end of the ray: albedo / pi * E * cos.
+    Number r_g = atmosphere.bottom_radius;
+    Number mu_s_g = ClampCosine((r * mu_s + t_max * nu) / r_g);
+    vec3 sun_transmittance = GetTransmittanceToSun(atmosphere, transmittance_texture, r_g, mu_s_g);
+    luminance += throughput * sun_transmittance * atmosphere.ground_albedo * (max(mu_s_g, 0.0) / kPi);
+  }
+}
+
+// The per-texel kernel of the multiple-scattering table.
+vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count) {
+  Number r;
+  Number mu_s;
+  GetRMuSFromMultiScatteringTextureUv(atmosphere, texture_size, frag_coord / vec2(texture_size), r, mu_s);
+  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+  vec3 luminance_sum = vec3(0.0);
+  vec3 transfer_sum = vec3(0.0);
+  for (int k = 0; k < direction_count; ++k) {
+    vec3 luminance;
+    vec3 transfer;
+    IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
+        sun_direction, sample_count, luminance, transfer);
+    luminance_sum += luminance;
+    transfer_sum += transfer;
+  }
+  // Each direction stands for 4 pi / count sr; with the isotropic phase 1 / (4 pi) both
+  // integrals become plain means.
+  vec3 second_order = luminance_sum / Number(direction_count);
+  vec3 f_ms = transfer_sum / Number(direction_count);
+  return second_order / (vec3(1.0) - min(f_ms, vec3(0.999)));
+}

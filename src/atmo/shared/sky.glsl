@@ -1,0 +1,169 @@
+// Sky radiance after Hillaire 2020: ray marching of single scattering (true phase functions,
+// transmittance to the sun from the table, hard planet shadow) plus the isotropic
+// multiple-scattering term from its table; the sky-view table that caches this march for one
+// observer and sun; the sun disc; and the aerial-perspective volume.
+//
+// A view is given by r (observer's distance from the planet centre), mu (cosine of the view
+// zenith angle), mu_s (cosine of the sun zenith angle) and nu (cosine of the angle between the
+// view and sun directions). Radiance is per unit solar irradiance at the top of the atmosphere.
+
+Number GetRayleighPhase(IN(AtmosphereParameters) atmosphere, Number nu) {
+  return EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu);
+}
+
+Number GetMiePhase(IN(AtmosphereParameters) atmosphere, Number nu) {
+  return EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu);
+}
+
+// Moves an observer outside the atmosphere to where its ray enters it, updating r, mu, mu_s and
+// the remaining distance limit. Returns false when the ray misses the atmosphere.
+bool MoveToAtmosphereEntry(IN(AtmosphereParameters) atmosphere, INOUT(Number) r, INOUT(Number) mu,
+    INOUT(Number) mu_s, Number nu, INOUT(Number) t_limit) {
+  if (r <= atmosphere.top_radius) {
+    return true;
+  }
+  Number d = DistanceToAtmosphereEntry(atmosphere, r, mu);
+  if (d < 0.0 || d >= t_limit) {
+    return false;
+  }
+  Number r_entry = sqrt(d * d + 2.0 * r * mu * d + r * r);
+  mu = ClampCosine((r * mu + d) / r_entry);
+  mu_s = ClampCosine((r * mu_s + d * nu) / r_entry);
+  r = min(r_entry, atmosphere.top_radius);
+  t_limit = t_limit - d;
+  return true;
+}
+
+// Integrates the scattered radiance along the ray up to the ground, the top of the atmosphere,
+// or t_limit, whichever comes first, with `sample_count` uniform steps, each integrated
+// analytically for the transmittance across it (Hillaire 2020, eq. 11 of the 2015 course notes).
+// `transmittance` receives the transmittance over the marched segment.
+vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, Number r, Number mu, Number mu_s, Number nu,
+    Number t_limit, int sample_count, OUT(vec3) transmittance) {
+  transmittance = vec3(1.0);
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
+    return vec3(0.0);
+  }
+  bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
+  Number t_max = min(DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground), t_limit);
+  Number dt = t_max / Number(sample_count);
+  Number rayleigh_phase = GetRayleighPhase(atmosphere, nu);
+  Number mie_phase = GetMiePhase(atmosphere, nu);
+  vec3 radiance = vec3(0.0);
+  for (int i = 0; i < sample_count; ++i) {
+    Number t = (Number(i) + 0.5) * dt;
+    Number r_i = sqrt(t * t + 2.0 * r * mu * t + r * r);
+    Number mu_s_i = ClampCosine((r * mu_s + t * nu) / r_i);
+    MediumSample medium = SampleMedium(atmosphere, r_i);
+    vec3 step_transmittance = exp(-medium.extinction * dt);
+    vec3 sun_transmittance = GetTransmittanceToSun(atmosphere, transmittance_texture, r_i, mu_s_i);
+    vec3 multiple_scattering = GetMultiScattering(atmosphere, multiple_scattering_texture, r_i, mu_s_i);
+    vec3 source = sun_transmittance * (medium.rayleigh_scattering * rayleigh_phase + medium.mie_scattering * mie_phase) +
+        multiple_scattering * medium.scattering;
+    radiance += transmittance * source * IntegrateStep(medium.extinction, step_transmittance, dt);
+    transmittance *= step_transmittance;
+  }
+  return radiance;
+}
+
+// Transmittance along the view ray to the top of the atmosphere, 0 where the ray meets the
+// ground, for an observer inside or outside the atmosphere.
+vec3 GetViewTransmittance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    Number r, Number mu) {
+  if (r > atmosphere.top_radius) {
+    Number d = DistanceToAtmosphereEntry(atmosphere, r, mu);
+    if (d < 0.0) {
+      return vec3(1.0);
+    }
+    Number r_entry = sqrt(d * d + 2.0 * r * mu * d + r * r);
+    mu = ClampCosine((r * mu + d) / r_entry);
+    r = atmosphere.top_radius;
+  }
+  if (RayIntersectsGround(atmosphere, r, mu)) {
+    return vec3(0.0);
+  }
+  return GetTransmittanceToTopAtmosphereBoundary(atmosphere, transmittance_texture, r, mu);
+}
+
+// Radiance of the sun disc seen along the view ray: a uniform disc of angular radius alpha whose
+// irradiance at the top of the atmosphere is 1, i.e. radiance 1 / (2 pi (1 - cos alpha)),
+// attenuated by the view transmittance. Zero outside the disc.
+vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    Number r, Number mu, Number nu) {
+  Number cos_alpha = cos(atmosphere.sun_angular_radius);
+  if (nu < cos_alpha) {
+    return vec3(0.0);
+  }
+  return GetViewTransmittance(atmosphere, transmittance_texture, r, mu) / (2.0 * kPi * (1.0 - cos_alpha));
+}
+
+// The sky-view table (Hillaire 2020, section 5.3) for one observer radius: x is the azimuth from
+// the sun over the full 360 degrees (texel i centred on 2 pi i / width; the sampler repeats in x),
+// y the view zenith with the non-linear latitude of the seed, which puts the horizon, dipping as
+// the observer rises, at y = 0.5 and samples densely around it:
+//   above the horizon  y = 0.5 * (1 - sqrt(1 - theta / theta_h)),
+//   below the horizon  y = 0.5 + 0.5 * sqrt((theta - theta_h) / beta),
+// where theta_h = pi - beta is the zenith angle of the horizon and cos beta = sqrt(r^2 - R^2) / r.
+vec2 GetSkyViewTextureUvFromViewAngles(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
+    Number mu, Number azimuth) {
+  Number beta = max(acos(clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0)),
+      1e-9);
+  Number zenith_horizon_angle = kPi - beta;
+  Number view_zenith = acos(ClampCosine(mu));
+  Number y;
+  if (view_zenith < zenith_horizon_angle) {
+    Number coord = view_zenith / zenith_horizon_angle;
+    y = 0.5 * (1.0 - SafeSqrt(1.0 - coord));
+  } else {
+    Number coord = min((view_zenith - zenith_horizon_angle) / beta, 1.0);
+    y = 0.5 + 0.5 * SafeSqrt(coord);
+  }
+  Number x = azimuth / (2.0 * kPi);
+  return vec2(x + 0.5 / Number(texture_size.x), GetTextureCoordFromUnitRange(y, texture_size.y));
+}
+
+void GetViewAnglesFromSkyViewTextureUv(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
+    IN(vec2) uv, OUT(Number) mu, OUT(Number) azimuth) {
+  Number beta = max(acos(clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0)),
+      1e-9);
+  Number zenith_horizon_angle = kPi - beta;
+  Number y = clamp(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
+  Number view_zenith;
+  if (y < 0.5) {
+    Number coord = 1.0 - 2.0 * y;  // = sqrt(1 - theta / theta_h)
+    view_zenith = zenith_horizon_angle * (1.0 - coord * coord);
+  } else {
+    Number coord = 2.0 * y - 1.0;  // = sqrt((theta - theta_h) / beta)
+    view_zenith = zenith_horizon_angle + beta * coord * coord;
+  }
+  mu = cos(view_zenith);
+  azimuth = (uv.x - 0.5 / Number(texture_size.x)) * 2.0 * kPi;
+}
+
+// The per-texel kernel of the sky-view table for an observer at radius r and a sun at zenith
+// cosine mu_s (azimuth 0).
+vec3 ComputeSkyViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, IN(ivec2) texture_size, IN(vec2) frag_coord, Number r,
+    Number mu_s, int sample_count) {
+  Number mu;
+  Number azimuth;
+  GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
+  Number nu = SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s;
+  vec3 transmittance;
+  return IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu, mu_s, nu,
+      1e30, sample_count, transmittance);
+}
+
+vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTexture) sky_view_texture, Number r,
+    Number mu, Number azimuth) {
+  vec2 uv = GetSkyViewTextureUvFromViewAngles(atmosphere, textureSize(sky_view_texture, 0), r, mu, azimuth);
+  return vec3(texture(sky_view_texture, uv));
+}
+
+// Aerial perspective (Hillaire 2020, section 5.4): a froxel volume over the camera frustum; slice
+// z of `depth` holds the in-scattered radiance and transmittance between the camera and the
+// distance (z + 1) / depth * max_distance along the texel's ray.
+Number GetAerialPerspectiveSliceDistance(Number slice_coordinate, int depth, Number max_distance) {
+  return slice_coordinate / Number(depth) * max_distance;
+}
