@@ -1,6 +1,7 @@
 // End-to-end tests of the `atmo` command line (DESIGN.md §4): each test runs the program in a
 // fresh temporary folder, capturing stdout and stderr to files, with tiny images so the whole
 // file stays fast.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,8 +12,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace {
 
@@ -73,8 +72,8 @@ class CliTest : public ::testing::Test {
 
   // Runs `atmo <args>` (a shell-quoted string) in the test's folder.
   RunResult Run(const std::string& args) const {
-    const std::string command = "cd '" + dir_.string() + "' && '" ATMO_CLI_PATH "' " + args +
-                                " >stdout.txt 2>stderr.txt";
+    const std::string command =
+        "cd '" + dir_.string() + "' && '" ATMO_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
     const int status = std::system(command.c_str());
     RunResult result;
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -143,8 +142,9 @@ TEST_F(CliTest, DumpedPresetGivesTheSameSamplesAsThePreset) {
 }
 
 TEST_F(CliTest, SingleConfigurationGivesOneRowPerChannel) {
-  const RunResult r = Run("sample --model hillaire --preset earth --altitude 0 --sun-zenith 30 "
-                          "--view-zenith 60 --azimuth 90");
+  const RunResult r =
+      Run("sample --model hillaire --preset earth --altitude 0 --sun-zenith 30 "
+          "--view-zenith 60 --azimuth 90");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = SampleRows(r.out);
   ASSERT_EQ(rows.size(), 3u);
@@ -178,7 +178,8 @@ TEST_F(CliTest, ViewIntoTheGroundHasZeroTransmittance) {
 
 TEST_F(CliTest, GridGivesThreeRowsPerInputRowWithInputsEchoed) {
   // Surrounding whitespace, CRLF line ends and blank lines are tolerated.
-  WriteFile(dir_ / "grid.csv", std::string(" ") + kGridHeader + " \r\n"
+  WriteFile(dir_ / "grid.csv", std::string(" ") + kGridHeader +
+                                   " \r\n"
                                    "0,30,60,90\r\n"
                                    "\n"
                                    "1000, 30, 10, 180\n"
@@ -187,8 +188,10 @@ TEST_F(CliTest, GridGivesThreeRowsPerInputRowWithInputsEchoed) {
   const RunResult r = Run("sample --grid grid.csv --out out.csv");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = SampleRows(ReadFile(dir_ / "out.csv"));
-  const std::vector<std::vector<std::string>> inputs = {
-      {"0", "30", "60", "90"}, {"1000", "30", "10", "180"}, {"1000", "85.5", "90", "0"}, {"20000", "100", "45", "270"}};
+  const std::vector<std::vector<std::string>> inputs = {{"0", "30", "60", "90"},
+                                                        {"1000", "30", "10", "180"},
+                                                        {"1000", "85.5", "90", "0"},
+                                                        {"20000", "100", "45", "270"}};
   ASSERT_EQ(rows.size(), inputs.size() * 3);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ASSERT_EQ(rows[i].size(), 8u);
@@ -202,8 +205,8 @@ TEST_F(CliTest, RenderWritesExrAndPngForEveryCamera) {
   for (const char* camera : {"perspective", "fisheye", "equirect"}) {
     const std::string exr = std::string(camera) + ".exr";
     const std::string png = std::string(camera) + ".png";
-    const RunResult r =
-        Run(std::string("render --width 64 --height 32 --camera ") + camera + " --exr " + exr + " --png " + png);
+    const RunResult r = Run(std::string("render --width 64 --height 32 --camera ") + camera + " --exr " +
+                            exr + " --png " + png);
     ASSERT_EQ(r.exit_code, 0) << camera << ": " << r.err;
     EXPECT_EQ(Lines(r.out).size(), 1u) << r.out;
     EXPECT_GT(fs::file_size(dir_ / exr), 0u);
@@ -218,6 +221,7 @@ TEST_F(CliTest, RenderWritesExrAndPngForEveryCamera) {
 struct FailureCase {
   const char* name;
   const char* args;
+  const char* message_part;  // a part of the error message that says what was wrong
 };
 
 class CliFailureTest : public CliTest, public ::testing::WithParamInterface<FailureCase> {};
@@ -236,6 +240,7 @@ TEST_P(CliFailureTest, FailsWithOneLineAndLeavesOutputsUntouched) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(r.err.rfind("atmo: error:", 0), 0u) << r.err;
   EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find(GetParam().message_part), std::string::npos) << r.err;
   for (const std::string& output : outputs) {
     EXPECT_EQ(ReadFile(dir_ / output), "previous " + output) << output;
   }
@@ -245,25 +250,31 @@ TEST_P(CliFailureTest, FailsWithOneLineAndLeavesOutputsUntouched) {
 #define ATMO_TINY_RENDER " --width 8 --height 4"
 
 const FailureCase kFailureCases[] = {
-    {"MalformedJsonConfig", "sample --config bad.json" ATMO_SAMPLE_ONE},
-    {"NegativeTopRadius", "sample --config negative_top.json" ATMO_SAMPLE_ONE},
-    {"UnknownConfigKey", "render --config unknown_key.json" ATMO_TINY_RENDER},
-    {"NanAltitudeRender", "render --altitude nan" ATMO_TINY_RENDER},
-    {"NanAltitudeSample", "sample --altitude nan --sun-zenith 30 --view-zenith 60 --azimuth 90 --out out.csv"},
-    {"UnwritablePng", "render --png /nonexistent-dir/x.png" ATMO_TINY_RENDER},
-    {"UnwritableOut", "sample --altitude 0 --sun-zenith 30 --view-zenith 60 --azimuth 90 --out /nonexistent-dir/x.csv"},
-    {"AbsurdResolution", "render --width 100000 --height 4"},
-    {"UnknownModel", "sample --model no-such-model" ATMO_SAMPLE_ONE},
-    {"UnknownPreset", "render --preset no-such-preset" ATMO_TINY_RENDER},
-    {"BadCsvHeader", "sample --grid bad_header.csv --out out.csv"},
-    {"CsvRowWithThreeNumbers", "sample --grid three_numbers.csv --out out.csv"},
-    {"PresetAndConfigTogether", "sample --preset earth --config earth.json" ATMO_SAMPLE_ONE},
-    {"GlBackend", "render --backend gl" ATMO_TINY_RENDER},
-    {"ViewZenithOutOfRange", "sample --altitude 0 --sun-zenith 30 --view-zenith 190 --azimuth 0 --out out.csv"},
-    {"GridWithSingleConfiguration", "sample --grid three_numbers.csv --altitude 0 --out out.csv"},
-    {"MissingSingleConfigurationValue", "sample --altitude 0 --sun-zenith 30 --view-zenith 60 --out out.csv"},
-    {"MalformedModelOption", "sample --option novalue" ATMO_SAMPLE_ONE},
-    {"ThreadsOutOfRange", "render --threads 0" ATMO_TINY_RENDER},
+    {"MalformedJsonConfig", "sample --config bad.json" ATMO_SAMPLE_ONE, "bad.json"},
+    {"NegativeTopRadius", "sample --config negative_top.json" ATMO_SAMPLE_ONE, "top_radius_m"},
+    {"UnknownConfigKey", "render --config unknown_key.json" ATMO_TINY_RENDER, "no_such_key"},
+    {"NanAltitudeRender", "render --altitude nan" ATMO_TINY_RENDER, "--altitude"},
+    {"NanAltitudeSample", "sample --altitude nan --sun-zenith 30 --view-zenith 60 --azimuth 90 --out out.csv",
+     "--altitude"},
+    {"UnwritablePng", "render --png /nonexistent-dir/x.png" ATMO_TINY_RENDER, "/nonexistent-dir"},
+    {"UnwritableOut",
+     "sample --altitude 0 --sun-zenith 30 --view-zenith 60 --azimuth 90 --out /nonexistent-dir/x.csv",
+     "/nonexistent-dir"},
+    {"AbsurdResolution", "render --width 100000 --height 4", "--width"},
+    {"UnknownModel", "sample --model no-such-model" ATMO_SAMPLE_ONE, "no-such-model"},
+    {"UnknownPreset", "render --preset no-such-preset" ATMO_TINY_RENDER, "no-such-preset"},
+    {"BadCsvHeader", "sample --grid bad_header.csv --out out.csv", "bad_header.csv:1:"},
+    {"CsvRowWithThreeNumbers", "sample --grid three_numbers.csv --out out.csv",
+     "three_numbers.csv:3: expected 4 comma-separated numbers"},
+    {"PresetAndConfigTogether", "sample --preset earth --config earth.json" ATMO_SAMPLE_ONE, "--config"},
+    {"GlBackend", "render --backend gl" ATMO_TINY_RENDER, "the gl backend is not available in this build"},
+    {"ViewZenithOutOfRange",
+     "sample --altitude 0 --sun-zenith 30 --view-zenith 190 --azimuth 0 --out out.csv", "--view-zenith"},
+    {"GridWithSingleConfiguration", "sample --grid three_numbers.csv --altitude 0 --out out.csv", "--grid"},
+    {"MissingSingleConfigurationValue", "sample --altitude 0 --sun-zenith 30 --view-zenith 60 --out out.csv",
+     "--azimuth"},
+    {"MalformedModelOption", "sample --option novalue" ATMO_SAMPLE_ONE, "novalue"},
+    {"ThreadsOutOfRange", "render --threads 0" ATMO_TINY_RENDER, "--threads"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Cli, CliFailureTest, ::testing::ValuesIn(kFailureCases),

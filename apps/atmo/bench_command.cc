@@ -4,12 +4,12 @@
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
 // repeats of the pass's last duration (PassTimings), plus "all_luts" (the sum of the model's
 // "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here).
+#include <oneapi/tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
-
-#include <oneapi/tbb/global_control.h>
 
 #include "atmo/error.h"
 #include "atmo/render.h"
@@ -40,7 +40,8 @@ double Median(std::vector<double> values) {
 }
 
 bool EndsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 }  // namespace
@@ -97,7 +98,8 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
   std::printf("%-*s  %10s  %10s  %10s\n", static_cast<int>(width), "pass", "median_ms", "min_ms", "max_ms");
   for (const auto& [name, values] : samples.passes()) {
     std::printf("%-*s  %10.3f  %10.3f  %10.3f\n", static_cast<int>(width), name.c_str(), Median(values),
-                *std::min_element(values.begin(), values.end()), *std::max_element(values.begin(), values.end()));
+                *std::min_element(values.begin(), values.end()),
+                *std::max_element(values.begin(), values.end()));
   }
   return 0;
 }

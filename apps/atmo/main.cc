@@ -10,15 +10,15 @@
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
 // for a command line that does not parse, 1 for anything else.
+#include <oneapi/tbb/global_control.h>
+
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <optional>
 #include <string>
-
-#include <CLI/CLI.hpp>
-#include <oneapi/tbb/global_control.h>
 
 #include "atmo/error.h"
 #include "atmo/render.h"
@@ -58,6 +58,17 @@ const CLI::Validator kPositive(
     },
     "POSITIVE", "POSITIVE");
 
+// [min, max] for a floating-point value, printed with %g (CLI::Range prints "0.000000").
+CLI::Validator RangeOf(double min, double max) {
+  return CLI::Validator(
+      [min, max](std::string& text) -> std::string {
+        const double value = std::strtod(text.c_str(), nullptr);
+        if (value >= min && value <= max) return {};
+        return atmo::cli::Format("%s is outside [%g, %g]", text.c_str(), min, max);
+      },
+      atmo::cli::Format("[%g, %g]", min, max));
+}
+
 // Adds a floating-point option that must be finite.
 CLI::Option* AddNumber(CLI::App* app, const std::string& name, double& value, const std::string& help) {
   return app->add_option(name, value, help)->check(kFinite)->capture_default_str();
@@ -74,14 +85,16 @@ CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::opti
 
 void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option("--model", common.model, "sky model (hillaire, ...)")->capture_default_str();
-  CLI::Option* preset =
-      app->add_option("--preset", common.preset, "parameter preset (see `atmo presets`)")->capture_default_str();
-  CLI::Option* config = app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
+  CLI::Option* preset = app->add_option("--preset", common.preset, "parameter preset (see `atmo presets`)")
+                            ->capture_default_str();
+  CLI::Option* config =
+      app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
   preset->excludes(config);
   app->add_option("--backend", common.backend, "cpu or gl")
       ->check(CLI::IsMember({"cpu", "gl"}))
       ->capture_default_str();
-  app->add_option("--threads", common.threads, "worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  app->add_option("--threads", common.threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
   app->add_option_function<std::uint64_t>(
       "--seed",
       [&common](const std::uint64_t& seed) {
@@ -89,7 +102,9 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
         common.seed_given = true;
       },
       "random seed for Monte Carlo models (deterministic models ignore it)");
-  app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")->expected(1)->take_all();
+  app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")
+      ->expected(1)
+      ->take_all();
 }
 
 }  // namespace
@@ -107,7 +122,7 @@ int main(int argc, char** argv) {
   render_app->add_option("--camera", render.camera, "perspective, fisheye or equirect")
       ->check(CLI::IsMember({"perspective", "fisheye", "equirect"}))
       ->capture_default_str();
-  const std::string side_help = " in pixels, 1.." + std::to_string(atmo::kMaxImageSide);
+  const std::string side_help = " in pixels";
   render_app->add_option("--width", render.width, "image width" + side_help)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
@@ -115,23 +130,27 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
-      ->check(CLI::Range(0.0, 180.0));
-  AddOptionalNumber(render_app, "--yaw", render.yaw_deg, "compass azimuth of the view in degrees [default: the sun's]");
-  AddNumber(render_app, "--pitch", render.pitch_deg, "elevation of the view in degrees")->check(CLI::Range(-90.0, 90.0));
+      ->check(RangeOf(0.0, 180.0));
+  AddOptionalNumber(render_app, "--yaw", render.yaw_deg,
+                    "compass azimuth of the view in degrees [default: the sun's]");
+  AddNumber(render_app, "--pitch", render.pitch_deg, "elevation of the view in degrees")
+      ->check(RangeOf(-90.0, 90.0));
   AddNumber(render_app, "--sun-elevation", render.sun_elevation_deg, "sun elevation in degrees")
-      ->check(CLI::Range(-90.0, 90.0));
+      ->check(RangeOf(-90.0, 90.0));
   AddNumber(render_app, "--sun-azimuth", render.sun_azimuth_deg, "sun compass azimuth in degrees");
   AddOptionalNumber(render_app, "--altitude", render.altitude_m,
                     "observer altitude in metres [default: the preset's]");
-  AddOptionalNumber(render_app, "--exposure", render.exposure, "tone-mapping exposure [default: the preset's]")
+  AddOptionalNumber(render_app, "--exposure", render.exposure,
+                    "tone-mapping exposure [default: the preset's]")
       ->check(kPositive);
   render_app->add_option("--tonemap", render.tonemap, "exp, aces or none")
       ->check(CLI::IsMember({"exp", "aces", "none"}))
       ->capture_default_str();
-  AddNumber(render_app, "--gamma", render.gamma, "display gamma")->check(CLI::Range(0.1, 10.0));
+  AddNumber(render_app, "--gamma", render.gamma, "display gamma")->check(RangeOf(0.1, 10.0));
   render_app->add_flag("--no-sun-disc", render.no_sun_disc, "leave the sun disc out");
   render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
-  render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")->capture_default_str();
+  render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")
+      ->capture_default_str();
 
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
@@ -141,10 +160,12 @@ int main(int argc, char** argv) {
   sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
   CLI::Option* single[] = {
       AddOptionalNumber(sample_app, "--altitude", sample.altitude_m, "observer altitude in metres"),
-      AddOptionalNumber(sample_app, "--sun-zenith", sample.sun_zenith_deg, "sun zenith angle in degrees [0, 180]")
-          ->check(CLI::Range(0.0, 180.0)),
-      AddOptionalNumber(sample_app, "--view-zenith", sample.view_zenith_deg, "view zenith angle in degrees [0, 180]")
-          ->check(CLI::Range(0.0, 180.0)),
+      AddOptionalNumber(sample_app, "--sun-zenith", sample.sun_zenith_deg,
+                        "sun zenith angle in degrees [0, 180]")
+          ->check(RangeOf(0.0, 180.0)),
+      AddOptionalNumber(sample_app, "--view-zenith", sample.view_zenith_deg,
+                        "view zenith angle in degrees [0, 180]")
+          ->check(RangeOf(0.0, 180.0)),
       AddOptionalNumber(sample_app, "--azimuth", sample.azimuth_deg,
                         "azimuth between view and sun in degrees (0: towards the sun)"),
   };
@@ -158,8 +179,9 @@ int main(int argc, char** argv) {
   atmo::cli::BenchCommand bench;
   CLI::App* bench_app = app.add_subcommand("bench", "time the precomputation passes and a frame");
   AddCommonOptions(bench_app, common);
-  CLI::Option* repeat =
-      bench_app->add_option("--repeat", bench.repeat, "repetitions")->check(CLI::Range(1, 100000))->capture_default_str();
+  CLI::Option* repeat = bench_app->add_option("--repeat", bench.repeat, "repetitions")
+                            ->check(CLI::Range(1, 100000))
+                            ->capture_default_str();
   bench_app->add_flag("--quick", bench.quick, "3 repetitions")->excludes(repeat);
   bench_app->add_option("--width", bench.width, "frame width" + side_help)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
@@ -173,8 +195,7 @@ int main(int argc, char** argv) {
     if (sample_app->parsed() && sample.grid_path.empty()) {
       for (CLI::Option* option : single) {
         if (option->count() == 0) {
-          throw CLI::RequiredError("without --grid, " + option->get_name() +
-                                   " is required (give --altitude, --sun-zenith, --view-zenith and --azimuth)");
+          throw CLI::RequiredError(option->get_name() + " (or --grid)");
         }
       }
     }

@@ -28,7 +28,8 @@ std::string PresetSummary(const AtmosphereParameters& p) {
   if (p.geometry == Geometry::kHalfSpace) return "half-space; channels " + channels + " nm";
   std::string media;
   for (const auto& [name, medium] : {std::pair<const char*, const Medium*>{"rayleigh", &p.rayleigh},
-                                     {"mie", &p.mie}, {"ozone", &p.ozone}}) {
+                                     {"mie", &p.mie},
+                                     {"ozone", &p.ozone}}) {
     if (medium->present()) media += std::string(media.empty() ? "" : "+") + name;
   }
   return Format("ground %.10g km, top %.10g km; channels %s nm; %s", p.ground_radius_m / 1e3,
@@ -46,7 +47,8 @@ int RunPresets(const CommonOptions& common, const PresetsCommand& command) {
   }
   for (const std::string& name : PresetNames()) {
     const AtmosphereParameters parameters = Preset(name);
-    std::printf("%-16s %s (%s)\n", name.c_str(), PresetSource(name).c_str(), PresetSummary(parameters).c_str());
+    std::printf("%-16s %s (%s)\n", name.c_str(), PresetSource(name).c_str(),
+                PresetSummary(parameters).c_str());
   }
   return 0;
 }

@@ -85,7 +85,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   std::string files;
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
   std::printf("%s %s (%dx%d %s, %s, %s) in %.1f ms\n", written.empty() ? "rendered" : "wrote",
-              written.empty() ? "nothing" : files.c_str(), image.width, image.height,
+              written.empty() ? "without writing a file" : files.c_str(), image.width, image.height,
               std::string(ToString(settings.camera.kind)).c_str(), std::string(model->name()).c_str(),
               parameters.name.c_str(), render_ms);
   return 0;

@@ -47,12 +47,18 @@ vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(Transmit
   }
   bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
   Number t_max = min(DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground), t_limit);
-  Number dt = t_max / Number(sample_count);
   Number rayleigh_phase = GetRayleighPhase(atmosphere, nu);
   Number mie_phase = GetMiePhase(atmosphere, nu);
   vec3 radiance = vec3(0.0);
   for (int i = 0; i < sample_count; ++i) {
-    Number t = (Number(i) + 0.5) * dt;
+    // Step i spans [t_max x_i^2, t_max x_{i+1}^2] with x uniform: short steps near the observer,
+    // where the density is highest for rays that rise and the transmittance weighs most for all.
+    Number x_0 = Number(i) / Number(sample_count);
+    Number x_1 = Number(i + 1) / Number(sample_count);
+    Number t_0 = t_max * x_0 * x_0;
+    Number t_1 = t_max * x_1 * x_1;
+    Number dt = t_1 - t_0;
+    Number t = 0.5 * (t_0 + t_1);
     Number r_i = sqrt(t * t + 2.0 * r * mu * t + r * r);
     Number mu_s_i = ClampCosine((r * mu_s + t * nu) / r_i);
     MediumSample medium = SampleMedium(atmosphere, r_i);
