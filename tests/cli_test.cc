@@ -1,17 +1,22 @@
 // End-to-end tests of the `atmo` command line (DESIGN.md §4): each test runs the program in a
 // fresh temporary folder, capturing stdout and stderr to files, with tiny images so the whole
 // file stays fast.
-#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+
+#include "atmo/image.h"
 
 namespace {
 
@@ -213,6 +218,29 @@ TEST_F(CliTest, RenderWritesExrAndPngForEveryCamera) {
     const std::string png_bytes = ReadFile(dir_ / png);
     ASSERT_GE(png_bytes.size(), 8u);
     EXPECT_EQ(png_bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << camera;
+  }
+}
+
+TEST_F(CliTest, RenderedExrCarriesItsSettings) {
+  const RunResult r =
+      Run("render --width 16 --height 8 --camera equirect --sun-elevation 20 --seed 7 "
+          "--threads 1 --exr sky.exr --png ''");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "sky.png"));
+  atmo::ImageMetadata metadata;
+  const atmo::Image image = atmo::ReadExr(dir_ / "sky.exr", &metadata);
+  EXPECT_EQ(image.width, 16);
+  EXPECT_EQ(image.height, 8);
+  std::map<std::string, std::string> values(metadata.begin(), metadata.end());
+  EXPECT_EQ(values["atmo:version"], ATMO_VERSION);
+  EXPECT_EQ(values["atmo:model"], "hillaire");
+  EXPECT_EQ(values["atmo:preset"], "earth");
+  EXPECT_EQ(values["atmo:camera"], "equirect");
+  EXPECT_EQ(values["atmo:sunElevationDeg"], "20");
+  EXPECT_EQ(values["atmo:wavelengthsNm"], "680, 550, 440");
+  EXPECT_EQ(values["atmo:parameterHash"].size(), 16u);
+  for (const char* key : {"atmo:radianceUnit", "atmo:renderTimeMs", "atmo:sunAzimuthDeg", "atmo:altitudeM"}) {
+    EXPECT_FALSE(values[key].empty()) << key;
   }
 }
 

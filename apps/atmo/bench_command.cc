@@ -4,12 +4,13 @@
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
 // repeats of the pass's last duration (PassTimings), plus "all_luts" (the sum of the model's
 // "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here).
-#include <oneapi/tbb/global_control.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
+
+#include <oneapi/tbb/global_control.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "atmo/render.h"
@@ -88,9 +89,11 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     samples.Add(frame_name, frame_ms);
   }
 
-  const std::size_t threads =
-      oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism);
-  std::printf("atmo bench: model %s, preset %s, %zu threads, %d repeats, %dx%d frame\n",
+  // The parallelism oneTBB uses: the --threads limit, at most the arena's concurrency.
+  const std::size_t threads = std::min<std::size_t>(
+      oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism),
+      static_cast<std::size_t>(oneapi::tbb::this_task_arena::max_concurrency()));
+  std::printf("atmo bench: model %s, preset %s, threads %zu, repeats %d, frame %dx%d\n",
               std::string(model->name()).c_str(), parameters.name.c_str(), threads, repeat, command.width,
               command.height);
   std::size_t width = 4;

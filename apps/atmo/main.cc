@@ -10,15 +10,15 @@
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
 // for a command line that does not parse, 1 for anything else.
-#include <oneapi/tbb/global_control.h>
-
-#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <optional>
 #include <string>
+
+#include <CLI/CLI.hpp>
+#include <oneapi/tbb/global_control.h>
 
 #include "atmo/error.h"
 #include "atmo/render.h"

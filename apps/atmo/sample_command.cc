@@ -11,11 +11,12 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <glm/glm.hpp>
 #include <map>
 #include <sstream>
 #include <string_view>
 #include <utility>
+
+#include <glm/glm.hpp>
 
 #include "atmo/error.h"
 #include "atmo/image.h"

@@ -21,16 +21,11 @@ void CheckFinite(double value, const char* name) {
 }  // namespace
 
 shared::CameraParameters ToSharedCamera(const Camera& camera) {
-  shared::CameraParameters c;
-  c.kind = camera.kind == CameraKind::kFisheye    ? shared::kCameraFisheye
-           : camera.kind == CameraKind::kEquirect ? shared::kCameraEquirect
-                                                  : shared::kCameraPerspective;
-  c.width = camera.width;
-  c.height = camera.height;
-  c.horizontal_fov = glm::radians(camera.fov_deg);
-  c.yaw = glm::radians(camera.yaw_deg);
-  c.pitch = glm::radians(camera.pitch_deg);
-  return c;
+  const int kind = camera.kind == CameraKind::kFisheye    ? shared::kCameraFisheye
+                   : camera.kind == CameraKind::kEquirect ? shared::kCameraEquirect
+                                                          : shared::kCameraPerspective;
+  return shared::MakeCameraParameters(kind, camera.width, camera.height, glm::radians(camera.fov_deg),
+                                      glm::radians(camera.yaw_deg), glm::radians(camera.pitch_deg));
 }
 
 void ValidateCamera(const Camera& camera) {

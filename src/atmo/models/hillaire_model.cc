@@ -142,6 +142,7 @@ class HillaireSkyView final : public SkyView {
         r_(model.parameters().ground_radius_m + altitude_m),
         mu_s_(shared::ClampCosine(sun.z)) {
     const auto& batches = model.batches();
+    horizon_dip_ = shared::GetHorizonDipAngle(batches.front().atmosphere, r_);
     if (model.settings().use_sky_view_lut && r_ <= batches.front().atmosphere.top_radius) {
       const auto start = Clock::now();
       for (const auto& batch : batches) sky_view_.push_back(model.ComputeSkyViewLut(batch, r_, mu_s_));
@@ -204,8 +205,9 @@ class HillaireSkyView final : public SkyView {
         Radiance(view, values);
       } else {
         const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+        const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
         for (std::size_t b = 0; b < batches.size(); ++b) {
-          const shared::vec3 l = shared::GetSkyRadianceFromSkyView(batches[b].atmosphere, sky_view_[b], r_, view.z, azimuth);
+          const shared::vec3 l = shared::vec3(shared::texture(sky_view_[b], uv));
           for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) values[3 * b + c] = l[static_cast<int>(c)];
         }
       }
@@ -232,6 +234,7 @@ class HillaireSkyView final : public SkyView {
   const HillaireModel& model_;
   double r_;
   double mu_s_;
+  double horizon_dip_;                       // GetHorizonDipAngle(r_), for per-pixel lookups
   std::vector<shared::Texture2D> sky_view_;  // one per batch; empty where the table does not serve
 };
 

@@ -7,6 +7,22 @@ vec3 GetDirectionFromAzimuthElevation(Number azimuth, Number elevation) {
   return vec3(cos(elevation) * sin(azimuth), cos(elevation) * cos(azimuth), sin(elevation));
 }
 
+CameraParameters MakeCameraParameters(int kind, int width, int height, Number horizontal_fov, Number yaw,
+    Number pitch) {
+  CameraParameters camera;
+  camera.kind = kind;
+  camera.width = width;
+  camera.height = height;
+  camera.horizontal_fov = horizontal_fov;
+  camera.yaw = yaw;
+  camera.pitch = pitch;
+  camera.forward = GetDirectionFromAzimuthElevation(yaw, pitch);
+  camera.right = vec3(cos(yaw), -sin(yaw), 0.0);
+  camera.up = cross(camera.right, camera.forward);
+  camera.tan_half_fov = tan(0.5 * horizontal_fov);
+  return camera;
+}
+
 // Writes the view direction of the pixel; returns false where the camera sees nothing (outside
 // the fisheye's circle).
 bool GetCameraRayDirection(IN(CameraParameters) camera, IN(vec2) frag_coord, OUT(vec3) direction) {
@@ -33,19 +49,15 @@ bool GetCameraRayDirection(IN(CameraParameters) camera, IN(vec2) frag_coord, OUT
     direction = GetDirectionFromAzimuthElevation(azimuth, elevation);
     return true;
   }
-  vec3 forward = GetDirectionFromAzimuthElevation(camera.yaw, camera.pitch);
-  vec3 right = vec3(cos(camera.yaw), -sin(camera.yaw), 0.0);
-  vec3 up = cross(right, forward);
-  Number tan_half = tan(0.5 * camera.horizontal_fov);
-  Number x = (2.0 * frag_coord.x / w - 1.0) * tan_half;
-  Number y = (1.0 - 2.0 * frag_coord.y / h) * tan_half * h / w;
-  direction = normalize(forward + x * right + y * up);
+  Number x = (2.0 * frag_coord.x / w - 1.0) * camera.tan_half_fov;
+  Number y = (1.0 - 2.0 * frag_coord.y / h) * camera.tan_half_fov * h / w;
+  direction = normalize(camera.forward + x * camera.right + y * camera.up);
   return true;
 }
 
 // Azimuth of the view direction measured from the sun's, in [0, 2 pi), about the local zenith.
 Number GetAzimuthFromSun(IN(vec3) view_direction, IN(vec3) sun_direction) {
-  Number a = atan(view_direction.x * sun_direction.y - view_direction.y * sun_direction.x,
-                  view_direction.x * sun_direction.x + view_direction.y * sun_direction.y);
+  Number a = FastAtan2(view_direction.x * sun_direction.y - view_direction.y * sun_direction.x,
+                       view_direction.x * sun_direction.x + view_direction.y * sun_direction.y);
   return a < 0.0 ? a + 2.0 * kPi : a;
 }

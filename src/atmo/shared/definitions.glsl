@@ -59,4 +59,9 @@ struct CameraParameters {
   Number horizontal_fov;   // radians (perspective)
   Number yaw;              // radians, compass azimuth of the view centre
   Number pitch;            // radians, elevation of the view centre (perspective)
+  // Derived by MakeCameraParameters, so that pixels need no trigonometry (perspective).
+  vec3 forward;
+  vec3 right;
+  vec3 up;
+  Number tan_half_fov;
 };

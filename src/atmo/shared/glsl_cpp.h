@@ -95,6 +95,7 @@ inline void LinearTaps(double u, int size, bool repeat, int& i0, int& i1, double
   w = x - fl;
   i0 = static_cast<int>(fl);
   i1 = i0 + 1;
+  if (i0 >= 0 && i1 < size) return;  // inside: no wrapping or clamping
   if (repeat) {
     i0 = ((i0 % size) + size) % size;
     i1 = ((i1 % size) + size) % size;

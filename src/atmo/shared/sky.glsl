@@ -111,12 +111,16 @@ vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTex
 //   above the horizon  y = 0.5 * (1 - sqrt(1 - theta / theta_h)),
 //   below the horizon  y = 0.5 + 0.5 * sqrt((theta - theta_h) / beta),
 // where theta_h = pi - beta is the zenith angle of the horizon and cos beta = sqrt(r^2 - R^2) / r.
-vec2 GetSkyViewTextureUvFromViewAngles(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
-    Number mu, Number azimuth) {
-  Number beta = max(acos(clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0)),
-      1e-9);
+// The angle beta between the horizontal and the geometric horizon seen from radius r.
+Number GetHorizonDipAngle(IN(AtmosphereParameters) atmosphere, Number r) {
+  Number cos_beta = clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0);
+  return max(acos(cos_beta), 1e-9);
+}
+
+// The mapping with beta = GetHorizonDipAngle(r) computed once per observer.
+vec2 GetSkyViewTextureUvFromBeta(IN(ivec2) texture_size, Number beta, Number mu, Number azimuth) {
   Number zenith_horizon_angle = kPi - beta;
-  Number view_zenith = acos(ClampCosine(mu));
+  Number view_zenith = FastAcos(ClampCosine(mu));
   Number y;
   if (view_zenith < zenith_horizon_angle) {
     Number coord = view_zenith / zenith_horizon_angle;
@@ -129,10 +133,14 @@ vec2 GetSkyViewTextureUvFromViewAngles(IN(AtmosphereParameters) atmosphere, IN(i
   return vec2(x + 0.5 / Number(texture_size.x), GetTextureCoordFromUnitRange(y, texture_size.y));
 }
 
+vec2 GetSkyViewTextureUvFromViewAngles(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
+    Number mu, Number azimuth) {
+  return GetSkyViewTextureUvFromBeta(texture_size, GetHorizonDipAngle(atmosphere, r), mu, azimuth);
+}
+
 void GetViewAnglesFromSkyViewTextureUv(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
     IN(vec2) uv, OUT(Number) mu, OUT(Number) azimuth) {
-  Number beta = max(acos(clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0)),
-      1e-9);
+  Number beta = GetHorizonDipAngle(atmosphere, r);
   Number zenith_horizon_angle = kPi - beta;
   Number y = clamp(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
   Number view_zenith;
