@@ -7,6 +7,7 @@
 //   atmo::Image img = atmo::Render(*model, s);   // linear; radiance x solar_irradiance per channel
 #pragma once
 
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -46,6 +47,11 @@ constexpr int kMaxImageSide = 16384;
 // Throws atmo::Error for invalid settings (non-finite angles, a resolution outside
 // [1, kMaxImageSide], a field of view outside (0, 180)) or a model whose channel count is not 3.
 Image Render(const Model& model, const RenderSettings& settings);
+
+// Renders a prepared view (its per-view tables already built) through a camera: the frame pass
+// alone. Radiance is multiplied per channel by `solar_irradiance` (one value per channel). Same
+// errors as Render for the camera; the view must have 3 channels.
+Image RenderView(const SkyView& sky, const Camera& camera, bool sun_disc, std::span<const double> solar_irradiance);
 
 // Unit direction towards the sun in the local frame from its elevation and compass azimuth.
 glm::dvec3 SunDirection(double elevation_deg, double azimuth_deg);

@@ -18,6 +18,13 @@ void CheckFinite(double value, const char* name) {
   if (!std::isfinite(value)) throw Error(std::string(name) + " must be finite");
 }
 
+void CheckThreeChannels(std::size_t channels) {
+  if (channels != 3) {
+    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
+                std::to_string(channels));
+  }
+}
+
 }  // namespace
 
 shared::CameraParameters ToSharedCamera(const Camera& camera) {
@@ -50,19 +57,24 @@ Image Render(const Model& model, const RenderSettings& settings) {
   CheckFinite(settings.altitude_m, "altitude");
   CheckFinite(settings.sun_elevation_deg, "sun elevation");
   CheckFinite(settings.sun_azimuth_deg, "sun azimuth");
-  const std::size_t channels = model.channel_count();
-  if (channels != 3) {
-    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
-                std::to_string(channels));
-  }
+  CheckThreeChannels(model.channel_count());
   const std::unique_ptr<SkyView> sky =
       model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
-  const shared::CameraParameters camera = ToSharedCamera(settings.camera);
-  const std::vector<double>& irradiance = model.parameters().solar_irradiance;
-  const int width = settings.camera.width;
-  Image image(width, settings.camera.height, 3);
-  const bool has_alpha = settings.camera.kind == CameraKind::kFisheye;
+  return RenderView(*sky, settings.camera, settings.sun_disc, model.parameters().solar_irradiance);
+}
+
+Image RenderView(const SkyView& sky, const Camera& camera_settings, bool sun_disc,
+                 std::span<const double> solar_irradiance) {
+  ValidateCamera(camera_settings);
+  CheckThreeChannels(sky.channel_count());
+  if (solar_irradiance.size() != 3) throw Error("solar_irradiance must have one value per channel");
+  const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const int width = camera_settings.width;
+  Image image(width, camera_settings.height, 3);
+  const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
+  const float irradiance[3] = {static_cast<float>(solar_irradiance[0]), static_cast<float>(solar_irradiance[1]),
+                               static_cast<float>(solar_irradiance[2])};
 
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
@@ -74,9 +86,9 @@ Image Render(const Model& model, const RenderSettings& settings) {
         if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
       }
       float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
-      sky->RadianceBatch(views, settings.sun_disc, std::span<float>(row, static_cast<std::size_t>(width) * 3));
+      sky.RadianceBatch(views, sun_disc, std::span<float>(row, static_cast<std::size_t>(width) * 3));
       for (int x = 0; x < width; ++x) {
-        for (int c = 0; c < 3; ++c) row[3 * x + c] *= static_cast<float>(irradiance[c]);
+        for (int c = 0; c < 3; ++c) row[3 * x + c] *= irradiance[c];
       }
     }
   });
