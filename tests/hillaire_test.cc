@@ -221,7 +221,8 @@ TEST(Hillaire, MultipleScatteringTableConverges) {
     }
   }
   std::printf("multiple scattering, 64 directions x 20 steps vs 400 x 100: worst relative difference %.4f\n", worst);
-  EXPECT_LT(worst, 0.02);
+  // 0.37 % measured with the mirrored Fibonacci lattice.
+  EXPECT_LT(worst, 0.01);
 }
 
 TEST(Hillaire, TwoDirectionMultipleScatteringIsACoarserApproximation) {

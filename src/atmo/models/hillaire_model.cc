@@ -9,6 +9,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "cpu/hillaire_tables.h"
 #include "physics/shared_parameters.h"
 
 namespace atmo {
@@ -66,7 +67,13 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
     if (key == "transmittance_lut") s.transmittance_lut = ParseSize(key, value, 2, 4096);
     else if (key == "transmittance_samples") s.transmittance_samples = ParseInt(key, value, 1, 100000);
     else if (key == "multiple_scattering_lut") s.multiple_scattering_lut = ParseSize(key, value, 2, 4096);
-    else if (key == "multiple_scattering_directions") s.multiple_scattering_directions = ParseInt(key, value, 2, 65536);
+    else if (key == "multiple_scattering_directions") {
+      s.multiple_scattering_directions = ParseInt(key, value, 2, 65536);
+      if (s.multiple_scattering_directions % 2 != 0) {
+        throw Error("option multiple_scattering_directions=" + value +
+                    ": expected an even number (a lattice and its mirror image; 2 = up and down)");
+      }
+    }
     else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseInt(key, value, 1, 100000);
     else if (key == "sky_view_lut") s.sky_view_lut = ParseSize(key, value, 2, 8192);
     else if (key == "sky_view_samples") s.sky_view_samples = ParseInt(key, value, 1, 100000);
@@ -107,11 +114,8 @@ void HillaireModel::ComputeTransmittanceLut(Batch& batch) const {
 void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
   const glm::ivec2 size = settings_.multiple_scattering_lut;
   batch.multiple_scattering = shared::Texture2D(size.x, size.y);
-  FillTexture(batch.multiple_scattering, [&](const shared::vec2& frag_coord) {
-    return shared::ComputeMultiScatteringTexel(batch.atmosphere, batch.transmittance, size, frag_coord,
-                                               settings_.multiple_scattering_directions,
-                                               settings_.multiple_scattering_samples);
-  });
+  cpu::ComputeMultipleScatteringTable(batch.atmosphere, batch.transmittance, settings_.multiple_scattering_directions,
+                                      settings_.multiple_scattering_samples, batch.multiple_scattering);
 }
 
 void HillaireModel::Precompute() {
@@ -126,10 +130,8 @@ void HillaireModel::Precompute() {
 shared::Texture2D HillaireModel::ComputeSkyViewLut(const Batch& batch, double r, double mu_s) const {
   const glm::ivec2 size = settings_.sky_view_lut;
   shared::Texture2D sky_view(size.x, size.y, /*repeat=*/true);
-  FillTexture(sky_view, [&](const shared::vec2& frag_coord) {
-    return shared::ComputeSkyViewTexel(batch.atmosphere, batch.transmittance, batch.multiple_scattering, size,
-                                       frag_coord, r, mu_s, settings_.sky_view_samples);
-  });
+  cpu::ComputeSkyViewTable(batch.atmosphere, batch.transmittance, batch.multiple_scattering, r, mu_s,
+                           settings_.sky_view_samples, sky_view);
   return sky_view;
 }
 

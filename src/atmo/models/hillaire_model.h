@@ -5,8 +5,9 @@
 //   transmittance_lut=256x64          transmittance to the top, Bruneton's (r, mu) mapping
 //   transmittance_samples=40          trapezoidal intervals per texel
 //   multiple_scattering_lut=32x32     Psi_ms(mu_s, r), isotropic orders >= 2, 1/(1 - f_ms) sum
-//   multiple_scattering_directions=64 directions over the sphere (Fibonacci lattice; 2 = the
-//                                     seed's up/down variant)
+//   multiple_scattering_directions=64 directions over the sphere (even: a Fibonacci lattice on the
+//                                     half sphere and its mirror image), or 2 = the seed's up/down
+//                                     variant
 //   multiple_scattering_samples=20    ray-march steps per direction
 //   sky_view_lut=192x108              per observer and sun: 360 degrees of azimuth x latitude with
 //                                     the horizon-following non-linear mapping

@@ -12,6 +12,20 @@ Number GetProfileDensity(IN(DensityProfile) profile, Number altitude) {
                                             : GetLayerDensity(profile.layers[1], altitude);
 }
 
+// Densities (unitless, in [0, 1]) of the Rayleigh, Mie and absorbing media at radius r.
+vec3 GetDensities(IN(AtmosphereParameters) atmosphere, Number r) {
+  Number altitude = max(r - atmosphere.bottom_radius, 0.0);
+  return vec3(GetProfileDensity(atmosphere.rayleigh_density, altitude),
+              GetProfileDensity(atmosphere.mie_density, altitude),
+              GetProfileDensity(atmosphere.absorption_density, altitude));
+}
+
+// Extinction (per length) from the three densities.
+vec3 GetExtinctionFromDensities(IN(AtmosphereParameters) atmosphere, IN(vec3) densities) {
+  return atmosphere.rayleigh_extinction * densities.x + atmosphere.mie_extinction * densities.y +
+      atmosphere.absorption_extinction * densities.z;
+}
+
 struct MediumSample {
   vec3 rayleigh_scattering;  // per length
   vec3 mie_scattering;       // per length
@@ -20,16 +34,12 @@ struct MediumSample {
 };
 
 MediumSample SampleMedium(IN(AtmosphereParameters) atmosphere, Number r) {
-  Number altitude = max(r - atmosphere.bottom_radius, 0.0);
-  Number rayleigh_density = GetProfileDensity(atmosphere.rayleigh_density, altitude);
-  Number mie_density = GetProfileDensity(atmosphere.mie_density, altitude);
-  Number absorption_density = GetProfileDensity(atmosphere.absorption_density, altitude);
+  vec3 densities = GetDensities(atmosphere, r);
   MediumSample medium;
-  medium.rayleigh_scattering = atmosphere.rayleigh_scattering * rayleigh_density;
-  medium.mie_scattering = atmosphere.mie_scattering * mie_density;
+  medium.rayleigh_scattering = atmosphere.rayleigh_scattering * densities.x;
+  medium.mie_scattering = atmosphere.mie_scattering * densities.y;
   medium.scattering = medium.rayleigh_scattering + medium.mie_scattering;
-  medium.extinction = atmosphere.rayleigh_extinction * rayleigh_density + atmosphere.mie_extinction * mie_density +
-      atmosphere.absorption_extinction * absorption_density;
+  medium.extinction = GetExtinctionFromDensities(atmosphere, densities);
   return medium;
 }
 

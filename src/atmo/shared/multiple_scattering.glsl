@@ -31,17 +31,24 @@ vec3 GetMultiScattering(IN(AtmosphereParameters) atmosphere, IN(MultiScatteringT
   return vec3(texture(multiple_scattering_texture, uv));
 }
 
-// Direction k of `count` over the unit sphere (z up). For count == 2 the seed's variant: straight
-// up and straight down. Otherwise a Fibonacci lattice: equal-area, uniformly distributed points,
-// each standing for a solid angle of 4 pi / count.
+// Direction k of `count` (even) over the unit sphere (z up). For count == 2 the seed's variant:
+// straight up and straight down. Otherwise a Fibonacci lattice of count / 2 points whose azimuths
+// are compressed into [0, pi) (uniform over the half sphere y >= 0), and its mirror image in the
+// plane y = 0 that holds the sun: uniformly distributed, each point standing for 4 pi / count sr,
+// and symmetric, so that mirrored pairs see the same sun. (An 8 x 8 grid of equal-area cells,
+// also symmetric, errs five times more against 400 directions: 1.9 % vs 0.37 %.)
 vec3 GetMultiScatteringDirection(int k, int count) {
   if (count == 2) {
     return vec3(0.0, 0.0, k == 0 ? 1.0 : -1.0);
   }
-  Number z = 1.0 - (2.0 * Number(k) + 1.0) / Number(count);
-  Number phi = Number(k) * kPi * (3.0 - sqrt(5.0));  // golden angle
+  int half_count = count / 2;
+  int j = k < half_count ? k : k - half_count;
+  Number z = 1.0 - (2.0 * Number(j) + 1.0) / Number(half_count);
+  Number golden_angle = kPi * (3.0 - sqrt(5.0));
+  Number turns = Number(j) * golden_angle / (2.0 * kPi);
+  Number phi = kPi * (turns - floor(turns));
   Number s = SafeSqrt(1.0 - z * z);
-  return vec3(s * cos(phi), s * sin(phi), z);
+  return vec3(s * cos(phi), (k < half_count ? 1.0 : -1.0) * s * sin(phi), z);
 }
 
 // Integrates, along the ray from radius r in direction `direction` (z up; the sun is
@@ -55,12 +62,15 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
   Number nu = dot(direction, sun_direction);
   bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
   Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
-  Number dt = t_max / Number(sample_count);
   vec3 throughput = vec3(1.0);
   luminance = vec3(0.0);
   transfer = vec3(0.0);
   for (int i = 0; i < sample_count; ++i) {
-    Number t = (Number(i) + 0.5) * dt;
+    // Quadratic steps, as in IntegrateScatteredRadiance: short near the point, long far away.
+    Number x_0 = Number(i) / Number(sample_count);
+    Number x_1 = Number(i + 1) / Number(sample_count);
+    Number dt = t_max * (x_1 * x_1 - x_0 * x_0);
+    Number t = 0.5 * t_max * (x_0 * x_0 + x_1 * x_1);
     Number r_i = sqrt(t * t + 2.0 * r * mu * t + r * r);
     Number mu_s_i = ClampCosine((r * mu_s + t * nu) / r_i);
     MediumSample medium = SampleMedium(atmosphere, r_i);

@@ -10,17 +10,18 @@
 vec3 ComputeOpticalDepthOfSegment(IN(AtmosphereParameters) atmosphere, Number r, Number mu, Number t_dense,
     Number t_far, int sample_count) {
   Number length = t_far - t_dense;
-  vec3 optical_depth = vec3(0.0);
-  for (int i = 0; i <= sample_count; ++i) {
+  // The integrals of the three densities, combined with the coefficients once at the end.
+  vec3 density_integrals = vec3(0.0);
+  for (int i = 1; i <= sample_count; ++i) {  // the sample at x = 0 has dt/dx = 0
     Number x = Number(i) / Number(sample_count);
     Number t = t_dense + length * x * x;
     Number dt_dx = 2.0 * abs(length) * x;
     // Distance from the planet centre to the sample point (law of cosines).
     Number r_i = sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0));
-    Number weight = (i == 0 || i == sample_count) ? 0.5 : 1.0;
-    optical_depth += SampleMedium(atmosphere, r_i).extinction * (weight * dt_dx / Number(sample_count));
+    Number weight = i == sample_count ? 0.5 : 1.0;
+    density_integrals += GetDensities(atmosphere, r_i) * (weight * dt_dx);
   }
-  return optical_depth;
+  return GetExtinctionFromDensities(atmosphere, density_integrals / Number(sample_count));
 }
 
 // Optical depth from radius r along mu to the top of the atmosphere with `sample_count`

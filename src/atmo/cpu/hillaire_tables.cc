@@ -1,0 +1,167 @@
+#include "cpu/hillaire_tables.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+namespace atmo::cpu {
+namespace {
+
+using shared::Number;
+using shared::vec2;
+using shared::vec3;
+
+template <typename RowFunction>
+void ForEachRow(int rows, const RowFunction& row_function) {
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, rows), [&](const oneapi::tbb::blocked_range<int>& range) {
+    for (int y = range.begin(); y < range.end(); ++y) row_function(y);
+  });
+}
+
+// The sun-independent part of one ray of the multiple-scattering integral.
+struct MultipleScatteringRay {
+  vec3 direction;
+  double weight;  // how many directions of the set this one stands for (2 for a mirrored pair)
+  std::vector<double> t;
+  std::vector<double> r;
+  std::vector<vec3> luminance_weight;  // throughput x step integral x scattering x isotropic phase
+  bool hits_ground;
+  double t_max;
+  vec3 ground_throughput;
+};
+
+}  // namespace
+
+void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
+                                    int direction_count, int sample_count, shared::Texture2D& table) {
+  const shared::ivec2 size(table.width, table.height);
+  // The directions of shared::GetMultiScatteringDirection; with the sun in the plane y = 0 the
+  // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
+  std::vector<std::pair<vec3, double>> directions;
+  if (direction_count == 2) {
+    directions = {{shared::GetMultiScatteringDirection(0, 2), 1.0}, {shared::GetMultiScatteringDirection(1, 2), 1.0}};
+  } else {
+    // Directions count/2.. are the mirror images of 0..count/2-1.
+    for (int k = 0; k < direction_count / 2; ++k) {
+      directions.emplace_back(shared::GetMultiScatteringDirection(k, direction_count), 2.0);
+    }
+  }
+
+  ForEachRow(size.y, [&](int y) {
+    double r, unused_mu_s;
+    shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
+    std::vector<MultipleScatteringRay> rays;
+    vec3 transfer_sum(0.0);
+    for (const auto& [direction, weight] : directions) {
+      MultipleScatteringRay ray;
+      ray.direction = direction;
+      ray.weight = weight;
+      const double mu = direction.z;
+      ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
+      ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
+      vec3 throughput(1.0);
+      vec3 transfer(0.0);
+      for (int i = 0; i < sample_count; ++i) {
+        // Steps as in shared::IntegrateMultiScatteringRay.
+        const double x_0 = double(i) / sample_count;
+        const double x_1 = double(i + 1) / sample_count;
+        const double dt = ray.t_max * (x_1 * x_1 - x_0 * x_0);
+        const double t = 0.5 * ray.t_max * (x_0 * x_0 + x_1 * x_1);
+        const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
+        const shared::MediumSample medium = shared::SampleMedium(a, r_i);
+        const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
+        const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+        ray.t.push_back(t);
+        ray.r.push_back(r_i);
+        ray.luminance_weight.push_back(step_integral * medium.scattering * shared::IsotropicPhaseFunction());
+        transfer += step_integral * medium.scattering;
+        throughput *= step_transmittance;
+      }
+      ray.ground_throughput = throughput;
+      transfer_sum += transfer * weight;
+      rays.push_back(std::move(ray));
+    }
+    const vec3 f_ms = transfer_sum / double(direction_count);
+
+    for (int x = 0; x < size.x; ++x) {
+      double unused_r, mu_s;
+      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
+      const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+      vec3 luminance_sum(0.0);
+      for (const MultipleScatteringRay& ray : rays) {
+        const double nu = glm::dot(ray.direction, sun);
+        vec3 luminance(0.0);
+        for (std::size_t i = 0; i < ray.t.size(); ++i) {
+          const double mu_s_i = shared::ClampCosine((r * mu_s + ray.t[i] * nu) / ray.r[i]);
+          luminance += ray.luminance_weight[i] * shared::GetTransmittanceToSun(a, transmittance, ray.r[i], mu_s_i);
+        }
+        if (ray.hits_ground) {
+          const double r_g = a.bottom_radius;
+          const double mu_s_g = shared::ClampCosine((r * mu_s + ray.t_max * nu) / r_g);
+          luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, r_g, mu_s_g) *
+                       a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
+        }
+        luminance_sum += luminance * ray.weight;
+      }
+      const vec3 second_order = luminance_sum / double(direction_count);
+      table.at(x, y) = glm::vec3(second_order / (vec3(1.0) - glm::min(f_ms, vec3(0.999))));
+    }
+  });
+}
+
+void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
+                         const shared::Texture2D& multiple_scattering, double r, double mu_s, int sample_count,
+                         shared::Texture2D& table) {
+  const shared::ivec2 size(table.width, table.height);
+  ForEachRow(size.y, [&](int y) {
+    // The view zenith of the row; the columns only change the azimuth from the sun.
+    double mu, unused_azimuth;
+    shared::GetViewAnglesFromSkyViewTextureUv(a, size, r, vec2(0.5, y + 0.5) / vec2(size), mu, unused_azimuth);
+    const bool hits_ground = shared::RayIntersectsGround(a, r, mu);
+    const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, hits_ground);
+    // Steps as in shared::IntegrateScatteredRadiance.
+    std::vector<double> t(sample_count), r_i(sample_count);
+    std::vector<vec3> weight(sample_count), rayleigh(sample_count), mie(sample_count), scattering(sample_count);
+    vec3 throughput(1.0);
+    for (int i = 0; i < sample_count; ++i) {
+      const double x_0 = double(i) / sample_count;
+      const double x_1 = double(i + 1) / sample_count;
+      const double t_0 = t_max * x_0 * x_0;
+      const double t_1 = t_max * x_1 * x_1;
+      const double dt = t_1 - t_0;
+      t[i] = 0.5 * (t_0 + t_1);
+      r_i[i] = std::sqrt(t[i] * t[i] + 2.0 * r * mu * t[i] + r * r);
+      const shared::MediumSample medium = shared::SampleMedium(a, r_i[i]);
+      const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
+      weight[i] = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+      rayleigh[i] = medium.rayleigh_scattering;
+      mie[i] = medium.mie_scattering;
+      scattering[i] = medium.scattering;
+      throughput *= step_transmittance;
+    }
+    // Column x and column (width - x) see azimuths phi and 2 pi - phi: the same nu.
+    for (int x = 0; 2 * x <= size.x; ++x) {
+      double unused_mu, azimuth;
+      shared::GetViewAnglesFromSkyViewTextureUv(a, size, r, vec2(x + 0.5, y + 0.5) / vec2(size), unused_mu, azimuth);
+      const double nu = shared::SafeSqrt(1.0 - mu * mu) * shared::SafeSqrt(1.0 - mu_s * mu_s) * std::cos(azimuth) +
+                        mu * mu_s;
+      const double rayleigh_phase = shared::GetRayleighPhase(a, nu);
+      const double mie_phase = shared::GetMiePhase(a, nu);
+      vec3 radiance(0.0);
+      for (int i = 0; i < sample_count; ++i) {
+        const double mu_s_i = shared::ClampCosine((r * mu_s + t[i] * nu) / r_i[i]);
+        const vec3 sun_transmittance = shared::GetTransmittanceToSun(a, transmittance, r_i[i], mu_s_i);
+        const vec3 ms = shared::GetMultiScattering(a, multiple_scattering, r_i[i], mu_s_i);
+        const vec3 source = sun_transmittance * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) + ms * scattering[i];
+        radiance += weight[i] * source;
+      }
+      table.at(x, y) = glm::vec3(radiance);
+      table.at((size.x - x) % size.x, y) = glm::vec3(radiance);
+    }
+  });
+}
+
+}  // namespace atmo::cpu

@@ -1,0 +1,27 @@
+// CPU evaluation of the hillaire tables that shares work between texels (private).
+//
+// The per-texel kernels of src/atmo/shared (ComputeMultiScatteringTexel, ComputeSkyViewTexel)
+// define the values; the GPU runs them as they are. On the CPU the same sums are evaluated in an
+// order that does the sun-independent work of a table row once: along a ray of fixed (r, mu) the
+// positions, media, step transmittances and throughputs do not depend on the sun, only the
+// transmittance to the sun and the multiple-scattering lookups do. Mirror symmetry about the
+// sun's vertical plane halves the rest. tests/hillaire_tables_test.cc checks that every texel
+// equals its per-texel kernel.
+#pragma once
+
+#include "shared/shared.h"
+
+namespace atmo::cpu {
+
+// Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
+void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,
+                                    const shared::Texture2D& transmittance, int direction_count, int sample_count,
+                                    shared::Texture2D& table);
+
+// Fills `table` (already sized) like shared::ComputeSkyViewTexel for an observer at radius
+// r <= top radius and a sun at zenith cosine mu_s, in parallel over rows.
+void ComputeSkyViewTable(const shared::AtmosphereParameters& atmosphere, const shared::Texture2D& transmittance,
+                         const shared::Texture2D& multiple_scattering, double r, double mu_s, int sample_count,
+                         shared::Texture2D& table);
+
+}  // namespace atmo::cpu

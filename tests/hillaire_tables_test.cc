@@ -1,0 +1,76 @@
+// The CPU's row-sharing evaluation of the hillaire tables equals the shared per-texel kernels
+// that define them (and that the GPU runs as they are).
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "cpu/hillaire_tables.h"
+#include "shared/shared.h"
+#include "test_atmospheres.h"
+
+namespace atmo::cpu {
+namespace {
+
+using shared::ivec2;
+using shared::Texture2D;
+using shared::vec2;
+
+Texture2D TransmittanceTable(const shared::AtmosphereParameters& a) {
+  Texture2D t(64, 16);
+  for (int y = 0; y < t.height; ++y) {
+    for (int x = 0; x < t.width; ++x) {
+      t.at(x, y) = glm::vec3(shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel(a, ivec2(64, 16), vec2(x + 0.5, y + 0.5), 40));
+    }
+  }
+  return t;
+}
+
+// Float storage of the tables bounds the agreement: a few float ulps.
+void ExpectSameTexel(const glm::vec3& fast, const glm::dvec3& reference, int x, int y) {
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(fast[c], reference[c], 1e-6 * std::abs(reference[c]) + 1e-30) << "texel " << x << "," << y;
+  }
+}
+
+TEST(HillaireTables, MultipleScatteringRowsEqualPerTexelKernel) {
+  const shared::AtmosphereParameters a = testing::EarthLike();
+  const Texture2D transmittance = TransmittanceTable(a);
+  for (int directions : {2, 16, 30}) {  // the seed's pair and two lattices
+    Texture2D table(8, 6);
+    ComputeMultipleScatteringTable(a, transmittance, directions, 12, table);
+    for (int y = 0; y < table.height; ++y) {
+      for (int x = 0; x < table.width; ++x) {
+        ExpectSameTexel(table.at(x, y),
+                        shared::ComputeMultiScatteringTexel(a, transmittance, ivec2(8, 6), vec2(x + 0.5, y + 0.5), directions, 12),
+                        x, y);
+      }
+    }
+  }
+}
+
+TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
+  const shared::AtmosphereParameters a = testing::EarthLike();
+  const Texture2D transmittance = TransmittanceTable(a);
+  Texture2D multiple_scattering(8, 8);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 10, multiple_scattering);
+  for (double altitude : {0.0, 1500.0, 60e3}) {
+    for (double mu_s : {0.9, 0.05, -0.2}) {
+      for (int width : {12, 13}) {  // even and odd: the mirrored columns
+        Texture2D table(width, 9, true);
+        const double r = a.bottom_radius + altitude;
+        ComputeSkyViewTable(a, transmittance, multiple_scattering, r, mu_s, 16, table);
+        for (int y = 0; y < table.height; ++y) {
+          for (int x = 0; x < table.width; ++x) {
+            ExpectSameTexel(table.at(x, y),
+                            shared::ComputeSkyViewTexel(a, transmittance, multiple_scattering, ivec2(width, 9),
+                                                        vec2(x + 0.5, y + 0.5), r, mu_s, 16),
+                            x, y);
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace atmo::cpu
