@@ -57,7 +57,7 @@ bool GetCameraRayDirection(IN(CameraParameters) camera, IN(vec2) frag_coord, OUT
 
 // Azimuth of the view direction measured from the sun's, in [0, 2 pi), about the local zenith.
 Number GetAzimuthFromSun(IN(vec3) view_direction, IN(vec3) sun_direction) {
-  Number a = FastAtan2(view_direction.x * sun_direction.y - view_direction.y * sun_direction.x,
-                       view_direction.x * sun_direction.x + view_direction.y * sun_direction.y);
+  Number a = atan(view_direction.x * sun_direction.y - view_direction.y * sun_direction.x,
+                  view_direction.x * sun_direction.x + view_direction.y * sun_direction.y);
   return a < 0.0 ? a + 2.0 * kPi : a;
 }

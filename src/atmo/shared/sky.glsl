@@ -120,7 +120,7 @@ Number GetHorizonDipAngle(IN(AtmosphereParameters) atmosphere, Number r) {
 // The mapping with beta = GetHorizonDipAngle(r) computed once per observer.
 vec2 GetSkyViewTextureUvFromBeta(IN(ivec2) texture_size, Number beta, Number mu, Number azimuth) {
   Number zenith_horizon_angle = kPi - beta;
-  Number view_zenith = FastAcos(ClampCosine(mu));
+  Number view_zenith = acos(ClampCosine(mu));
   Number y;
   if (view_zenith < zenith_horizon_angle) {
     Number coord = view_zenith / zenith_horizon_angle;
