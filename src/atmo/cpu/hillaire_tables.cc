@@ -7,10 +7,17 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#if defined(__GLIBC__) && defined(__x86_64__)
+// glibc's vector exp (libmvec): declaring the SIMD variants lets the compiler vectorise loops that
+// call exp. glibc's own math.h does the same, but only under -ffast-math. This file is compiled
+// with -fno-math-errno (src/atmo/CMakeLists.txt) so that exp has no side effect, and with
+// -fopenmp-simd for the reductions (`omp simd` only; no OpenMP runtime).
+extern "C" double exp(double) noexcept __attribute__((simd("notinbranch")));
+#endif
+
 namespace atmo::cpu {
 namespace {
 
-using shared::Number;
 using shared::vec2;
 using shared::vec3;
 
@@ -19,6 +26,53 @@ void ForEachRow(int rows, const RowFunction& row_function) {
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, rows), [&](const oneapi::tbb::blocked_range<int>& range) {
     for (int y = range.begin(); y < range.end(); ++y) row_function(y);
   });
+}
+
+// A density layer prepared for branch-free evaluation: an absent exponential gets scale 0, so that
+// exp never overflows into 0 * inf.
+struct Layer {
+  double exp_term, exp_scale, linear_term, constant_term;
+};
+
+Layer PrepareLayer(const shared::DensityProfileLayer& layer) {
+  return {layer.exp_term, layer.exp_term == 0.0 ? 0.0 : layer.exp_scale, layer.linear_term, layer.constant_term};
+}
+
+// Writes layer(altitude_j) for j < n, before the clamp; an absent exponential costs nothing.
+void EvaluateLayer(const Layer& layer, const double* altitude, int n, double* out) {
+  if (layer.exp_term == 0.0) {
+#pragma omp simd
+    for (int j = 0; j < n; ++j) out[j] = layer.linear_term * altitude[j] + layer.constant_term;
+  } else {
+#pragma omp simd
+    for (int j = 0; j < n; ++j) {
+      const double h = altitude[j];
+      out[j] = layer.exp_term * exp(layer.exp_scale * h) + layer.linear_term * h + layer.constant_term;
+    }
+  }
+}
+
+// Returns sum_j weight_j * density(altitude_j) for one profile, with the formula of
+// shared::GetProfileDensity (altitudes are >= 0, so a lower layer of width 0 never applies). The
+// layers are evaluated in loops without branches, which the compiler vectorises (a select or
+// clamp there keeps it from using the vector exp); selection, clamp and sum follow.
+double IntegrateProfile(const shared::DensityProfile& profile, const double* altitude, const double* weight, int n,
+                        double* lower, double* upper) {
+  const double width = profile.layers[0].width;
+  EvaluateLayer(PrepareLayer(profile.layers[1]), altitude, n, upper);
+  double sum = 0.0;
+  if (width <= 0.0) {
+#pragma omp simd reduction(+ : sum)
+    for (int j = 0; j < n; ++j) sum += weight[j] * std::min(std::max(upper[j], 0.0), 1.0);
+    return sum;
+  }
+  EvaluateLayer(PrepareLayer(profile.layers[0]), altitude, n, lower);
+#pragma omp simd reduction(+ : sum)
+  for (int j = 0; j < n; ++j) {
+    const double d = altitude[j] < width ? lower[j] : upper[j];
+    sum += weight[j] * std::min(std::max(d, 0.0), 1.0);
+  }
+  return sum;
 }
 
 // The sun-independent part of one ray of the multiple-scattering integral.
@@ -34,6 +88,53 @@ struct MultipleScatteringRay {
 };
 
 }  // namespace
+
+void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample_count, shared::Texture2D& table) {
+  const shared::ivec2 size(table.width, table.height);
+  ForEachRow(size.y, [&](int y) {
+    // The sample points and weights of shared::ComputeOpticalDepthOfSegment (one segment, or two
+    // split at the lowest point of the ray), as altitudes and weights per unit length.
+    std::vector<double> altitude(2 * sample_count + 2);
+    std::vector<double> weight(2 * sample_count + 2);
+    std::vector<double> lower(2 * sample_count + 2);
+    std::vector<double> upper(2 * sample_count + 2);
+    for (int x = 0; x < size.x; ++x) {
+      double r, mu;
+      shared::GetRMuFromTransmittanceTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), r, mu);
+      const double d = shared::DistanceToTopAtmosphereBoundary(a, r, mu);
+      int n = 0;
+      auto add_segment = [&](double t_dense, double t_far, int intervals) {
+        const double length = t_far - t_dense;
+        const double scale = 2.0 * std::abs(length) / intervals;
+        double* h = altitude.data() + n;
+        double* w = weight.data() + n;
+#pragma omp simd
+        for (int i = 1; i <= intervals; ++i) {
+          const double u = double(i) / intervals;
+          const double t = t_dense + length * u * u;
+          const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+          h[i - 1] = std::max(r_i - a.bottom_radius, 0.0);
+          w[i - 1] = scale * u;
+        }
+        w[intervals - 1] *= 0.5;  // the trapezoid's end point
+        n += intervals;
+      };
+      if (mu >= 0.0 || sample_count < 2) {
+        add_segment(0.0, d, sample_count);
+      } else {
+        const double t_lowest = std::min(-r * mu, d);
+        const int n_before = std::max(sample_count / 2, 1);
+        add_segment(t_lowest, 0.0, n_before);
+        add_segment(t_lowest, d, std::max(sample_count - n_before, 1));
+      }
+      auto integrate = [&](const shared::DensityProfile& profile) {
+        return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
+      };
+      const vec3 integrals(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
+      table.at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(a, integrals)));
+    }
+  });
+}
 
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
                                     int direction_count, int sample_count, shared::Texture2D& table) {

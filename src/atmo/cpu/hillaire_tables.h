@@ -2,7 +2,8 @@
 //
 // The per-texel kernels of src/atmo/shared (ComputeMultiScatteringTexel, ComputeSkyViewTexel)
 // define the values; the GPU runs them as they are. On the CPU the same sums are evaluated in an
-// order that does the sun-independent work of a table row once: along a ray of fixed (r, mu) the
+// order that does the sun-independent work of a table row once (the transmittance table, which
+// has no such sharing, vectorises along each ray instead): along a ray of fixed (r, mu) the
 // positions, media, step transmittances and throughputs do not depend on the sun, only the
 // transmittance to the sun and the multiple-scattering lookups do. Mirror symmetry about the
 // sun's vertical plane halves the rest. tests/hillaire_tables_test.cc checks that every texel
@@ -12,6 +13,12 @@
 #include "shared/shared.h"
 
 namespace atmo::cpu {
+
+// Fills `table` (already sized) like shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel: the
+// same sample points and weights, with the density profiles evaluated for all samples of a ray at
+// once in a loop that the compiler vectorises (glibc's libmvec exp).
+void ComputeTransmittanceTable(const shared::AtmosphereParameters& atmosphere, int sample_count,
+                               shared::Texture2D& table);
 
 // Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,

@@ -5,9 +5,6 @@
 #include <cstdlib>
 #include <string>
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/parallel_for.h>
-
 #include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
 #include "physics/shared_parameters.h"
@@ -39,18 +36,6 @@ glm::ivec2 ParseSize(const std::string& key, const std::string& value, int lo, i
     return {n, n};
   }
   return {ParseInt(key, value.substr(0, x), lo, hi), ParseInt(key, value.substr(x + 1), lo, hi)};
-}
-
-// Fills every texel of `texture` with kernel(frag_coord) in parallel over rows.
-template <typename Kernel>
-void FillTexture(shared::Texture2D& texture, const Kernel& kernel) {
-  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, texture.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      for (int x = 0; x < texture.width; ++x) {
-        texture.at(x, y) = glm::vec3(kernel(shared::vec2(x + 0.5, y + 0.5)));
-      }
-    }
-  });
 }
 
 void CheckDirection(const glm::dvec3& v, const char* what) {
@@ -105,10 +90,7 @@ HillaireModel::HillaireModel(const AtmosphereParameters& parameters, const Hilla
 void HillaireModel::ComputeTransmittanceLut(Batch& batch) const {
   const glm::ivec2 size = settings_.transmittance_lut;
   batch.transmittance = shared::Texture2D(size.x, size.y);
-  FillTexture(batch.transmittance, [&](const shared::vec2& frag_coord) {
-    return shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel(batch.atmosphere, size, frag_coord,
-                                                                   settings_.transmittance_samples);
-  });
+  cpu::ComputeTransmittanceTable(batch.atmosphere, settings_.transmittance_samples, batch.transmittance);
 }
 
 void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {

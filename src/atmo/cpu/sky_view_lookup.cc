@@ -1,0 +1,237 @@
+// Sky-view table lookups for rows of view directions, in float (see sky_view_lookup.h).
+//
+// Each chunk of directions goes through short loops over structure-of-arrays buffers, written
+// with selects instead of branches so that g++ -O3 vectorises them (check with
+// -fopt-info-vec-optimized): the azimuth and the latitude give the texel coordinates (s, t), these
+// give the four texels and the weights, and a last loop fetches and blends. std::sqrt does not
+// vectorise while it may set errno (-fmath-errno, the default), so the square roots of a chunk
+// are taken in passes of their own (SqrtInPlace).
+//
+// Precision. Where the shared path computes in double, this one rounds to float: the azimuth
+// (polynomial atan2, |a| <= pi) to a few 1e-7 rad, i.e. s to ~1e-5 texel for width 192; the view
+// zenith angle past the horizon d = FastAcos(mu) - theta_h to ~2e-7 rad. The latitude mapping
+// y = 0.5 -+ 0.5 sqrt(|d| / c) has slope 0.25 / sqrt(|d| c), infinite at the horizon, so there d
+// is formed differently: as a small double-precision offset plus a Taylor polynomial of FastAcos
+// about the horizon in a - a_h (exact in float), which makes it accurate relative to its own
+// size. Outside that window (|a - a_h| >= 1/32) the slope is at most ~1.2, so t stays within
+// ~2e-5 texel for height 108.
+#include "cpu/sky_view_lookup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <iterator>
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+namespace atmo::cpu {
+namespace {
+
+// Directions per chunk: the buffers of a chunk (~6 KiB) stay in L1.
+constexpr int kChunk = 128;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// shared::FastAcos (geometry.glsl): acos(a) ~ sqrt(1 - a) p(a) for a in [0, 1], with p of degree 7
+// (Abramowitz & Stegun 4.4.46); coefficients lowest degree first. They must stay those of the
+// shared function: the tests compare with it.
+constexpr double kAcosPolynomial[8] = {1.5707963050, -0.2145988016, 0.0889789874,  -0.0501743046,
+                                       0.0308918810, -0.0170881256, 0.0066700901, -0.0012624911};
+
+// shared::FastAtan2 (geometry.glsl): atan(a) ~ a + a^3 (k1 + a^2 (k2 + a^2 k3)) for a in [0, 1].
+constexpr float kAtan1 = -0.327622764f;
+constexpr float kAtan2 = 0.15931422f;
+constexpr float kAtan3 = -0.0464964749f;
+
+constexpr float kPiF = static_cast<float>(kPi);
+constexpr float kHalfPiF = static_cast<float>(0.5 * kPi);
+
+// v[i] = sqrt(v[i]) for v[i] >= 0, eight at a time where the target has AVX.
+void SqrtInPlace(float* v, int n) {
+  int i = 0;
+#if defined(__AVX__)
+  for (; i + 8 <= n; i += 8) _mm256_storeu_ps(v + i, _mm256_sqrt_ps(_mm256_loadu_ps(v + i)));
+#endif
+  for (; i < n; ++i) v[i] = std::sqrt(v[i]);
+}
+
+// The texel coordinates of n <= kChunk directions: s = azimuth from the sun (signed, in
+// [-pi, pi]) * width / (2 pi), not yet wrapped; t = y * (height - 1), y the latitude coordinate of
+// GetSkyViewTextureUvFromBeta (the sampler's v * height - 0.5).
+void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float* y, const float* z, int n, float* s,
+                             float* t) {
+  float root[kChunk];    // argument, then value, of the square roots
+  float factor[kChunk];  // d = offset + sign * root * factor
+  float offset[kChunk];
+  float sign[kChunk];
+  const float half_width = 0.5f * static_cast<float>(l.width);
+  for (int i = 0; i < n; ++i) {
+    // Azimuth: FastAtan2(v x sun . up, v . sun) in the horizontal plane (GetAzimuthFromSun).
+    const float cx = x[i] * l.sun_x + y[i] * l.sun_y;
+    const float cy = x[i] * l.sun_y - y[i] * l.sun_x;
+    const float ax = std::fabs(cx);
+    const float ay = std::fabs(cy);
+    const float largest = ax > ay ? ax : ay;
+    const float smallest = ax > ay ? ay : ax;
+    const float ratio = largest > 0.0f ? smallest / largest : 0.0f;  // atan2(0, 0) = 0
+    const float ratio2 = ratio * ratio;
+    float angle = ((kAtan3 * ratio2 + kAtan2) * ratio2 + kAtan1) * ratio2 * ratio + ratio;
+    angle = ay > ax ? kHalfPiF - angle : angle;
+    angle = cx < 0.0f ? kPiF - angle : angle;
+    angle = cy < 0.0f ? -angle : angle;
+    const float si = angle * l.texels_per_radian;
+    s[i] = si >= -half_width && si <= half_width ? si : 0.0f;  // also NaN -> 0
+
+    // Zenith: a = |mu| clamped to 1 (NaN -> 1), g(a) = sqrt(1 - a) p(a).
+    const float abs_mu = std::fabs(z[i]);
+    const float a = abs_mu < 1.0f ? abs_mu : 1.0f;
+    const bool below = z[i] < 0.0f;  // FastAcos takes mu = -0 as positive, as here
+    const float delta = a - l.horizon_a;
+    const bool near_horizon = std::fabs(delta) < l.near_horizon_window;
+    const float taylor =
+        delta * (l.taylor[0] + delta * (l.taylor[1] + delta * (l.taylor[2] + delta * (l.taylor[3] + delta * l.taylor[4]))));
+    float p = static_cast<float>(kAcosPolynomial[7]);
+    p = p * a + static_cast<float>(kAcosPolynomial[6]);
+    p = p * a + static_cast<float>(kAcosPolynomial[5]);
+    p = p * a + static_cast<float>(kAcosPolynomial[4]);
+    p = p * a + static_cast<float>(kAcosPolynomial[3]);
+    p = p * a + static_cast<float>(kAcosPolynomial[2]);
+    p = p * a + static_cast<float>(kAcosPolynomial[1]);
+    p = p * a + static_cast<float>(kAcosPolynomial[0]);
+    // Far from the horizon: d = g - theta_h (mu >= 0) or beta - g (mu < 0), g = root * p;
+    // near it the same with the offsets about a_h and g replaced by the Taylor polynomial G.
+    root[i] = near_horizon ? 1.0f : 1.0f - a;
+    factor[i] = near_horizon ? taylor : p;
+    offset[i] = below ? (near_horizon ? l.below_offset : l.horizon_dip_rad) : (near_horizon ? l.above_offset : -l.horizon_zenith_rad);
+    sign[i] = below ? -1.0f : 1.0f;
+  }
+  SqrtInPlace(root, n);
+  for (int i = 0; i < n; ++i) {
+    // y = 0.5 (1 - sqrt(-d / theta_h)) above the horizon (d < 0), 0.5 (1 + sqrt(min(d / beta, 1)))
+    // below it.
+    const float d = offset[i] + sign[i] * (root[i] * factor[i]);
+    const bool above = d < 0.0f;
+    const float q = std::fabs(d) * (above ? l.inverse_horizon_zenith : l.inverse_horizon_dip);
+    root[i] = q < 1.0f ? q : 1.0f;  // also NaN -> 1
+    sign[i] = above ? -1.0f : 1.0f;
+  }
+  SqrtInPlace(root, n);
+  const float half_range = 0.5f * static_cast<float>(l.height - 1);
+  for (int i = 0; i < n; ++i) {
+    const float ti = half_range + sign[i] * (half_range * root[i]);
+    t[i] = ti > 0.0f ? (ti < 2.0f * half_range ? ti : 2.0f * half_range) : 0.0f;
+  }
+}
+
+}  // namespace
+
+SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
+                                const glm::dvec3& sun_direction) {
+  SkyViewLookup l;
+  l.texels = sky_view.texels.data();
+  l.width = sky_view.width;
+  l.height = sky_view.height;
+  l.sun_x = static_cast<float>(sun_direction.x);
+  l.sun_y = static_cast<float>(sun_direction.y);
+  l.texels_per_radian = static_cast<float>(sky_view.width / (2.0 * kPi));
+
+  const double beta = horizon_dip_rad;
+  const double theta_h = kPi - beta;
+  l.horizon_zenith_rad = static_cast<float>(theta_h);
+  l.horizon_dip_rad = static_cast<float>(beta);
+  l.inverse_horizon_zenith = static_cast<float>(1.0 / theta_h);
+  l.inverse_horizon_dip = static_cast<float>(1.0 / beta);
+
+  // The horizon is at mu = -cos(beta); a_h is its |mu| rounded to float, so that a - a_h is exact.
+  const float a_h = static_cast<float>(std::clamp(std::cos(beta), 0.0, 1.0));
+  const double a0 = a_h;
+  l.horizon_a = a_h;
+  // The Taylor series of sqrt(1 - a) about a0 converges for |delta| < 1 - a0; within 1/16 of that
+  // radius, 5 terms leave a relative error below 2e-9.
+  const double window = std::min(1.0 / 32.0, (1.0 - a0) / 16.0);
+  l.near_horizon_window = static_cast<float>(window);
+  // p(a0 + delta) = sum_j P[j] delta^j (a Taylor shift of the polynomial, by repeated synthetic
+  // division), sqrt(1 - a0 - delta) = sum_j S[j] delta^j = sqrt(1 - a0) sum_j b_j (delta / (1 - a0))^j
+  // with b_j the binomial coefficients of (1 - x)^(1/2).
+  double shifted[8];
+  std::copy(std::begin(kAcosPolynomial), std::end(kAcosPolynomial), shifted);
+  double P[6];
+  for (int j = 0; j < 6; ++j) {
+    for (int k = 6; k >= j; --k) shifted[k] += a0 * shifted[k + 1];
+    P[j] = shifted[j];
+  }
+  const double binomial[6] = {1.0, -1.0 / 2.0, -1.0 / 8.0, -1.0 / 16.0, -5.0 / 128.0, -7.0 / 256.0};
+  double S[6];
+  const double root = std::sqrt(1.0 - a0);
+  for (int j = 0; j < 6; ++j) S[j] = window > 0.0 ? root * binomial[j] / std::pow(1.0 - a0, j) : 0.0;
+  for (int k = 1; k <= 5; ++k) {
+    double c = 0.0;
+    for (int j = 0; j <= k; ++j) c += S[j] * P[k - j];
+    l.taylor[k - 1] = static_cast<float>(c);
+  }
+  // g(a0) evaluated as shared::FastAcos does.
+  double p = kAcosPolynomial[7];
+  for (int k = 6; k >= 0; --k) p = p * a0 + kAcosPolynomial[k];
+  const double g0 = std::sqrt(1.0 - a0) * p;
+  l.above_offset = static_cast<float>(g0 - theta_h);
+  l.below_offset = static_cast<float>(beta - g0);
+  return l;
+}
+
+void GetSkyViewTexelCoordinatesRow(const SkyViewLookup& lookup, const float* x, const float* y, const float* z,
+                                   int count, float* s, float* t) {
+  for (int begin = 0; begin < count; begin += kChunk) {
+    const int n = std::min(kChunk, count - begin);
+    ComputeTexelCoordinates(lookup, x + begin, y + begin, z + begin, n, s + begin, t + begin);
+    const float width = static_cast<float>(lookup.width);
+    for (int i = begin; i < begin + n; ++i) s[i] = s[i] < 0.0f ? s[i] + width : s[i];
+  }
+}
+
+void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* y, const float* z, int count,
+                      float* out) {
+  const int width = lookup.width;
+  const int height = lookup.height;
+  const float* texels = &lookup.texels[0].x;  // glm::vec3 is three packed floats
+  float s[kChunk];
+  float t[kChunk];
+  int base[kChunk];    // index of texel (x0, y0), in floats
+  int step_x[kChunk];  // (x1, y) - (x0, y), in floats: 3, or 3 (1 - width) at the wrap
+  int step_y[kChunk];  // (x, y1) - (x, y0), in floats: 3 width, or 0 on the last row
+  float wx[kChunk];
+  float wy[kChunk];
+  for (int begin = 0; begin < count; begin += kChunk) {
+    const int n = std::min(kChunk, count - begin);
+    ComputeTexelCoordinates(lookup, x + begin, y + begin, z + begin, n, s, t);
+    // The GL_LINEAR taps: s in [-width / 2, width / 2] wraps, t in [0, height - 1] needs no clamp
+    // but of the second row on the last one (where wy = 0).
+    for (int i = 0; i < n; ++i) {
+      const float sf = std::floor(s[i]);
+      const float tf = std::floor(t[i]);
+      wx[i] = s[i] - sf;
+      wy[i] = t[i] - tf;
+      int x0 = static_cast<int>(sf);
+      x0 = x0 < 0 ? x0 + width : x0;
+      const int y0 = static_cast<int>(tf);
+      base[i] = 3 * (x0 + y0 * width);
+      step_x[i] = x0 == width - 1 ? 3 * (1 - width) : 3;
+      step_y[i] = y0 < height - 1 ? 3 * width : 0;
+    }
+    float* o = out + 3 * static_cast<std::ptrdiff_t>(begin);
+    for (int i = 0; i < n; ++i) {
+      const float* t00 = texels + base[i];
+      const float* t10 = t00 + step_x[i];
+      const float* t01 = t00 + step_y[i];
+      const float* t11 = t01 + step_x[i];
+      for (int c = 0; c < 3; ++c) {
+        const float top = t00[c] + (t10[c] - t00[c]) * wx[i];
+        const float bottom = t01[c] + (t11[c] - t01[c]) * wx[i];
+        o[3 * i + c] = top + (bottom - top) * wy[i];
+      }
+    }
+  }
+}
+
+}  // namespace atmo::cpu

@@ -1,0 +1,76 @@
+// Sky-view table lookups for a row of view directions, in float, vectorised.
+//
+// Per direction v (unit, local frame x = east, y = north, z = up) the result is that of the
+// shared double-precision path
+//   texture(sky_view, GetSkyViewTextureUvFromBeta(textureSize(sky_view, 0), beta, v.z,
+//                                                 GetAzimuthFromSun(v, sun)))
+// with the same polynomial acos and atan2, the same latitude mapping and the same GL_LINEAR
+// sampling (repeat in x, clamp to edge in y), to within a few 1e-5 texels of the sampling
+// position (float rounding; see sky_view_lookup.cc). The arithmetic runs on structure-of-arrays
+// chunks without branches, so that the compiler vectorises it; then the four texels of each
+// direction are fetched and blended.
+//
+// To use it: build a SkyViewLookup once per view and table with MakeSkyViewLookup, then call
+// LookupSkyViewRow on rows of directions (any count; thread-safe, the lookup is read-only).
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "shared/glsl_cpp.h"
+
+namespace atmo::cpu {
+
+// The per-view constants of the lookup. Made by MakeSkyViewLookup; the fields are its business.
+struct SkyViewLookup {
+  // The table: `width` x `height` RGB texels, row-major; not owned, it must outlive the lookup.
+  // Sampled as GL_LINEAR with GL_REPEAT in x and clamp to edge in y (the sky-view sampler).
+  const glm::vec3* texels = nullptr;
+  int width = 0;
+  int height = 0;
+
+  // Azimuth from the sun: the sun direction's horizontal components, and the table's texels per
+  // radian of azimuth, width / (2 pi).
+  float sun_x = 0.0f;
+  float sun_y = 0.0f;
+  float texels_per_radian = 0.0f;
+
+  // Latitude. beta is the horizon dip angle (shared::GetHorizonDipAngle), theta_h = pi - beta
+  // the zenith angle of the horizon, d = FastAcos(mu) - theta_h the view zenith angle past the
+  // horizon (rad). With a = |mu| and g(a) = FastAcos(a): d = g(a) - theta_h for mu >= 0 and
+  // d = beta - g(a) for mu < 0.
+  float horizon_zenith_rad = 0.0f;      // theta_h
+  float horizon_dip_rad = 0.0f;         // beta
+  float inverse_horizon_zenith = 0.0f;  // 1 / theta_h
+  float inverse_horizon_dip = 0.0f;     // 1 / beta
+  // Near the horizon (|a - horizon_a| < near_horizon_window), where the mapping has a square
+  // root singularity and d must be accurate to far better than a float ulp of pi, d is formed
+  // from constants computed in double and a Taylor polynomial of g about horizon_a:
+  //   d = above_offset + G(a - horizon_a)  (mu >= 0),   d = below_offset - G(a - horizon_a)  (mu < 0),
+  // with G(delta) = g(horizon_a + delta) - g(horizon_a) = sum_k taylor[k - 1] delta^k, k = 1..5.
+  float horizon_a = 0.0f;
+  float near_horizon_window = 0.0f;
+  float above_offset = 0.0f;  // g(horizon_a) - theta_h
+  float below_offset = 0.0f;  // beta - g(horizon_a)
+  float taylor[5] = {};
+};
+
+// The lookup of `sky_view` (a table made for one observer and a sun at azimuth 0, as
+// HillaireModel::ComputeSkyViewLut makes it) for the horizon dip angle `horizon_dip_rad`
+// (shared::GetHorizonDipAngle(atmosphere, r)) and the sun direction `sun_direction` (the local
+// frame, normalised). Keeps a pointer to the table's texels.
+SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
+                                const glm::dvec3& sun_direction);
+
+// Writes the table's radiance for the `count` directions (x[i], y[i], z[i]) to out[3 i + c],
+// c = 0, 1, 2. Directions should be unit vectors; any finite or non-finite input gives an
+// in-bounds lookup (z is clamped to [-1, 1], a NaN azimuth reads as the sun's).
+void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* y, const float* z, int count,
+                      float* out);
+
+// The sampling positions of LookupSkyViewRow, for tests: texel coordinates s = u * width - 0.5
+// and t = v * height - 0.5 (texel i's centre at i), s[i] in [0, width] after the wrap in x,
+// t[i] in [0, height - 1].
+void GetSkyViewTexelCoordinatesRow(const SkyViewLookup& lookup, const float* x, const float* y, const float* z,
+                                   int count, float* s, float* t);
+
+}  // namespace atmo::cpu
