@@ -119,7 +119,7 @@ void BM_Frame1920x1080(benchmark::State& state) {
       model->View(0.0, atmo::SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
   for (auto _ : state) {
     atmo::Image image =
-        atmo::RenderView(*view, settings.camera, settings.sun_disc, model->parameters().solar_irradiance);
+        atmo::RenderView(*view, settings.camera, settings.terms, model->parameters().solar_irradiance);
     benchmark::DoNotOptimize(image.pixels.data());
   }
 }

@@ -337,3 +337,56 @@ TEST(AerialPerspective, FroxelsMatchTheSegmentIntegralAndBehave) {
 
 }  // namespace
 }  // namespace atmo
+
+namespace atmo {
+namespace {
+
+// The lit ground that images add (Radiance itself excludes it, per the sample contract).
+TEST(HillaireGround, ReflectsOnlyBelowTheHorizonAndScalesWithAlbedo) {
+  const auto model = CreateModel("hillaire", Preset("earth"));
+  const auto sky = model->View(100.0, Sun(40.0));
+  std::vector<double> ground(3);
+  sky->GroundRadiance(DirectionFromZenithAzimuth(glm::radians(60.0), 0.0), ground);
+  for (double g : ground) EXPECT_EQ(g, 0.0);
+  sky->GroundRadiance(DirectionFromZenithAzimuth(glm::radians(120.0), 0.0), ground);
+  for (double g : ground) EXPECT_GT(g, 0.0);
+  // Looking straight down from 100 m: almost no air in between, so L = albedo / pi * (E_sun + E_sky)
+  // with E_sun = T_sun cos(40 deg) on a horizontal surface, and E_sky > 0 adds to it.
+  sky->GroundRadiance(glm::dvec3(0.0, 0.0, -1.0), ground);
+  const auto sun_transmittance = Transmittance(*sky, 40.0, 0.0);
+  for (int c = 0; c < 3; ++c) {
+    const double direct_only = 0.3 / M_PI * sun_transmittance[c] * std::cos(glm::radians(40.0));
+    EXPECT_GT(ground[c], direct_only);
+    EXPECT_LT(ground[c], 1.6 * direct_only);  // the sky adds less than the sun at 50 degrees elevation
+  }
+  AtmosphereParameters black = Preset("earth");
+  black.ground_albedo = {0.0, 0.0, 0.0};
+  const auto black_sky = CreateModel("hillaire", black)->View(100.0, Sun(40.0));
+  black_sky->GroundRadiance(glm::dvec3(0.0, 0.0, -1.0), ground);
+  for (double g : ground) EXPECT_EQ(g, 0.0);
+}
+
+TEST(HillaireGround, ImageTablesAddTheSameGroundAsThePerPixelQuery) {
+  const auto model = CreateModel("hillaire", Preset("earth"));
+  const auto sky = model->View(1000.0, Sun(70.0));
+  std::vector<glm::dvec3> views;
+  for (double zenith = 95.0; zenith < 180.0; zenith += 10.0) {
+    for (double azimuth = 10.0; azimuth < 360.0; azimuth += 50.0) {
+      views.push_back(DirectionFromZenithAzimuth(glm::radians(zenith), glm::radians(azimuth)));
+    }
+  }
+  std::vector<float> with_ground(3 * views.size()), without_ground(3 * views.size());
+  sky->RadianceBatch(views, {false, true}, with_ground);
+  sky->RadianceBatch(views, {false, false}, without_ground);
+  std::vector<double> ground(3);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    sky->GroundRadiance(views[i], ground);
+    for (int c = 0; c < 3; ++c) {
+      // Bilinear interpolation in the 192x108 table of a smooth field: 2 %.
+      EXPECT_NEAR(with_ground[3 * i + c] - without_ground[3 * i + c], ground[c], 0.02 * ground[c]) << "view " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace atmo

@@ -74,7 +74,7 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     model->Precompute();
     const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(30.0, 180.0));
     const auto start = std::chrono::steady_clock::now();
-    const Image image = RenderView(*sky, settings.camera, settings.sun_disc, parameters.solar_irradiance);
+    const Image image = RenderView(*sky, settings.camera, settings.terms, parameters.solar_irradiance);
     const double frame_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 

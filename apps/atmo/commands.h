@@ -59,6 +59,7 @@ struct RenderCommand {
   std::string tonemap = "exp";
   double gamma = 2.2;
   bool no_sun_disc = false;
+  bool no_ground = false;
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG
 };

@@ -39,7 +39,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
   settings.sun_elevation_deg = command.sun_elevation_deg;
   settings.sun_azimuth_deg = command.sun_azimuth_deg;
-  settings.sun_disc = !command.no_sun_disc;
+  settings.terms.sun_disc = !command.no_sun_disc;
+  settings.terms.ground = !command.no_ground;
   if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
 
   ToneMapping mapping;

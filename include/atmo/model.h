@@ -32,6 +32,12 @@ namespace atmo {
 // documents its keys and rejects unknown ones.
 using ModelOptions = std::map<std::string, std::string>;
 
+// What RadianceBatch adds to the scattered radiance, for images.
+struct RadianceTerms {
+  bool sun_disc = true;  // the sun disc, attenuated by the view transmittance
+  bool ground = true;    // the light the Lambertian ground reflects, attenuated (rays that meet it)
+};
+
 // A model bound to one observer altitude and one sun direction: what a frame needs. Creating it
 // may precompute per-view tables (the sky-view table of `hillaire`). Thread-safe for queries.
 class SkyView {
@@ -46,10 +52,14 @@ class SkyView {
   // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance.
   virtual void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const = 0;
 
-  // Radiance (plus the sun disc when asked) for many directions, written as floats with
-  // channel_count() values per direction. The default loops over Radiance; models override it
-  // with a faster path. Directions of length 0 are skipped (left at 0).
-  virtual void RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const;
+  // Radiance reflected by the ground towards the observer along `view` (0 where the ray misses
+  // the ground), attenuated by the atmosphere in front of it. The default has no ground: 0.
+  virtual void GroundRadiance(const glm::dvec3& view, std::span<double> out) const;
+
+  // Radiance plus the requested terms for many directions, written as floats with
+  // channel_count() values per direction. The default loops over the single queries; models
+  // override it with a faster path. Directions of length 0 are skipped (left at 0).
+  virtual void RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms, std::span<float> out) const;
 
   // Aerial perspective: the radiance scattered towards the observer between it and the point at
   // `distance_m` along `view`, and the transmittance over that segment. Throws atmo::Error for a

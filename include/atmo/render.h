@@ -38,7 +38,7 @@ struct RenderSettings {
   double altitude_m = 0.0;
   double sun_elevation_deg = 30.0;
   double sun_azimuth_deg = 180.0;  // compass azimuth of the sun
-  bool sun_disc = true;
+  RadianceTerms terms;             // sun disc and lit ground on by default
 };
 
 // Largest accepted image side, to reject absurd resolutions before allocating.
@@ -51,7 +51,8 @@ Image Render(const Model& model, const RenderSettings& settings);
 // Renders a prepared view (its per-view tables already built) through a camera: the frame pass
 // alone. Radiance is multiplied per channel by `solar_irradiance` (one value per channel). Same
 // errors as Render for the camera; the view must have 3 channels.
-Image RenderView(const SkyView& sky, const Camera& camera, bool sun_disc, std::span<const double> solar_irradiance);
+Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
+                 std::span<const double> solar_irradiance);
 
 // Unit direction towards the sun in the local frame from its elevation and compass azimuth.
 glm::dvec3 SunDirection(double elevation_deg, double azimuth_deg);

@@ -60,10 +60,10 @@ Image Render(const Model& model, const RenderSettings& settings) {
   CheckThreeChannels(model.channel_count());
   const std::unique_ptr<SkyView> sky =
       model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
-  return RenderView(*sky, settings.camera, settings.sun_disc, model.parameters().solar_irradiance);
+  return RenderView(*sky, settings.camera, settings.terms, model.parameters().solar_irradiance);
 }
 
-Image RenderView(const SkyView& sky, const Camera& camera_settings, bool sun_disc,
+Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance) {
   ValidateCamera(camera_settings);
   CheckThreeChannels(sky.channel_count());
@@ -86,7 +86,7 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, bool sun_dis
         if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
       }
       float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
-      sky.RadianceBatch(views, sun_disc, std::span<float>(row, static_cast<std::size_t>(width) * 3));
+      sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * 3));
       for (int x = 0; x < width; ++x) {
         for (int c = 0; c < 3; ++c) row[3 * x + c] *= irradiance[c];
       }

@@ -3,9 +3,12 @@
 // Each chunk of directions goes through short loops over structure-of-arrays buffers, written
 // with selects instead of branches so that g++ -O3 vectorises them (check with
 // -fopt-info-vec-optimized): the azimuth and the latitude give the texel coordinates (s, t), these
-// give the four texels and the weights, and a last loop fetches and blends. std::sqrt does not
-// vectorise while it may set errno (-fmath-errno, the default), so the square roots of a chunk
-// are taken in passes of their own (SqrtInPlace).
+// give the four texels and the weights, and a last loop fetches and blends. Two defaults of g++
+// stand in the way, and are worked around here rather than switched off for this file: std::sqrt
+// does not vectorise while it may set errno (-fmath-errno), so the square roots of a chunk are
+// taken in passes of their own (SqrtInPlace); and a conditional `c ? x - y : y` is not
+// if-converted while float arithmetic may trap (-ftrapping-math), so the selects between computed
+// floats are bitwise (Select).
 //
 // Precision. Where the shared path computes in double, this one rounds to float: the azimuth
 // (polynomial atan2, |a| <= pi) to a few 1e-7 rad, i.e. s to ~1e-5 texel for width 192; the view
@@ -18,8 +21,10 @@
 #include "cpu/sky_view_lookup.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <iterator>
 
 #if defined(__AVX__)
@@ -48,6 +53,12 @@ constexpr float kAtan3 = -0.0464964749f;
 constexpr float kPiF = static_cast<float>(kPi);
 constexpr float kHalfPiF = static_cast<float>(0.5 * kPi);
 
+// c ? a : b, with both evaluated: a bitwise blend that the vectoriser turns into a vector select.
+inline float Select(bool c, float a, float b) {
+  const std::uint32_t mask = 0u - static_cast<std::uint32_t>(c);
+  return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & mask) | (std::bit_cast<std::uint32_t>(b) & ~mask));
+}
+
 // v[i] = sqrt(v[i]) for v[i] >= 0, eight at a time where the target has AVX.
 void SqrtInPlace(float* v, int n) {
   int i = 0;
@@ -66,32 +77,44 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
   float factor[kChunk];  // d = offset + sign * root * factor
   float offset[kChunk];
   float sign[kChunk];
+  // The constants, in locals: the vectoriser does not hoist loads of them out of the loops.
   const float half_width = 0.5f * static_cast<float>(l.width);
+  const float sun_x = l.sun_x;
+  const float sun_y = l.sun_y;
+  const float texels_per_radian = l.texels_per_radian;
+  const float theta_h = l.horizon_zenith_rad;
+  const float beta = l.horizon_dip_rad;
+  const float inverse_theta_h = l.inverse_horizon_zenith;
+  const float inverse_beta = l.inverse_horizon_dip;
+  const float horizon_a = l.horizon_a;
+  const float window = l.near_horizon_window;
+  const float above_offset = l.above_offset;
+  const float below_offset = l.below_offset;
+  const float t1 = l.taylor[0], t2 = l.taylor[1], t3 = l.taylor[2], t4 = l.taylor[3], t5 = l.taylor[4];
   for (int i = 0; i < n; ++i) {
     // Azimuth: FastAtan2(v x sun . up, v . sun) in the horizontal plane (GetAzimuthFromSun).
-    const float cx = x[i] * l.sun_x + y[i] * l.sun_y;
-    const float cy = x[i] * l.sun_y - y[i] * l.sun_x;
+    const float cx = x[i] * sun_x + y[i] * sun_y;
+    const float cy = x[i] * sun_y - y[i] * sun_x;
     const float ax = std::fabs(cx);
     const float ay = std::fabs(cy);
     const float largest = ax > ay ? ax : ay;
     const float smallest = ax > ay ? ay : ax;
-    const float ratio = largest > 0.0f ? smallest / largest : 0.0f;  // atan2(0, 0) = 0
+    const float ratio = Select(largest > 0.0f, smallest / largest, 0.0f);  // atan2(0, 0) = 0
     const float ratio2 = ratio * ratio;
     float angle = ((kAtan3 * ratio2 + kAtan2) * ratio2 + kAtan1) * ratio2 * ratio + ratio;
-    angle = ay > ax ? kHalfPiF - angle : angle;
-    angle = cx < 0.0f ? kPiF - angle : angle;
-    angle = cy < 0.0f ? -angle : angle;
-    const float si = angle * l.texels_per_radian;
-    s[i] = si >= -half_width && si <= half_width ? si : 0.0f;  // also NaN -> 0
+    angle = Select(ay > ax, kHalfPiF - angle, angle);
+    angle = Select(cx < 0.0f, kPiF - angle, angle);
+    angle = Select(cy < 0.0f, -angle, angle);
+    const float si = angle * texels_per_radian;
+    s[i] = Select((si >= -half_width) & (si <= half_width), si, 0.0f);  // also NaN -> 0
 
     // Zenith: a = |mu| clamped to 1 (NaN -> 1), g(a) = sqrt(1 - a) p(a).
     const float abs_mu = std::fabs(z[i]);
-    const float a = abs_mu < 1.0f ? abs_mu : 1.0f;
+    const float a = Select(abs_mu < 1.0f, abs_mu, 1.0f);
     const bool below = z[i] < 0.0f;  // FastAcos takes mu = -0 as positive, as here
-    const float delta = a - l.horizon_a;
-    const bool near_horizon = std::fabs(delta) < l.near_horizon_window;
-    const float taylor =
-        delta * (l.taylor[0] + delta * (l.taylor[1] + delta * (l.taylor[2] + delta * (l.taylor[3] + delta * l.taylor[4]))));
+    const float delta = a - horizon_a;
+    const bool near_horizon = std::fabs(delta) < window;
+    const float taylor = delta * (t1 + delta * (t2 + delta * (t3 + delta * (t4 + delta * t5))));
     float p = static_cast<float>(kAcosPolynomial[7]);
     p = p * a + static_cast<float>(kAcosPolynomial[6]);
     p = p * a + static_cast<float>(kAcosPolynomial[5]);
@@ -102,10 +125,10 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
     p = p * a + static_cast<float>(kAcosPolynomial[0]);
     // Far from the horizon: d = g - theta_h (mu >= 0) or beta - g (mu < 0), g = root * p;
     // near it the same with the offsets about a_h and g replaced by the Taylor polynomial G.
-    root[i] = near_horizon ? 1.0f : 1.0f - a;
-    factor[i] = near_horizon ? taylor : p;
-    offset[i] = below ? (near_horizon ? l.below_offset : l.horizon_dip_rad) : (near_horizon ? l.above_offset : -l.horizon_zenith_rad);
-    sign[i] = below ? -1.0f : 1.0f;
+    root[i] = Select(near_horizon, 1.0f, 1.0f - a);
+    factor[i] = Select(near_horizon, taylor, p);
+    offset[i] = Select(below, Select(near_horizon, below_offset, beta), Select(near_horizon, above_offset, -theta_h));
+    sign[i] = Select(below, -1.0f, 1.0f);
   }
   SqrtInPlace(root, n);
   for (int i = 0; i < n; ++i) {
@@ -113,15 +136,16 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
     // below it.
     const float d = offset[i] + sign[i] * (root[i] * factor[i]);
     const bool above = d < 0.0f;
-    const float q = std::fabs(d) * (above ? l.inverse_horizon_zenith : l.inverse_horizon_dip);
-    root[i] = q < 1.0f ? q : 1.0f;  // also NaN -> 1
-    sign[i] = above ? -1.0f : 1.0f;
+    const float q = std::fabs(d) * Select(above, inverse_theta_h, inverse_beta);
+    root[i] = Select(q < 1.0f, q, 1.0f);  // also NaN -> 1
+    sign[i] = Select(above, -1.0f, 1.0f);
   }
   SqrtInPlace(root, n);
-  const float half_range = 0.5f * static_cast<float>(l.height - 1);
+  const float last_row = static_cast<float>(l.height - 1);
+  const float half_range = 0.5f * last_row;
   for (int i = 0; i < n; ++i) {
     const float ti = half_range + sign[i] * (half_range * root[i]);
-    t[i] = ti > 0.0f ? (ti < 2.0f * half_range ? ti : 2.0f * half_range) : 0.0f;
+    t[i] = Select(ti > 0.0f, Select(ti < last_row, ti, last_row), 0.0f);
   }
 }
 
@@ -186,7 +210,7 @@ void GetSkyViewTexelCoordinatesRow(const SkyViewLookup& lookup, const float* x, 
     const int n = std::min(kChunk, count - begin);
     ComputeTexelCoordinates(lookup, x + begin, y + begin, z + begin, n, s + begin, t + begin);
     const float width = static_cast<float>(lookup.width);
-    for (int i = begin; i < begin + n; ++i) s[i] = s[i] < 0.0f ? s[i] + width : s[i];
+    for (int i = begin; i < begin + n; ++i) s[i] = Select(s[i] < 0.0f, s[i] + width, s[i]);
   }
 }
 
@@ -205,16 +229,16 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
   for (int begin = 0; begin < count; begin += kChunk) {
     const int n = std::min(kChunk, count - begin);
     ComputeTexelCoordinates(lookup, x + begin, y + begin, z + begin, n, s, t);
-    // The GL_LINEAR taps: s in [-width / 2, width / 2] wraps, t in [0, height - 1] needs no clamp
-    // but of the second row on the last one (where wy = 0).
+    // The GL_LINEAR taps: s in [-width / 2, width / 2] wraps, t in [0, height - 1] is clamped
+    // only in that the last row's second row is itself (where wy = 0). floor(s) is formed from the
+    // truncation: std::floor does not vectorise while float arithmetic may trap.
     for (int i = 0; i < n; ++i) {
-      const float sf = std::floor(s[i]);
-      const float tf = std::floor(t[i]);
-      wx[i] = s[i] - sf;
-      wy[i] = t[i] - tf;
-      int x0 = static_cast<int>(sf);
-      x0 = x0 < 0 ? x0 + width : x0;
-      const int y0 = static_cast<int>(tf);
+      int x0 = static_cast<int>(s[i]);
+      x0 -= static_cast<float>(x0) > s[i];
+      const int y0 = static_cast<int>(t[i]);  // t >= 0
+      wx[i] = s[i] - static_cast<float>(x0);
+      wy[i] = t[i] - static_cast<float>(y0);
+      x0 += x0 < 0 ? width : 0;
       base[i] = 3 * (x0 + y0 * width);
       step_x[i] = x0 == width - 1 ? 3 * (1 - width) : 3;
       step_y[i] = y0 < height - 1 ? 3 * width : 0;

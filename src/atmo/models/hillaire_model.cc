@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
 #include "physics/shared_parameters.h"
@@ -63,13 +65,17 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
     else if (key == "sky_view_lut") s.sky_view_lut = ParseSize(key, value, 2, 8192);
     else if (key == "sky_view_samples") s.sky_view_samples = ParseInt(key, value, 1, 100000);
     else if (key == "ray_march_samples") s.ray_march_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "ground_irradiance_lut") s.ground_irradiance_lut = ParseInt(key, value, 2, 4096);
+    else if (key == "ground_irradiance_directions") s.ground_irradiance_directions = ParseInt(key, value, 1, 65536);
+    else if (key == "ground_irradiance_samples") s.ground_irradiance_samples = ParseInt(key, value, 1, 100000);
     else if (key == "sky_view") {
       if (value != "auto" && value != "off") throw Error("option sky_view=" + value + ": expected auto or off");
       s.use_sky_view_lut = value == "auto";
     } else {
       throw Error("unknown option '" + key + "' for model hillaire (known: transmittance_lut, transmittance_samples, "
                   "multiple_scattering_lut, multiple_scattering_directions, multiple_scattering_samples, "
-                  "sky_view_lut, sky_view_samples, ray_march_samples, sky_view)");
+                  "sky_view_lut, sky_view_samples, ray_march_samples, sky_view, ground_irradiance_lut, "
+                  "ground_irradiance_directions, ground_irradiance_samples)");
     }
   }
   return s;
@@ -83,7 +89,9 @@ HillaireModel::HillaireModel(const AtmosphereParameters& parameters, const Hilla
                 "' is the geometry of the simple model");
   }
   for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
-    batches_.push_back(Batch{ToSharedParameters(parameters, b), {}, {}});
+    Batch batch;
+    batch.atmosphere = ToSharedParameters(parameters, b);
+    batches_.push_back(std::move(batch));
   }
 }
 
@@ -107,6 +115,30 @@ void HillaireModel::Precompute() {
   start = Clock::now();
   for (Batch& batch : batches_) ComputeMultipleScatteringLut(batch);
   RecordPass("multiple_scattering_lut", MillisecondsSince(start));
+  start = Clock::now();
+  for (Batch& batch : batches_) ComputeGroundIrradianceLut(batch);
+  RecordPass("ground_irradiance_lut", MillisecondsSince(start));
+}
+
+void HillaireModel::ComputeGroundIrradianceLut(Batch& batch) const {
+  const int width = settings_.ground_irradiance_lut;
+  batch.ground_irradiance = shared::Texture2D(width, 1);
+  oneapi::tbb::parallel_for(0, width, [&](int x) {
+    batch.ground_irradiance.at(x, 0) = glm::vec3(shared::ComputeGroundIrradianceTexel(
+        batch.atmosphere, batch.transmittance, batch.multiple_scattering, width, x + 0.5,
+        settings_.ground_irradiance_directions, settings_.ground_irradiance_samples));
+  });
+}
+
+void HillaireModel::AddGroundView(const Batch& batch, double r, double mu_s, shared::Texture2D& table) const {
+  const shared::ivec2 size(table.width, table.height);
+  oneapi::tbb::parallel_for(0, size.y, [&](int y) {
+    for (int x = 0; x < size.x; ++x) {
+      table.at(x, y) += glm::vec3(shared::ComputeGroundViewTexel(batch.atmosphere, batch.transmittance,
+                                                                 batch.ground_irradiance, size,
+                                                                 shared::vec2(x + 0.5, y + 0.5), r, mu_s));
+    }
+  });
 }
 
 shared::Texture2D HillaireModel::ComputeSkyViewLut(const Batch& batch, double r, double mu_s) const {
@@ -128,9 +160,16 @@ class HillaireSkyView final : public SkyView {
     const auto& batches = model.batches();
     horizon_dip_ = shared::GetHorizonDipAngle(batches.front().atmosphere, r_);
     if (model.settings().use_sky_view_lut && r_ <= batches.front().atmosphere.top_radius) {
-      const auto start = Clock::now();
+      auto start = Clock::now();
       for (const auto& batch : batches) sky_view_.push_back(model.ComputeSkyViewLut(batch, r_, mu_s_));
       model.RecordPass("sky_view_lut", MillisecondsSince(start));
+      // For images: the same table with the ground's reflected light added below the horizon.
+      start = Clock::now();
+      for (std::size_t b = 0; b < batches.size(); ++b) {
+        sky_and_ground_view_.push_back(sky_view_[b]);
+        model.AddGroundView(batches[b], r_, mu_s_, sky_and_ground_view_.back());
+      }
+      model.RecordPass("ground_view_lut", MillisecondsSince(start));
     }
   }
 
@@ -161,6 +200,14 @@ class HillaireSkyView final : public SkyView {
     });
   }
 
+  void GroundRadiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = glm::dot(view, sun_direction());
+    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+      return shared::GetGroundRadiance(batch.atmosphere, batch.transmittance, batch.ground_irradiance, r_, view.z, mu_s_,
+                                       nu);
+    });
+  }
+
   void ScatteringAlongSegment(const glm::dvec3& view, double distance_m, std::span<double> radiance,
                               std::span<double> transmittance) const override {
     const double nu = glm::dot(view, sun_direction());
@@ -177,30 +224,29 @@ class HillaireSkyView final : public SkyView {
     }
   }
 
-  void RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const override {
+  void RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                     std::span<float> out) const override {
+    if (sky_view_.empty()) {  // per-pixel ray marching
+      SkyView::RadianceBatch(views, terms, out);
+      return;
+    }
+    const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
     const std::size_t n = channel_count();
-    const auto& batches = model_.batches();
     const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
-    std::vector<double> values(n);
+    std::vector<double> disc(n);
     for (std::size_t i = 0; i < views.size(); ++i) {
       const glm::dvec3& view = views[i];
       if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) continue;
-      if (sky_view_.empty()) {
-        Radiance(view, values);
-      } else {
-        const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
-        const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
-        for (std::size_t b = 0; b < batches.size(); ++b) {
-          const shared::vec3 l = shared::vec3(shared::texture(sky_view_[b], uv));
-          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) values[3 * b + c] = l[static_cast<int>(c)];
-        }
+      const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+      const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
+      for (std::size_t b = 0; b < tables.size(); ++b) {
+        const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
+        for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
       }
-      if (include_sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
-        std::vector<double> disc(n);
+      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
         SunDiscRadiance(view, disc);
-        for (std::size_t c = 0; c < n; ++c) values[c] += disc[c];
+        for (std::size_t c = 0; c < n; ++c) out[i * n + c] += static_cast<float>(disc[c]);
       }
-      for (std::size_t c = 0; c < n; ++c) out[i * n + c] = static_cast<float>(values[c]);
     }
   }
 
@@ -220,6 +266,7 @@ class HillaireSkyView final : public SkyView {
   double mu_s_;
   double horizon_dip_;                       // GetHorizonDipAngle(r_), for per-pixel lookups
   std::vector<shared::Texture2D> sky_view_;  // one per batch; empty where the table does not serve
+  std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
 };
 
 std::unique_ptr<SkyView> HillaireModel::View(double altitude_m, const glm::dvec3& sun_direction) const {

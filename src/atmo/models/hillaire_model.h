@@ -15,7 +15,12 @@
 //   ray_march_samples=30              steps of the per-pixel ray march
 //   sky_view=auto|off                 auto: use the sky-view table inside the atmosphere and ray
 //                                     march per pixel above it; off: always ray march per pixel
+//   ground_irradiance_lut=32          sky irradiance of the ground vs sun zenith cosine (images)
+//   ground_irradiance_directions=64   hemisphere directions per texel
+//   ground_irradiance_samples=16      ray-march steps per direction
 // The sun disc is evaluated per pixel at full resolution, attenuated by the view transmittance.
+// For images the ground is a Lambertian surface lit by the attenuated sun and the sky; each view
+// keeps a copy of its sky-view table with that light added below the horizon.
 // Channels are computed three at a time: a preset with N channels keeps ceil(N/3) sets of tables.
 #pragma once
 
@@ -37,6 +42,9 @@ struct HillaireSettings {
   int sky_view_samples = 30;
   int ray_march_samples = 30;
   bool use_sky_view_lut = true;
+  int ground_irradiance_lut = 32;
+  int ground_irradiance_directions = 64;
+  int ground_irradiance_samples = 16;
 
   // Throws atmo::Error for an unknown key or a value out of range.
   static HillaireSettings FromOptions(const ModelOptions& options);
@@ -55,15 +63,19 @@ class HillaireModel final : public Model {
     shared::AtmosphereParameters atmosphere;
     shared::Texture2D transmittance;
     shared::Texture2D multiple_scattering;
+    shared::Texture2D ground_irradiance;  // width x 1
   };
   const std::vector<Batch>& batches() const { return batches_; }
   const HillaireSettings& settings() const { return settings_; }
   // Builds the sky-view table of one batch for an observer radius and sun zenith cosine.
   shared::Texture2D ComputeSkyViewLut(const Batch& batch, double r, double mu_s) const;
+  // Adds the ground's reflected light to a sky-view table of the same observer and sun.
+  void AddGroundView(const Batch& batch, double r, double mu_s, shared::Texture2D& table) const;
 
  private:
   void ComputeTransmittanceLut(Batch& batch) const;
   void ComputeMultipleScatteringLut(Batch& batch) const;
+  void ComputeGroundIrradianceLut(Batch& batch) const;
 
   HillaireSettings settings_;
   std::vector<Batch> batches_;

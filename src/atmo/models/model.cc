@@ -1,5 +1,6 @@
 #include "atmo/model.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "atmo/error.h"
@@ -12,17 +13,25 @@ void Model::RecordPass(std::string_view pass, double ms) const {
   timings_.Add(pass, ms);
 }
 
-void SkyView::RadianceBatch(std::span<const glm::dvec3> views, bool include_sun_disc, std::span<float> out) const {
+void SkyView::GroundRadiance(const glm::dvec3&, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+}
+
+void SkyView::RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms, std::span<float> out) const {
   const std::size_t n = channel_count();
   std::vector<double> radiance(n);
-  std::vector<double> disc(n);
+  std::vector<double> term(n);
   for (std::size_t i = 0; i < views.size(); ++i) {
     const glm::dvec3& view = views[i];
     if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) continue;
     Radiance(view, radiance);
-    if (include_sun_disc) {
-      SunDiscRadiance(view, disc);
-      for (std::size_t c = 0; c < n; ++c) radiance[c] += disc[c];
+    if (terms.sun_disc) {
+      SunDiscRadiance(view, term);
+      for (std::size_t c = 0; c < n; ++c) radiance[c] += term[c];
+    }
+    if (terms.ground) {
+      GroundRadiance(view, term);
+      for (std::size_t c = 0; c < n; ++c) radiance[c] += term[c];
     }
     for (std::size_t c = 0; c < n; ++c) out[i * n + c] = static_cast<float>(radiance[c]);
   }

@@ -181,3 +181,64 @@ vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTe
 Number GetAerialPerspectiveSliceDistance(Number slice_coordinate, int depth, Number max_distance) {
   return slice_coordinate / Number(depth) * max_distance;
 }
+
+// Ground lighting, for images (DESIGN.md's radiance excludes it; renderers add it). The ground is
+// Lambertian with the atmosphere's albedo, lit by the attenuated sun and by the sky.
+//
+// The sky irradiance of a horizontal ground patch as a function of the sun zenith cosine there,
+//   E_sky(mu_s) = integral over the upper hemisphere of L(R, w) cos(theta) dw,
+// is a 1D table (x = (mu_s + 1) / 2 on texel centres). Its per-texel kernel integrates the
+// ray-marched radiance over `direction_count` directions uniform in z = cos(theta) (each of
+// solid angle 2 pi / count) with golden-angle azimuths.
+vec3 ComputeGroundIrradianceTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, int texture_width, Number frag_x, int direction_count,
+    int sample_count) {
+  Number mu_s = 2.0 * GetUnitRangeFromTextureCoord(frag_x / Number(texture_width), texture_width) - 1.0;
+  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+  Number golden_angle = kPi * (3.0 - sqrt(5.0));
+  vec3 irradiance = vec3(0.0);
+  for (int k = 0; k < direction_count; ++k) {
+    Number z = 1.0 - (Number(k) + 0.5) / Number(direction_count);
+    Number phi = Number(k) * golden_angle;
+    Number s = SafeSqrt(1.0 - z * z);
+    vec3 direction = vec3(s * cos(phi), s * sin(phi), z);
+    vec3 transmittance;
+    irradiance += z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
+        atmosphere.bottom_radius, z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
+  }
+  return irradiance * (2.0 * kPi / Number(direction_count));
+}
+
+vec3 GetGroundIrradianceFromSky(IN(TransmittanceTexture) ground_irradiance_texture, Number mu_s) {
+  ivec2 size = textureSize(ground_irradiance_texture, 0);
+  return vec3(texture(ground_irradiance_texture, vec2(GetTextureCoordFromUnitRange(0.5 * mu_s + 0.5, size.x), 0.5)));
+}
+
+// Radiance that the ground reflects towards an observer at radius r looking along mu (0 where the
+// ray misses the ground), attenuated by the atmosphere in between.
+vec3 GetGroundRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(TransmittanceTexture) ground_irradiance_texture, Number r, Number mu, Number mu_s, Number nu) {
+  Number t_limit = 1e30;
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit) || !RayIntersectsGround(atmosphere, r, mu)) {
+    return vec3(0.0);
+  }
+  Number d = DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
+  vec3 transmittance = GetTransmittance(atmosphere, transmittance_texture, r, mu, d, true);
+  Number mu_s_ground = ClampCosine((r * mu_s + d * nu) / atmosphere.bottom_radius);
+  vec3 sun_irradiance = GetTransmittanceToSun(atmosphere, transmittance_texture, atmosphere.bottom_radius, mu_s_ground) *
+      max(mu_s_ground, 0.0);
+  vec3 sky_irradiance = GetGroundIrradianceFromSky(ground_irradiance_texture, mu_s_ground);
+  return transmittance * atmosphere.ground_albedo * (1.0 / kPi) * (sun_irradiance + sky_irradiance);
+}
+
+// The per-texel kernel of the ground part of the sky-view table: the ground radiance of the
+// texel's direction (zero above the horizon), for an observer at r and a sun at mu_s.
+vec3 ComputeGroundViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(TransmittanceTexture) ground_irradiance_texture, IN(ivec2) texture_size, IN(vec2) frag_coord, Number r,
+    Number mu_s) {
+  Number mu;
+  Number azimuth;
+  GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
+  Number nu = SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s;
+  return GetGroundRadiance(atmosphere, transmittance_texture, ground_irradiance_texture, r, mu, mu_s, nu);
+}
