@@ -177,8 +177,10 @@ TEST(Hillaire, GroundAlbedoBrightensTheSky) {
   dark.ground_albedo = {0.0, 0.0, 0.0};
   AtmosphereParameters bright = Preset("earth");
   bright.ground_albedo = {1.0, 1.0, 1.0};
-  const auto a = CreateModel("hillaire", dark)->View(0.0, Sun(40.0));
-  const auto b = CreateModel("hillaire", bright)->View(0.0, Sun(40.0));
+  const auto dark_model = CreateModel("hillaire", dark);
+  const auto bright_model = CreateModel("hillaire", bright);
+  const auto a = dark_model->View(0.0, Sun(40.0));
+  const auto b = bright_model->View(0.0, Sun(40.0));
   for (double zenith : {0.0, 60.0, 89.0}) {
     const auto la = Radiance(*a, zenith, 180.0);
     const auto lb = Radiance(*b, zenith, 180.0);
@@ -361,7 +363,8 @@ TEST(HillaireGround, ReflectsOnlyBelowTheHorizonAndScalesWithAlbedo) {
   }
   AtmosphereParameters black = Preset("earth");
   black.ground_albedo = {0.0, 0.0, 0.0};
-  const auto black_sky = CreateModel("hillaire", black)->View(100.0, Sun(40.0));
+  const auto black_model = CreateModel("hillaire", black);
+  const auto black_sky = black_model->View(100.0, Sun(40.0));
   black_sky->GroundRadiance(glm::dvec3(0.0, 0.0, -1.0), ground);
   for (double g : ground) EXPECT_EQ(g, 0.0);
 }

@@ -132,7 +132,8 @@ int main(int argc, char** argv) {
   AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
       ->check(RangeOf(0.0, 180.0));
   AddOptionalNumber(render_app, "--yaw", render.yaw_deg,
-                    "compass azimuth of the view in degrees [default: the sun's]");
+                    "compass azimuth of the view centre (fisheye: of the image's top) in degrees "
+                    "[default: the sun's; fisheye: 0, north up]");
   AddNumber(render_app, "--pitch", render.pitch_deg, "elevation of the view in degrees")
       ->check(RangeOf(-90.0, 90.0));
   AddNumber(render_app, "--sun-elevation", render.sun_elevation_deg, "sun elevation in degrees")

@@ -34,7 +34,9 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   settings.camera.width = command.width;
   settings.camera.height = command.height;
   settings.camera.fov_deg = command.fov_deg;
-  settings.camera.yaw_deg = command.yaw_deg.value_or(command.sun_azimuth_deg);
+  // Perspective and equirect views centre on the sun by default; the all-sky fisheye keeps north up.
+  settings.camera.yaw_deg =
+      command.yaw_deg.value_or(settings.camera.kind == CameraKind::kFisheye ? 0.0 : command.sun_azimuth_deg);
   settings.camera.pitch_deg = command.pitch_deg;
   settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
   settings.sun_elevation_deg = command.sun_elevation_deg;

@@ -39,7 +39,8 @@ struct RadianceTerms {
 };
 
 // A model bound to one observer altitude and one sun direction: what a frame needs. Creating it
-// may precompute per-view tables (the sky-view table of `hillaire`). Thread-safe for queries.
+// may precompute per-view tables (the sky-view table of `hillaire`). Thread-safe for queries. It
+// refers to the model's tables: the Model must outlive every SkyView made from it.
 class SkyView {
  public:
   virtual ~SkyView() = default;

@@ -78,7 +78,7 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
   float offset[kChunk];
   float sign[kChunk];
   // The constants, in locals: the vectoriser does not hoist loads of them out of the loops.
-  const float half_width = 0.5f * static_cast<float>(l.width);
+  const float width = static_cast<float>(l.width);
   const float sun_x = l.sun_x;
   const float sun_y = l.sun_y;
   const float texels_per_radian = l.texels_per_radian;
@@ -106,7 +106,7 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
     angle = Select(cx < 0.0f, kPiF - angle, angle);
     angle = Select(cy < 0.0f, -angle, angle);
     const float si = angle * texels_per_radian;
-    s[i] = Select((si >= -half_width) & (si <= half_width), si, 0.0f);  // also NaN -> 0
+    s[i] = Select((si >= -width) & (si < width), si, 0.0f);  // |si| <= width / 2 but for rounding; NaN -> 0
 
     // Zenith: a = |mu| clamped to 1 (NaN -> 1), g(a) = sqrt(1 - a) p(a).
     const float abs_mu = std::fabs(z[i]);

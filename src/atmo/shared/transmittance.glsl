@@ -45,12 +45,13 @@ vec3 ComputeTransmittanceToTopAtmosphereBoundary(IN(AtmosphereParameters) atmosp
 
 // Texture coordinates of the unit range [0, 1] that put 0 and 1 on the centres of the first and
 // last texels, so that the table holds exact values at its bounds.
+// (0.5 / n + x (1 - 1 / n), written with one division.)
 Number GetTextureCoordFromUnitRange(Number x, int texture_size) {
-  return 0.5 / Number(texture_size) + x * (1.0 - 1.0 / Number(texture_size));
+  return (0.5 + x * Number(texture_size - 1)) / Number(texture_size);
 }
 
 Number GetUnitRangeFromTextureCoord(Number u, int texture_size) {
-  return (u - 0.5 / Number(texture_size)) / (1.0 - 1.0 / Number(texture_size));
+  return (u * Number(texture_size) - 0.5) / Number(texture_size - 1);
 }
 
 // Bruneton's mapping: x_r = rho / H, with rho the distance to the horizon and H its value at the
