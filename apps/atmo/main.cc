@@ -69,6 +69,17 @@ CLI::Validator RangeOf(double min, double max) {
       atmo::cli::Format("[%g, %g]", min, max));
 }
 
+// (min, max), open: for the perspective field of view.
+CLI::Validator OpenRangeOf(double min, double max) {
+  return CLI::Validator(
+      [min, max](std::string& text) -> std::string {
+        const double value = std::strtod(text.c_str(), nullptr);
+        if (value > min && value < max) return {};
+        return atmo::cli::Format("%s is outside (%g, %g)", text.c_str(), min, max);
+      },
+      atmo::cli::Format("(%g, %g)", min, max));
+}
+
 // Adds a floating-point option that must be finite.
 CLI::Option* AddNumber(CLI::App* app, const std::string& name, double& value, const std::string& help) {
   return app->add_option(name, value, help)->check(kFinite)->capture_default_str();
@@ -130,7 +141,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
-      ->check(RangeOf(0.0, 180.0));
+      ->check(OpenRangeOf(0.0, 180.0));
   AddOptionalNumber(render_app, "--yaw", render.yaw_deg,
                     "compass azimuth of the view centre (fisheye: of the image's top) in degrees "
                     "[default: the sun's; fisheye: 0, north up]");

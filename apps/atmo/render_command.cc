@@ -23,6 +23,12 @@ std::string JoinValues(const std::vector<double>& values) {
   return text;
 }
 
+std::string JoinOptions(const std::vector<std::string>& options) {
+  std::string text;
+  for (const std::string& option : options) text += (text.empty() ? "" : " ") + option;
+  return text;
+}
+
 }  // namespace
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
@@ -76,6 +82,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
         {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
         {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
+        {"atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg)},
+        {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
+        {"atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg)},
+        {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
+        {"atmo:modelOptions", JoinOptions(common.options)},
     };
     WriteExr(command.exr_path, image, metadata);
     written.push_back(command.exr_path);

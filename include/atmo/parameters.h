@@ -116,7 +116,8 @@ std::string ToJson(const AtmosphereParameters& parameters);
 AtmosphereParameters FromJson(std::string_view json_text);
 AtmosphereParameters LoadParametersFile(const std::filesystem::path& path);
 
-// A stable 64-bit hash (FNV-1a over the canonical JSON) of the parameters, written into outputs.
+// A stable 64-bit hash (FNV-1a over the canonical JSON, name excluded) of the parameters,
+// written into outputs.
 std::uint64_t ParameterHash(const AtmosphereParameters& parameters);
 std::string ParameterHashHex(const AtmosphereParameters& parameters);
 

@@ -75,6 +75,74 @@ double IntegrateProfile(const shared::DensityProfile& profile, const double* alt
   return sum;
 }
 
+// A table read at one fixed radius (a ray sample) for many sun angles: the texel rows and weight
+// that the radius selects are found once; a lookup then blends four texels with them. The same
+// bilinear GL_LINEAR rule as shared::texture.
+class RowTaps {
+ public:
+  RowTaps() = default;
+  RowTaps(const shared::Texture2D& table, double v) : table_(&table) {
+    shared::detail::LinearTaps(v, table.height, false, y0_, y1_, wy_);
+  }
+  vec3 At(double u) const {
+    int x0, x1;
+    double wx;
+    shared::detail::LinearTaps(u, table_->width, table_->repeat_u, x0, x1, wx);
+    const vec3 a = glm::mix(vec3(table_->at(x0, y0_)), vec3(table_->at(x1, y0_)), wx);
+    const vec3 b = glm::mix(vec3(table_->at(x0, y1_)), vec3(table_->at(x1, y1_)), wx);
+    return glm::mix(a, b, wy_);
+  }
+
+ private:
+  const shared::Texture2D* table_ = nullptr;
+  int y0_ = 0, y1_ = 0;
+  double wy_ = 0.0;
+};
+
+// shared::GetTransmittanceToSun at a fixed radius r: Bruneton's mapping split into its r part,
+// computed once, and its mu_s part.
+class TransmittanceToSunAtRadius {
+ public:
+  TransmittanceToSunAtRadius(const shared::AtmosphereParameters& a, const shared::Texture2D& table, double r)
+      : a_(&a), r_(r) {
+    const double H = std::sqrt((a.top_radius - a.bottom_radius) * (a.top_radius + a.bottom_radius));
+    const double rho = shared::SafeSqrt((r - a.bottom_radius) * (r + a.bottom_radius));
+    d_min_ = a.top_radius - r;
+    d_max_ = rho + H;
+    width_ = table.width;
+    taps_ = RowTaps(table, shared::GetTextureCoordFromUnitRange(rho / H, table.height));
+  }
+  vec3 operator()(double mu_s) const {
+    if (shared::RayIntersectsGround(*a_, r_, mu_s)) return vec3(0.0);
+    const double d = shared::DistanceToTopAtmosphereBoundary(*a_, r_, mu_s);
+    return taps_.At(shared::GetTextureCoordFromUnitRange((d - d_min_) / (d_max_ - d_min_), width_));
+  }
+
+ private:
+  const shared::AtmosphereParameters* a_;
+  double r_;
+  double d_min_, d_max_;
+  int width_;
+  RowTaps taps_;
+};
+
+// shared::GetMultiScattering at a fixed radius r.
+class MultipleScatteringAtRadius {
+ public:
+  MultipleScatteringAtRadius(const shared::AtmosphereParameters& a, const shared::Texture2D& table, double r)
+      : width_(table.width) {
+    const double x_r = std::clamp((r - a.bottom_radius) / (a.top_radius - a.bottom_radius), 0.0, 1.0);
+    taps_ = RowTaps(table, shared::GetTextureCoordFromUnitRange(x_r, table.height));
+  }
+  vec3 operator()(double mu_s) const {
+    return taps_.At(shared::GetTextureCoordFromUnitRange(std::clamp(0.5 * mu_s + 0.5, 0.0, 1.0), width_));
+  }
+
+ private:
+  int width_;
+  RowTaps taps_;
+};
+
 // The sun-independent part of one ray of the multiple-scattering integral.
 struct MultipleScatteringRay {
   vec3 direction;
@@ -82,6 +150,7 @@ struct MultipleScatteringRay {
   std::vector<double> t;
   std::vector<double> r;
   std::vector<vec3> luminance_weight;  // throughput x step integral x scattering x isotropic phase
+  std::vector<TransmittanceToSunAtRadius> sun_transmittance;
   bool hits_ground;
   double t_max;
   vec3 ground_throughput;
@@ -177,6 +246,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
         ray.t.push_back(t);
         ray.r.push_back(r_i);
+        ray.sun_transmittance.emplace_back(a, transmittance, r_i);
         ray.luminance_weight.push_back(step_integral * medium.scattering * shared::IsotropicPhaseFunction());
         transfer += step_integral * medium.scattering;
         throughput *= step_transmittance;
@@ -197,7 +267,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         vec3 luminance(0.0);
         for (std::size_t i = 0; i < ray.t.size(); ++i) {
           const double mu_s_i = shared::ClampCosine((r * mu_s + ray.t[i] * nu) / ray.r[i]);
-          luminance += ray.luminance_weight[i] * shared::GetTransmittanceToSun(a, transmittance, ray.r[i], mu_s_i);
+          luminance += ray.luminance_weight[i] * ray.sun_transmittance[i](mu_s_i);
         }
         if (ray.hits_ground) {
           const double r_g = a.bottom_radius;
@@ -226,6 +296,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     // Steps as in shared::IntegrateScatteredRadiance.
     std::vector<double> t(sample_count), r_i(sample_count);
     std::vector<vec3> weight(sample_count), rayleigh(sample_count), mie(sample_count), scattering(sample_count);
+    std::vector<TransmittanceToSunAtRadius> sun_transmittance;
+    std::vector<MultipleScatteringAtRadius> multiple_scattering_at;
     vec3 throughput(1.0);
     for (int i = 0; i < sample_count; ++i) {
       const double x_0 = double(i) / sample_count;
@@ -235,6 +307,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
       const double dt = t_1 - t_0;
       t[i] = 0.5 * (t_0 + t_1);
       r_i[i] = std::sqrt(t[i] * t[i] + 2.0 * r * mu * t[i] + r * r);
+      sun_transmittance.emplace_back(a, transmittance, r_i[i]);
+      multiple_scattering_at.emplace_back(a, multiple_scattering, r_i[i]);
       const shared::MediumSample medium = shared::SampleMedium(a, r_i[i]);
       const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
       weight[i] = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
@@ -254,9 +328,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
       vec3 radiance(0.0);
       for (int i = 0; i < sample_count; ++i) {
         const double mu_s_i = shared::ClampCosine((r * mu_s + t[i] * nu) / r_i[i]);
-        const vec3 sun_transmittance = shared::GetTransmittanceToSun(a, transmittance, r_i[i], mu_s_i);
-        const vec3 ms = shared::GetMultiScattering(a, multiple_scattering, r_i[i], mu_s_i);
-        const vec3 source = sun_transmittance * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) + ms * scattering[i];
+        const vec3 source = sun_transmittance[i](mu_s_i) * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) +
+                            multiple_scattering_at[i](mu_s_i) * scattering[i];
         radiance += weight[i] * source;
       }
       table.at(x, y) = glm::vec3(radiance);

@@ -4,9 +4,9 @@
 // shared double-precision path
 //   texture(sky_view, GetSkyViewTextureUvFromBeta(textureSize(sky_view, 0), beta, v.z,
 //                                                 GetAzimuthFromSun(v, sun)))
-// with the same polynomial acos and atan2, the same latitude mapping and the same GL_LINEAR
-// sampling (repeat in x, clamp to edge in y), to within a few 1e-5 texels of the sampling
-// position (float rounding; see sky_view_lookup.cc). The arithmetic runs on structure-of-arrays
+// with the same latitude mapping and the same GL_LINEAR sampling (repeat in x, clamp to edge in y),
+// to within a few 1e-5 texels of the sampling position: acos and atan2 are float polynomials
+// accurate to float rounding (see sky_view_lookup.cc). The arithmetic runs on structure-of-arrays
 // chunks without branches, so that the compiler vectorises it; then the four texels of each
 // direction are fetched and blended.
 //
@@ -35,8 +35,8 @@ struct SkyViewLookup {
   float texels_per_radian = 0.0f;
 
   // Latitude. beta is the horizon dip angle (shared::GetHorizonDipAngle), theta_h = pi - beta
-  // the zenith angle of the horizon, d = FastAcos(mu) - theta_h the view zenith angle past the
-  // horizon (rad). With a = |mu| and g(a) = FastAcos(a): d = g(a) - theta_h for mu >= 0 and
+  // the zenith angle of the horizon, d = acos(mu) - theta_h the view zenith angle past the
+  // horizon (rad). With a = |mu| and g(a) = acos(a): d = g(a) - theta_h for mu >= 0 and
   // d = beta - g(a) for mu < 0.
   float horizon_zenith_rad = 0.0f;      // theta_h
   float horizon_dip_rad = 0.0f;         // beta

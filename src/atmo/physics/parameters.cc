@@ -199,8 +199,12 @@ void Validate(const AtmosphereParameters& p) {
 // FNV-1a, 64 bit (Fowler, Noll, Vo): offset basis 14695981039346656037, prime 1099511628211,
 // over the bytes of the canonical JSON, which holds every value exactly.
 std::uint64_t ParameterHash(const AtmosphereParameters& parameters) {
+  // The physics only: the same atmosphere hashes the same whatever it is named, so that tables
+  // computed for a preset serve an identical "custom" config.
+  AtmosphereParameters unnamed = parameters;
+  unnamed.name = "custom";
   std::uint64_t hash = 14695981039346656037ull;
-  for (const char c : ToJson(parameters)) {
+  for (const char c : ToJson(unnamed)) {
     hash ^= static_cast<unsigned char>(c);
     hash *= 1099511628211ull;
   }

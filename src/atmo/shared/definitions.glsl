@@ -10,7 +10,7 @@ const Number kPi = 3.14159265358979323846;
 // nu = cos(angle between the view direction and the sun direction).
 const int kPhaseIsotropic = 0;
 const int kPhaseRayleigh = 1;           // 3/(16 pi) (1 + nu^2)
-const int kPhaseModifiedRayleigh = 2;   // Atmosphere Plus: 0.8 (1.4 + 0.5 nu^2) / (4 pi)
+const int kPhaseModifiedRayleigh = 2;   // Atmosphere Plus: (1.4 + 0.5 nu^2) / (47/30 * 4 pi), see phase.glsl
 const int kPhaseCornetteShanks = 3;     // 3/(8 pi) (1-g^2)(1+nu^2) / ((2+g^2)(1+g^2-2 g nu)^1.5)
 const int kPhaseHenyeyGreenstein = 4;   // (1-g^2) / (4 pi (1+g^2-2 g nu)^1.5)
 

@@ -35,7 +35,7 @@ bool MoveToAtmosphereEntry(IN(AtmosphereParameters) atmosphere, INOUT(Number) r,
 }
 
 // Integrates the scattered radiance along the ray up to the ground, the top of the atmosphere,
-// or t_limit, whichever comes first, with `sample_count` uniform steps, each integrated
+// or t_limit, whichever comes first, with `sample_count` steps (quadratic in distance), each integrated
 // analytically for the transmittance across it (Hillaire 2020, eq. 11 of the 2015 course notes).
 // `transmittance` receives the transmittance over the marched segment.
 vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,

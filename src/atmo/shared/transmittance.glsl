@@ -6,7 +6,8 @@
 // density falls roughly exponentially away from the lowest point of the ray, so the quadratic
 // substitution puts more samples where the integrand varies fastest. Measured over all altitudes
 // and zenith angles of the `earth` preset (ozone tent included) against 100000 uniform intervals:
-// 40 intervals err by at most 2e-3 in transmittance (uniform steps: 6e-3), 100 by 3e-4.
+// 40 intervals err by at most 2e-3 in transmittance (uniform steps: 6e-3), 100 by 3e-4
+// (Transmittance.QuadratureConverges asserts < 2.5e-3 against 20000 over a coarser sweep).
 vec3 ComputeOpticalDepthOfSegment(IN(AtmosphereParameters) atmosphere, Number r, Number mu, Number t_dense,
     Number t_far, int sample_count) {
   Number length = t_far - t_dense;
