@@ -296,3 +296,50 @@ TEST(Transmittance, IsSymmetric) {
 
 }  // namespace
 }  // namespace atmo::shared
+
+// The CPU renderer's row form of the perspective camera equals the shared per-pixel kernel.
+#include "cpu/camera.h"
+
+namespace atmo {
+namespace {
+
+TEST(Camera, PerspectiveRowsEqualThePerPixelKernel) {
+  for (const Camera& c : {Camera{CameraKind::kPerspective, 64, 36, 90.0, 180.0, 10.0},
+                          Camera{CameraKind::kPerspective, 17, 40, 30.0, -45.0, -70.0}}) {
+    const shared::CameraParameters camera = ToSharedCamera(c);
+    std::vector<glm::dvec3> row(c.width);
+    for (int y = 0; y < c.height; ++y) {
+      PerspectiveRowDirections(camera, y, row);
+      for (int x = 0; x < c.width; ++x) {
+        shared::vec3 expected;
+        ASSERT_TRUE(shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), expected));
+        EXPECT_NEAR(glm::length(row[x] - expected), 0.0, 1e-14);
+      }
+    }
+  }
+}
+
+TEST(Camera, DirectionsFollowTheConventions) {
+  // Perspective: the centre looks at (yaw, pitch); fisheye: zenith at the centre, north up, east
+  // left, horizon on the circle; equirect: the centre column at yaw, the top row at the zenith.
+  shared::vec3 d;
+  const auto perspective = ToSharedCamera(Camera{CameraKind::kPerspective, 2, 2, 60.0, 90.0, 0.0});
+  shared::GetCameraRayDirection(perspective, shared::vec2(1.0, 1.0), d);
+  EXPECT_NEAR(glm::length(d - glm::dvec3(1.0, 0.0, 0.0)), 0.0, 1e-12);  // east
+  const auto fisheye = ToSharedCamera(Camera{CameraKind::kFisheye, 100, 100, 90.0, 0.0, 0.0});
+  shared::GetCameraRayDirection(fisheye, shared::vec2(50.0, 50.0), d);
+  EXPECT_NEAR(d.z, 1.0, 1e-12);
+  shared::GetCameraRayDirection(fisheye, shared::vec2(50.0, 0.0), d);  // top edge: north horizon
+  EXPECT_NEAR(glm::length(d - glm::dvec3(0.0, 1.0, 0.0)), 0.0, 1e-12);
+  shared::GetCameraRayDirection(fisheye, shared::vec2(0.0, 50.0), d);  // left edge: east horizon
+  EXPECT_NEAR(glm::length(d - glm::dvec3(1.0, 0.0, 0.0)), 0.0, 1e-12);
+  EXPECT_FALSE(shared::GetCameraRayDirection(fisheye, shared::vec2(1.0, 1.0), d));  // corner
+  const auto equirect = ToSharedCamera(Camera{CameraKind::kEquirect, 360, 180, 90.0, 180.0, 0.0});
+  shared::GetCameraRayDirection(equirect, shared::vec2(180.0, 90.0), d);
+  EXPECT_NEAR(glm::length(d - glm::dvec3(0.0, -1.0, 0.0)), 0.0, 1e-12);  // south
+  shared::GetCameraRayDirection(equirect, shared::vec2(10.0, 0.0), d);
+  EXPECT_NEAR(d.z, 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace atmo

@@ -27,6 +27,20 @@ void CheckThreeChannels(std::size_t channels) {
 
 }  // namespace
 
+// The directions of shared::GetCameraRayDirection for one row of a perspective camera, with the
+// row's part of the sum formed once: normalize(forward + x right + y up).
+void PerspectiveRowDirections(const shared::CameraParameters& camera, int row, std::span<glm::dvec3> views) {
+  const double w = camera.width;
+  const double h = camera.height;
+  const double y = (1.0 - 2.0 * (row + 0.5) / h) * camera.tan_half_fov * h / w;
+  const glm::dvec3 row_base = camera.forward + y * camera.up;
+  for (int x = 0; x < camera.width; ++x) {
+    const double u = (2.0 * (x + 0.5) / w - 1.0) * camera.tan_half_fov;
+    const glm::dvec3 d = row_base + u * camera.right;
+    views[x] = d * (1.0 / std::sqrt(glm::dot(d, d)));
+  }
+}
+
 shared::CameraParameters ToSharedCamera(const Camera& camera) {
   const int kind = camera.kind == CameraKind::kFisheye    ? shared::kCameraFisheye
                    : camera.kind == CameraKind::kEquirect ? shared::kCameraEquirect
@@ -79,11 +93,15 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
     for (int y = rows.begin(); y < rows.end(); ++y) {
-      for (int x = 0; x < width; ++x) {
-        shared::vec3 direction;
-        const bool seen = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), direction);
-        views[x] = seen ? direction : glm::dvec3(0.0);
-        if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
+      if (camera.kind == shared::kCameraPerspective) {
+        PerspectiveRowDirections(camera, y, views);
+      } else {
+        for (int x = 0; x < width; ++x) {
+          shared::vec3 direction;
+          const bool seen = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), direction);
+          views[x] = seen ? direction : glm::dvec3(0.0);
+          if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
+        }
       }
       float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
       sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * 3));

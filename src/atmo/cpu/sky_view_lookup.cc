@@ -3,7 +3,8 @@
 // Each chunk of directions goes through short loops over structure-of-arrays buffers, written
 // with selects instead of branches so that g++ -O3 vectorises them (check with
 // -fopt-info-vec-optimized): the azimuth and the latitude give the texel coordinates (s, t), these
-// give the four texels and the weights, and a last loop fetches and blends. Two defaults of g++
+// give the four texels and the weights, and a last loop fetches and blends them (one 16-byte load
+// per texel from the lookup's RGBA copy of the table where the target has SSE). Two defaults of g++
 // stand in the way, and are worked around here rather than switched off for this file: std::sqrt
 // does not vectorise while it may set errno (-fmath-errno), so the square roots of a chunk are
 // taken in passes of their own (SqrtInPlace); and a conditional `c ? x - y : y` is not
@@ -26,7 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#if defined(__AVX__)
+#if defined(__SSE__)
 #include <immintrin.h>
 #endif
 
@@ -111,7 +112,9 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
     angle = Select(std::signbit(cy), -angle, angle);
     const float si = angle * texels_per_radian;
     s[i] = Select((si >= -width) & (si < width), si, 0.0f);  // |si| <= width / 2 but for rounding; NaN -> 0
-
+  }
+  // The zenith in a loop of its own: together, the two need more vector registers than there are.
+  for (int i = 0; i < n; ++i) {
     // Zenith: a = |mu| clamped to 1 (NaN -> 1), g(a) = acos(a) = sqrt(1 - a) p(a).
     const float abs_mu = std::fabs(z[i]);
     const float a = Select(abs_mu < 1.0f, abs_mu, 1.0f);
@@ -152,7 +155,8 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
 SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
                                 const glm::dvec3& sun_direction) {
   SkyViewLookup l;
-  l.texels = sky_view.texels.data();
+  l.texels.reserve(sky_view.texels.size());
+  for (const glm::vec3& texel : sky_view.texels) l.texels.emplace_back(texel, 0.0f);
   l.width = sky_view.width;
   l.height = sky_view.height;
   l.sun_x = static_cast<float>(sun_direction.x);
@@ -209,12 +213,12 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
                       float* out) {
   const int width = lookup.width;
   const int height = lookup.height;
-  const float* texels = &lookup.texels[0].x;  // glm::vec3 is three packed floats
+  const glm::vec4* texels = lookup.texels.data();
   float s[kChunk];
   float t[kChunk];
-  int base[kChunk];    // index of texel (x0, y0), in floats
-  int step_x[kChunk];  // (x1, y) - (x0, y), in floats: 3, or 3 (1 - width) at the wrap
-  int step_y[kChunk];  // (x, y1) - (x, y0), in floats: 3 width, or 0 on the last row
+  int base[kChunk];    // index of texel (x0, y0)
+  int step_x[kChunk];  // (x1, y) - (x0, y): 1, or 1 - width at the wrap
+  int step_y[kChunk];  // (x, y1) - (x, y0): width, or 0 on the last row
   float wx[kChunk];
   float wy[kChunk];
   for (int begin = 0; begin < count; begin += kChunk) {
@@ -230,21 +234,38 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
       wx[i] = s[i] - static_cast<float>(x0);
       wy[i] = t[i] - static_cast<float>(y0);
       x0 += x0 < 0 ? width : 0;
-      base[i] = 3 * (x0 + y0 * width);
-      step_x[i] = x0 == width - 1 ? 3 * (1 - width) : 3;
-      step_y[i] = y0 < height - 1 ? 3 * width : 0;
+      base[i] = x0 + y0 * width;
+      step_x[i] = x0 == width - 1 ? 1 - width : 1;
+      step_y[i] = y0 < height - 1 ? width : 0;
     }
     float* o = out + 3 * static_cast<std::ptrdiff_t>(begin);
     for (int i = 0; i < n; ++i) {
-      const float* t00 = texels + base[i];
-      const float* t10 = t00 + step_x[i];
-      const float* t01 = t00 + step_y[i];
-      const float* t11 = t01 + step_x[i];
-      for (int c = 0; c < 3; ++c) {
-        const float top = t00[c] + (t10[c] - t00[c]) * wx[i];
-        const float bottom = t01[c] + (t11[c] - t01[c]) * wx[i];
-        o[3 * i + c] = top + (bottom - top) * wy[i];
+      const glm::vec4* t00 = texels + base[i];
+      const glm::vec4* t01 = t00 + step_y[i];
+#if defined(__SSE__)
+      const __m128 a = _mm_loadu_ps(&t00[0].x);
+      const __m128 b = _mm_loadu_ps(&t00[step_x[i]].x);
+      const __m128 c = _mm_loadu_ps(&t01[0].x);
+      const __m128 d = _mm_loadu_ps(&t01[step_x[i]].x);
+      const __m128 fx = _mm_set1_ps(wx[i]);
+      const __m128 top = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(b, a), fx));
+      const __m128 bottom = _mm_add_ps(c, _mm_mul_ps(_mm_sub_ps(d, c), fx));
+      const __m128 value = _mm_add_ps(top, _mm_mul_ps(_mm_sub_ps(bottom, top), _mm_set1_ps(wy[i])));
+      if (begin + i + 1 < count) {
+        _mm_storeu_ps(o + 3 * i, value);  // the fourth float is the next pixel's, written after
+      } else {
+        alignas(16) float last[4];
+        _mm_store_ps(last, value);
+        for (int k = 0; k < 3; ++k) o[3 * i + k] = last[k];
       }
+#else
+      const glm::vec4 top = t00[0] + (t00[step_x[i]] - t00[0]) * wx[i];
+      const glm::vec4 bottom = t01[0] + (t01[step_x[i]] - t01[0]) * wx[i];
+      const glm::vec4 value = top + (bottom - top) * wy[i];
+      o[3 * i] = value.x;
+      o[3 * i + 1] = value.y;
+      o[3 * i + 2] = value.z;
+#endif
     }
   }
 }

@@ -14,6 +14,8 @@
 // LookupSkyViewRow on rows of directions (any count; thread-safe, the lookup is read-only).
 #pragma once
 
+#include <vector>
+
 #include <glm/glm.hpp>
 
 #include "shared/glsl_cpp.h"
@@ -22,9 +24,10 @@ namespace atmo::cpu {
 
 // The per-view constants of the lookup. Made by MakeSkyViewLookup; the fields are its business.
 struct SkyViewLookup {
-  // The table: `width` x `height` RGB texels, row-major; not owned, it must outlive the lookup.
-  // Sampled as GL_LINEAR with GL_REPEAT in x and clamp to edge in y (the sky-view sampler).
-  const glm::vec3* texels = nullptr;
+  // A copy of the table, `width` x `height` texels, row-major, padded to RGBA so that a texel is
+  // one 16-byte load. Sampled as GL_LINEAR with GL_REPEAT in x and clamp to edge in y (the
+  // sky-view sampler).
+  std::vector<glm::vec4> texels;
   int width = 0;
   int height = 0;
 
@@ -57,7 +60,7 @@ struct SkyViewLookup {
 // The lookup of `sky_view` (a table made for one observer and a sun at azimuth 0, as
 // HillaireModel::ComputeSkyViewLut makes it) for the horizon dip angle `horizon_dip_rad`
 // (shared::GetHorizonDipAngle(atmosphere, r)) and the sun direction `sun_direction` (the local
-// frame, normalised). Keeps a pointer to the table's texels.
+// frame, normalised). Copies the table (for 192 x 108 texels, ~0.3 MiB).
 SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
                                 const glm::dvec3& sun_direction);
 

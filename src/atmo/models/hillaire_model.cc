@@ -9,6 +9,7 @@
 
 #include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
+#include "cpu/sky_view_lookup.h"
 #include "physics/shared_parameters.h"
 
 namespace atmo {
@@ -170,6 +171,11 @@ class HillaireSkyView final : public SkyView {
         model.AddGroundView(batches[b], r_, mu_s_, sky_and_ground_view_.back());
       }
       model.RecordPass("ground_view_lut", MillisecondsSince(start));
+      // Three channels: the frame kernel's float copies of both tables.
+      if (batches.size() == 1) {
+        sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_dip_, sun);
+        sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_dip_, sun);
+      }
     }
   }
 
@@ -230,18 +236,41 @@ class HillaireSkyView final : public SkyView {
       SkyView::RadianceBatch(views, terms, out);
       return;
     }
-    const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
     const std::size_t n = channel_count();
     const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
     std::vector<double> disc(n);
+    if (n == 3) {
+      // The vectorised float kernel, on chunks of directions in structure-of-arrays form.
+      const cpu::SkyViewLookup& lookup = terms.ground ? sky_and_ground_lookup_ : sky_lookup_;
+      constexpr std::size_t kChunk = 256;
+      float x[kChunk], y[kChunk], z[kChunk];
+      for (std::size_t first = 0; first < views.size(); first += kChunk) {
+        const std::size_t count = std::min(kChunk, views.size() - first);
+        for (std::size_t i = 0; i < count; ++i) {
+          x[i] = static_cast<float>(views[first + i].x);
+          y[i] = static_cast<float>(views[first + i].y);
+          z[i] = static_cast<float>(views[first + i].z);
+        }
+        cpu::LookupSkyViewRow(lookup, x, y, z, static_cast<int>(count), &out[3 * first]);
+      }
+    } else {
+      const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
+      for (std::size_t i = 0; i < views.size(); ++i) {
+        const glm::dvec3& view = views[i];
+        const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+        const shared::vec2 uv =
+            shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
+        for (std::size_t b = 0; b < tables.size(); ++b) {
+          const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
+          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
+        }
+      }
+    }
     for (std::size_t i = 0; i < views.size(); ++i) {
       const glm::dvec3& view = views[i];
-      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) continue;
-      const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
-      const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
-      for (std::size_t b = 0; b < tables.size(); ++b) {
-        const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
-        for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+        for (std::size_t c = 0; c < n; ++c) out[i * n + c] = 0.0f;
+        continue;
       }
       if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
         SunDiscRadiance(view, disc);
@@ -267,6 +296,8 @@ class HillaireSkyView final : public SkyView {
   double horizon_dip_;                       // GetHorizonDipAngle(r_), for per-pixel lookups
   std::vector<shared::Texture2D> sky_view_;  // one per batch; empty where the table does not serve
   std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
+  cpu::SkyViewLookup sky_lookup_;             // float frame-kernel copies (three channels only)
+  cpu::SkyViewLookup sky_and_ground_lookup_;
 };
 
 std::unique_ptr<SkyView> HillaireModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
