@@ -75,82 +75,125 @@ double IntegrateProfile(const shared::DensityProfile& profile, const double* alt
   return sum;
 }
 
-// A table read at one fixed radius (a ray sample) for many sun angles: the texel rows and weight
-// that the radius selects are found once; a lookup then blends four texels with them. The same
-// bilinear GL_LINEAR rule as shared::texture.
-class RowTaps {
- public:
-  RowTaps() = default;
-  RowTaps(const shared::Texture2D& table, double v) : table_(&table) {
-    shared::detail::LinearTaps(v, table.height, false, y0_, y1_, wy_);
+// A float table padded to four components, so that a texel is one 16-byte load.
+struct PaddedTable {
+  explicit PaddedTable(const shared::Texture2D& table) : width(table.width), height(table.height) {
+    texels.reserve(table.texels.size());
+    for (const glm::vec3& t : table.texels) texels.emplace_back(t, 0.0f);
   }
-  vec3 At(double u) const {
-    int x0, x1;
-    double wx;
-    shared::detail::LinearTaps(u, table_->width, table_->repeat_u, x0, x1, wx);
-    const vec3 a = glm::mix(vec3(table_->at(x0, y0_)), vec3(table_->at(x1, y0_)), wx);
-    const vec3 b = glm::mix(vec3(table_->at(x0, y1_)), vec3(table_->at(x1, y1_)), wx);
-    return glm::mix(a, b, wy_);
-  }
-
- private:
-  const shared::Texture2D* table_ = nullptr;
-  int y0_ = 0, y1_ = 0;
-  double wy_ = 0.0;
+  int width;
+  int height;
+  std::vector<glm::vec4> texels;
 };
 
-// shared::GetTransmittanceToSun at a fixed radius r: Bruneton's mapping split into its r part,
-// computed once, and its mu_s part.
-class TransmittanceToSunAtRadius {
+// The transmittance-to-sun and multiple-scattering lookups at the samples of one ray, for many
+// suns (the columns of a table row). What depends only on a sample's radius is computed once:
+// the texel rows and weight of both tables and the constants of Bruneton's mapping. Per sun, a
+// loop without branches (vectorised) finds each sample's sun cosine, planet shadow and texel
+// column, and a second loop blends the texels. The formulas are those of
+// shared::GetTransmittanceToSun and shared::GetMultiScattering (tested texel by texel).
+class SunLookupsAlongRay {
  public:
-  TransmittanceToSunAtRadius(const shared::AtmosphereParameters& a, const shared::Texture2D& table, double r)
-      : a_(&a), r_(r) {
-    const double H = std::sqrt((a.top_radius - a.bottom_radius) * (a.top_radius + a.bottom_radius));
-    const double rho = shared::SafeSqrt((r - a.bottom_radius) * (r + a.bottom_radius));
-    d_min_ = a.top_radius - r;
-    d_max_ = rho + H;
-    width_ = table.width;
-    taps_ = RowTaps(table, shared::GetTextureCoordFromUnitRange(rho / H, table.height));
+  SunLookupsAlongRay(const shared::AtmosphereParameters& a, const PaddedTable& transmittance,
+                     const PaddedTable* multiple_scattering, double r)
+      : a_(a), transmittance_(transmittance), multiple_scattering_(multiple_scattering), r_(r) {}
+
+  void AddSample(double t, double r_i) {
+    const double H = std::sqrt((a_.top_radius - a_.bottom_radius) * (a_.top_radius + a_.bottom_radius));
+    const double rho = shared::SafeSqrt((r_i - a_.bottom_radius) * (r_i + a_.bottom_radius));
+    t_.push_back(t);
+    r_i_.push_back(r_i);
+    inverse_r_.push_back(1.0 / r_i);
+    c_ground_.push_back((a_.bottom_radius - r_i) * (a_.bottom_radius + r_i));
+    c_top_.push_back((a_.top_radius - r_i) * (a_.top_radius + r_i));
+    d_min_.push_back(a_.top_radius - r_i);
+    inverse_range_.push_back(1.0 / (rho + H - (a_.top_radius - r_i)));
+    AddRow(transmittance_, shared::GetTextureCoordFromUnitRange(rho / H, transmittance_.height), transmittance_rows_);
+    if (multiple_scattering_ != nullptr) {
+      const double x_r = std::clamp((r_i - a_.bottom_radius) / (a_.top_radius - a_.bottom_radius), 0.0, 1.0);
+      AddRow(*multiple_scattering_, shared::GetTextureCoordFromUnitRange(x_r, multiple_scattering_->height),
+             multiple_scattering_rows_);
+    }
+    sun_column_.resize(t_.size());
+    multiple_scattering_column_.resize(t_.size());
+    lit_.resize(t_.size());
   }
-  vec3 operator()(double mu_s) const {
-    if (shared::RayIntersectsGround(*a_, r_, mu_s)) return vec3(0.0);
-    const double d = shared::DistanceToTopAtmosphereBoundary(*a_, r_, mu_s);
-    return taps_.At(shared::GetTextureCoordFromUnitRange((d - d_min_) / (d_max_ - d_min_), width_));
+
+  std::size_t size() const { return t_.size(); }
+  double t(std::size_t i) const { return t_[i]; }
+  double r(std::size_t i) const { return r_i_[i]; }
+
+  // For the sun at zenith cosine mu_s, nu = cos(ray direction, sun): the transmittance to the sun
+  // at every sample (0 in the planet's shadow) and, if the ray has a multiple-scattering table,
+  // its value there. Not thread-safe (scratch arrays); one instance per thread.
+  void Evaluate(double mu_s, double nu, vec3* sun_transmittance, vec3* multiple_scattering) const {
+    const int n = static_cast<int>(t_.size());
+    const double t_columns = transmittance_.width - 1;
+    const double m_columns = multiple_scattering_ != nullptr ? multiple_scattering_->width - 1 : 0.0;
+    const double r_mu_s = r_ * mu_s;
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      const double r_i = r_i_[i];
+      const double mu = std::min(std::max((r_mu_s + t_[i] * nu) * inverse_r_[i], -1.0), 1.0);
+      const double r2_mu2 = r_i * r_i * mu * mu;
+      lit_[i] = (mu < 0.0 && c_ground_[i] + r2_mu2 >= 0.0) ? 0.0 : 1.0;
+      const double root = std::sqrt(std::max(c_top_[i] + r2_mu2, 0.0));
+      const double d = mu > 0.0 ? c_top_[i] / (r_i * mu + root) : -r_i * mu + root;
+      sun_column_[i] = std::min(std::max((std::max(d, 0.0) - d_min_[i]) * inverse_range_[i], 0.0), 1.0) * t_columns;
+      multiple_scattering_column_[i] = std::min(std::max(0.5 * mu + 0.5, 0.0), 1.0) * m_columns;
+    }
+    for (int i = 0; i < n; ++i) {
+      sun_transmittance[i] = lit_[i] * Blend(transmittance_, transmittance_rows_[i], sun_column_[i]);
+      if (multiple_scattering != nullptr) {
+        multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
+      }
+    }
   }
 
  private:
-  const shared::AtmosphereParameters* a_;
+  struct Row {
+    const glm::vec4* texels0;  // the two texel rows GL_LINEAR blends, and the second one's weight
+    const glm::vec4* texels1;
+    float wy;
+  };
+
+  static void AddRow(const PaddedTable& table, double v, std::vector<Row>& rows) {
+    Row row;
+    int y0, y1;
+    double wy;
+    shared::detail::LinearTaps(v, table.height, false, y0, y1, wy);
+    row.texels0 = &table.texels[static_cast<std::size_t>(y0) * table.width];
+    row.texels1 = &table.texels[static_cast<std::size_t>(y1) * table.width];
+    row.wy = static_cast<float>(wy);
+    rows.push_back(row);
+  }
+
+  // GL_LINEAR at texel coordinate s (texel centres at integers, s in [0, width - 1]) of `row`, in
+  // float like the table itself.
+  static vec3 Blend(const PaddedTable& table, const Row& row, double s) {
+    const int x0 = static_cast<int>(s);
+    const int x1 = std::min(x0 + 1, table.width - 1);
+    const float wx = static_cast<float>(s - x0);
+    const glm::vec4 a = row.texels0[x0] + (row.texels0[x1] - row.texels0[x0]) * wx;
+    const glm::vec4 b = row.texels1[x0] + (row.texels1[x1] - row.texels1[x0]) * wx;
+    return vec3(glm::vec3(a + (b - a) * row.wy));
+  }
+
+  const shared::AtmosphereParameters& a_;
+  const PaddedTable& transmittance_;
+  const PaddedTable* multiple_scattering_;
   double r_;
-  double d_min_, d_max_;
-  int width_;
-  RowTaps taps_;
-};
-
-// shared::GetMultiScattering at a fixed radius r.
-class MultipleScatteringAtRadius {
- public:
-  MultipleScatteringAtRadius(const shared::AtmosphereParameters& a, const shared::Texture2D& table, double r)
-      : width_(table.width) {
-    const double x_r = std::clamp((r - a.bottom_radius) / (a.top_radius - a.bottom_radius), 0.0, 1.0);
-    taps_ = RowTaps(table, shared::GetTextureCoordFromUnitRange(x_r, table.height));
-  }
-  vec3 operator()(double mu_s) const {
-    return taps_.At(shared::GetTextureCoordFromUnitRange(std::clamp(0.5 * mu_s + 0.5, 0.0, 1.0), width_));
-  }
-
- private:
-  int width_;
-  RowTaps taps_;
+  std::vector<double> t_, r_i_, inverse_r_, c_ground_, c_top_, d_min_, inverse_range_;
+  std::vector<Row> transmittance_rows_, multiple_scattering_rows_;
+  mutable std::vector<double> sun_column_, multiple_scattering_column_, lit_;
 };
 
 // The sun-independent part of one ray of the multiple-scattering integral.
 struct MultipleScatteringRay {
   vec3 direction;
   double weight;  // how many directions of the set this one stands for (2 for a mirrored pair)
-  std::vector<double> t;
-  std::vector<double> r;
+  SunLookupsAlongRay samples;
   std::vector<vec3> luminance_weight;  // throughput x step integral x scattering x isotropic phase
-  std::vector<TransmittanceToSunAtRadius> sun_transmittance;
   bool hits_ground;
   double t_max;
   vec3 ground_throughput;
@@ -220,15 +263,15 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
     }
   }
 
+  const PaddedTable padded_transmittance(transmittance);
   ForEachRow(size.y, [&](int y) {
     double r, unused_mu_s;
     shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
     std::vector<MultipleScatteringRay> rays;
     vec3 transfer_sum(0.0);
     for (const auto& [direction, weight] : directions) {
-      MultipleScatteringRay ray;
-      ray.direction = direction;
-      ray.weight = weight;
+      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, nullptr, r), {}, false, 0.0,
+                                vec3(0.0)};
       const double mu = direction.z;
       ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
       ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
@@ -244,9 +287,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         const shared::MediumSample medium = shared::SampleMedium(a, r_i);
         const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
         const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-        ray.t.push_back(t);
-        ray.r.push_back(r_i);
-        ray.sun_transmittance.emplace_back(a, transmittance, r_i);
+        ray.samples.AddSample(t, r_i);
         ray.luminance_weight.push_back(step_integral * medium.scattering * shared::IsotropicPhaseFunction());
         transfer += step_integral * medium.scattering;
         throughput *= step_transmittance;
@@ -257,6 +298,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
     }
     const vec3 f_ms = transfer_sum / double(direction_count);
 
+    std::vector<vec3> sun_transmittance(sample_count);
     for (int x = 0; x < size.x; ++x) {
       double unused_r, mu_s;
       shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
@@ -264,11 +306,9 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
       vec3 luminance_sum(0.0);
       for (const MultipleScatteringRay& ray : rays) {
         const double nu = glm::dot(ray.direction, sun);
+        ray.samples.Evaluate(mu_s, nu, sun_transmittance.data(), nullptr);
         vec3 luminance(0.0);
-        for (std::size_t i = 0; i < ray.t.size(); ++i) {
-          const double mu_s_i = shared::ClampCosine((r * mu_s + ray.t[i] * nu) / ray.r[i]);
-          luminance += ray.luminance_weight[i] * ray.sun_transmittance[i](mu_s_i);
-        }
+        for (std::size_t i = 0; i < ray.samples.size(); ++i) luminance += ray.luminance_weight[i] * sun_transmittance[i];
         if (ray.hits_ground) {
           const double r_g = a.bottom_radius;
           const double mu_s_g = shared::ClampCosine((r * mu_s + ray.t_max * nu) / r_g);
@@ -287,6 +327,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
                          const shared::Texture2D& multiple_scattering, double r, double mu_s, int sample_count,
                          shared::Texture2D& table) {
   const shared::ivec2 size(table.width, table.height);
+  const PaddedTable padded_transmittance(transmittance);
+  const PaddedTable padded_multiple_scattering(multiple_scattering);
   ForEachRow(size.y, [&](int y) {
     // The view zenith of the row; the columns only change the azimuth from the sun.
     double mu, unused_azimuth;
@@ -296,8 +338,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     // Steps as in shared::IntegrateScatteredRadiance.
     std::vector<double> t(sample_count), r_i(sample_count);
     std::vector<vec3> weight(sample_count), rayleigh(sample_count), mie(sample_count), scattering(sample_count);
-    std::vector<TransmittanceToSunAtRadius> sun_transmittance;
-    std::vector<MultipleScatteringAtRadius> multiple_scattering_at;
+    SunLookupsAlongRay samples(a, padded_transmittance, &padded_multiple_scattering, r);
+    std::vector<vec3> sun_transmittance(sample_count), multiple_scattering_at(sample_count);
     vec3 throughput(1.0);
     for (int i = 0; i < sample_count; ++i) {
       const double x_0 = double(i) / sample_count;
@@ -307,8 +349,7 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
       const double dt = t_1 - t_0;
       t[i] = 0.5 * (t_0 + t_1);
       r_i[i] = std::sqrt(t[i] * t[i] + 2.0 * r * mu * t[i] + r * r);
-      sun_transmittance.emplace_back(a, transmittance, r_i[i]);
-      multiple_scattering_at.emplace_back(a, multiple_scattering, r_i[i]);
+      samples.AddSample(t[i], r_i[i]);
       const shared::MediumSample medium = shared::SampleMedium(a, r_i[i]);
       const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
       weight[i] = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
@@ -325,11 +366,11 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
                         mu * mu_s;
       const double rayleigh_phase = shared::GetRayleighPhase(a, nu);
       const double mie_phase = shared::GetMiePhase(a, nu);
+      samples.Evaluate(mu_s, nu, sun_transmittance.data(), multiple_scattering_at.data());
       vec3 radiance(0.0);
       for (int i = 0; i < sample_count; ++i) {
-        const double mu_s_i = shared::ClampCosine((r * mu_s + t[i] * nu) / r_i[i]);
-        const vec3 source = sun_transmittance[i](mu_s_i) * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) +
-                            multiple_scattering_at[i](mu_s_i) * scattering[i];
+        const vec3 source = sun_transmittance[i] * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) +
+                            multiple_scattering_at[i] * scattering[i];
         radiance += weight[i] * source;
       }
       table.at(x, y) = glm::vec3(radiance);
