@@ -75,6 +75,29 @@ double IntegrateProfile(const shared::DensityProfile& profile, const double* alt
   return sum;
 }
 
+// For the samples (t_i, r_i) of a ray and a sun with r mu_s = r_mu_s, nu = cos(ray, sun): whether
+// the sun is above each sample's horizon (lit, 1 or 0), and the texel columns of the
+// transmittance (Bruneton's x_mu) and multiple-scattering (mu_s) tables. Kept out of line, on
+// plain arrays, so that the compiler vectorises it wherever it is called from.
+__attribute__((noinline)) void SunColumns(int n, double r_mu_s, double nu, const double* __restrict t,
+                                          const double* __restrict r, const double* __restrict inverse_r,
+                                          const double* __restrict c_ground, const double* __restrict c_top,
+                                          const double* __restrict d_min, const double* __restrict inverse_range,
+                                          double t_columns, double m_columns, double* __restrict lit,
+                                          double* __restrict sun_column, double* __restrict ms_column) {
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double r_i = r[i];
+    const double mu = std::min(std::max((r_mu_s + t[i] * nu) * inverse_r[i], -1.0), 1.0);
+    const double r2_mu2 = r_i * r_i * mu * mu;
+    lit[i] = (mu < 0.0 && c_ground[i] + r2_mu2 >= 0.0) ? 0.0 : 1.0;
+    const double root = std::sqrt(std::max(c_top[i] + r2_mu2, 0.0));
+    const double d = mu > 0.0 ? c_top[i] / (r_i * mu + root) : -r_i * mu + root;
+    sun_column[i] = std::min(std::max((std::max(d, 0.0) - d_min[i]) * inverse_range[i], 0.0), 1.0) * t_columns;
+    ms_column[i] = std::min(std::max(0.5 * mu + 0.5, 0.0), 1.0) * m_columns;
+  }
+}
+
 // A float table padded to four components, so that a texel is one 16-byte load.
 struct PaddedTable {
   explicit PaddedTable(const shared::Texture2D& table) : width(table.width), height(table.height) {
@@ -95,8 +118,17 @@ struct PaddedTable {
 class SunLookupsAlongRay {
  public:
   SunLookupsAlongRay(const shared::AtmosphereParameters& a, const PaddedTable& transmittance,
-                     const PaddedTable* multiple_scattering, double r)
-      : a_(a), transmittance_(transmittance), multiple_scattering_(multiple_scattering), r_(r) {}
+                     const PaddedTable* multiple_scattering, double r, int sample_count)
+      : a_(a), transmittance_(transmittance), multiple_scattering_(multiple_scattering), r_(r) {
+    for (std::vector<double>* v : {&t_, &r_i_, &inverse_r_, &c_ground_, &c_top_, &d_min_, &inverse_range_}) {
+      v->reserve(sample_count);
+    }
+    transmittance_rows_.reserve(sample_count);
+    multiple_scattering_rows_.reserve(sample_count);
+    sun_column_.resize(sample_count);
+    multiple_scattering_column_.resize(sample_count);
+    lit_.resize(sample_count);
+  }
 
   void AddSample(double t, double r_i) {
     const double H = std::sqrt((a_.top_radius - a_.bottom_radius) * (a_.top_radius + a_.bottom_radius));
@@ -114,9 +146,11 @@ class SunLookupsAlongRay {
       AddRow(*multiple_scattering_, shared::GetTextureCoordFromUnitRange(x_r, multiple_scattering_->height),
              multiple_scattering_rows_);
     }
-    sun_column_.resize(t_.size());
-    multiple_scattering_column_.resize(t_.size());
-    lit_.resize(t_.size());
+    if (sun_column_.size() < t_.size()) {
+      sun_column_.resize(t_.size());
+      multiple_scattering_column_.resize(t_.size());
+      lit_.resize(t_.size());
+    }
   }
 
   std::size_t size() const { return t_.size(); }
@@ -130,18 +164,9 @@ class SunLookupsAlongRay {
     const int n = static_cast<int>(t_.size());
     const double t_columns = transmittance_.width - 1;
     const double m_columns = multiple_scattering_ != nullptr ? multiple_scattering_->width - 1 : 0.0;
-    const double r_mu_s = r_ * mu_s;
-#pragma omp simd
-    for (int i = 0; i < n; ++i) {
-      const double r_i = r_i_[i];
-      const double mu = std::min(std::max((r_mu_s + t_[i] * nu) * inverse_r_[i], -1.0), 1.0);
-      const double r2_mu2 = r_i * r_i * mu * mu;
-      lit_[i] = (mu < 0.0 && c_ground_[i] + r2_mu2 >= 0.0) ? 0.0 : 1.0;
-      const double root = std::sqrt(std::max(c_top_[i] + r2_mu2, 0.0));
-      const double d = mu > 0.0 ? c_top_[i] / (r_i * mu + root) : -r_i * mu + root;
-      sun_column_[i] = std::min(std::max((std::max(d, 0.0) - d_min_[i]) * inverse_range_[i], 0.0), 1.0) * t_columns;
-      multiple_scattering_column_[i] = std::min(std::max(0.5 * mu + 0.5, 0.0), 1.0) * m_columns;
-    }
+    SunColumns(n, r_ * mu_s, nu, t_.data(), r_i_.data(), inverse_r_.data(), c_ground_.data(), c_top_.data(),
+               d_min_.data(), inverse_range_.data(), t_columns, m_columns, lit_.data(), sun_column_.data(),
+               multiple_scattering_column_.data());
     for (int i = 0; i < n; ++i) {
       sun_transmittance[i] = lit_[i] * Blend(transmittance_, transmittance_rows_[i], sun_column_[i]);
       if (multiple_scattering != nullptr) {
@@ -268,10 +293,12 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
     double r, unused_mu_s;
     shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
     std::vector<MultipleScatteringRay> rays;
+    rays.reserve(directions.size());
     vec3 transfer_sum(0.0);
     for (const auto& [direction, weight] : directions) {
-      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, nullptr, r), {}, false, 0.0,
-                                vec3(0.0)};
+      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, nullptr, r, sample_count),
+                                {}, false, 0.0, vec3(0.0)};
+      ray.luminance_weight.reserve(sample_count);
       const double mu = direction.z;
       ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
       ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
@@ -338,7 +365,7 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     // Steps as in shared::IntegrateScatteredRadiance.
     std::vector<double> t(sample_count), r_i(sample_count);
     std::vector<vec3> weight(sample_count), rayleigh(sample_count), mie(sample_count), scattering(sample_count);
-    SunLookupsAlongRay samples(a, padded_transmittance, &padded_multiple_scattering, r);
+    SunLookupsAlongRay samples(a, padded_transmittance, &padded_multiple_scattering, r, sample_count);
     std::vector<vec3> sun_transmittance(sample_count), multiple_scattering_at(sample_count);
     vec3 throughput(1.0);
     for (int i = 0; i < sample_count; ++i) {
