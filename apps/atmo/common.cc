@@ -38,9 +38,13 @@ void CheckBackend(const CommonOptions& common) {
 }
 
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {
-  // Hook for Monte Carlo models: when one exists, pass common.seed to it (for example as the
-  // "seed" option); deterministic models reject unknown options, so it is not passed to them.
-  return CreateModel(common.model, parameters, ParseModelOptions(common.options));
+  // --seed travels as the "seed" option that every model accepts (deterministic ones ignore it).
+  ModelOptions options = ParseModelOptions(common.options);
+  if (common.seed_given) {
+    if (options.count("seed") != 0) throw Error("give the seed once: --seed or --option seed=N");
+    options["seed"] = std::to_string(common.seed);
+  }
+  return CreateModel(common.model, parameters, options);
 }
 
 void CheckOutputWritable(const fs::path& path) {

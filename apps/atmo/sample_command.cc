@@ -135,8 +135,7 @@ std::vector<SamplePoint> ReadGrid(const std::string& path) {
 struct SampleResult {
   std::vector<double> radiance;
   std::vector<double> transmittance;
-  // Standard error of `radiance`: 0 for deterministic models. Hook for Monte Carlo models: when
-  // the model interface reports an estimate's standard error, fill it here.
+  // Standard error of `radiance`: 0 for deterministic models.
   std::vector<double> standard_error;
 };
 
@@ -144,7 +143,7 @@ SampleResult Query(const SkyView& sky, const glm::dvec3& view) {
   const std::size_t channels = sky.channel_count();
   SampleResult result{std::vector<double>(channels), std::vector<double>(channels),
                       std::vector<double>(channels, 0.0)};
-  sky.Radiance(view, result.radiance);
+  sky.RadianceEstimate(view, result.radiance, result.standard_error);
   sky.Transmittance(view, result.transmittance);
   return result;
 }

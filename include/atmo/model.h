@@ -29,7 +29,8 @@
 namespace atmo {
 
 // Model settings as key=value strings (`--option key=value` on the command line); each model
-// documents its keys and rejects unknown ones.
+// documents its keys and rejects unknown ones. One key is common to all: "seed" (an unsigned
+// integer, from `--seed`), which stochastic models use and deterministic ones ignore.
 using ModelOptions = std::map<std::string, std::string>;
 
 // What RadianceBatch adds to the scattered radiance, for images.
@@ -48,6 +49,11 @@ class SkyView {
   // Scattered radiance towards the observer along `view`, all orders the model has; one value
   // per channel into `out` (size channel_count()).
   virtual void Radiance(const glm::dvec3& view, std::span<double> out) const = 0;
+  // Radiance as above with the standard error of the estimate per channel: Monte Carlo models
+  // fill both from the same samples; the default (deterministic models) calls Radiance and
+  // writes 0 errors.
+  virtual void RadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                                std::span<double> standard_error) const;
   // Transmittance along `view` to the top of the atmosphere; 0 where the ray meets the ground.
   virtual void Transmittance(const glm::dvec3& view, std::span<double> out) const = 0;
   // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance.

@@ -13,6 +13,12 @@ void Model::RecordPass(std::string_view pass, double ms) const {
   timings_.Add(pass, ms);
 }
 
+void SkyView::RadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                               std::span<double> standard_error) const {
+  Radiance(view, radiance);
+  std::fill(standard_error.begin(), standard_error.end(), 0.0);
+}
+
 void SkyView::GroundRadiance(const glm::dvec3&, std::span<double> out) const {
   std::fill(out.begin(), out.end(), 0.0);
 }
@@ -45,9 +51,18 @@ std::vector<std::string> ModelNames() { return {"hillaire"}; }
 
 std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParameters& parameters,
                                    const ModelOptions& options) {
+  // "seed" is common to every model; deterministic models ignore it.
+  ModelOptions model_options = options;
+  if (const auto seed = model_options.find("seed"); seed != model_options.end()) {
+    const std::string& text = seed->second;
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19) {
+      throw Error("option seed=" + text + ": expected an unsigned integer");
+    }
+  }
   std::unique_ptr<Model> model;
   if (name == "hillaire") {
-    model = std::make_unique<HillaireModel>(parameters, HillaireSettings::FromOptions(options));
+    model_options.erase("seed");
+    model = std::make_unique<HillaireModel>(parameters, HillaireSettings::FromOptions(model_options));
   } else {
     std::string known;
     for (const std::string& n : ModelNames()) known += (known.empty() ? "" : ", ") + n;
