@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <string>
 
 #include <oneapi/tbb/parallel_for.h>
@@ -10,6 +9,7 @@
 #include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
 #include "cpu/sky_view_lookup.h"
+#include "models/model_options.h"
 #include "physics/shared_parameters.h"
 
 namespace atmo {
@@ -17,58 +17,28 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double MillisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-int ParseInt(const std::string& key, const std::string& value, int lo, int hi) {
-  char* end = nullptr;
-  const long v = std::strtol(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0' || v < lo || v > hi) {
-    throw Error("option " + key + "=" + value + ": expected an integer in [" + std::to_string(lo) + ", " +
-                std::to_string(hi) + "]");
-  }
-  return static_cast<int>(v);
-}
-
-// "WxH" (or a single "N" for N x N).
-glm::ivec2 ParseSize(const std::string& key, const std::string& value, int lo, int hi) {
-  const std::size_t x = value.find('x');
-  if (x == std::string::npos) {
-    const int n = ParseInt(key, value, lo, hi);
-    return {n, n};
-  }
-  return {ParseInt(key, value.substr(0, x), lo, hi), ParseInt(key, value.substr(x + 1), lo, hi)};
-}
-
-void CheckDirection(const glm::dvec3& v, const char* what) {
-  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z) || glm::length(v) == 0.0) {
-    throw Error(std::string(what) + " must be a finite, non-zero direction");
-  }
-}
-
 }  // namespace
 
 HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
   HillaireSettings s;
   for (const auto& [key, value] : options) {
-    if (key == "transmittance_lut") s.transmittance_lut = ParseSize(key, value, 2, 4096);
-    else if (key == "transmittance_samples") s.transmittance_samples = ParseInt(key, value, 1, 100000);
-    else if (key == "multiple_scattering_lut") s.multiple_scattering_lut = ParseSize(key, value, 2, 4096);
+    if (key == "transmittance_lut") s.transmittance_lut = ParseSizeOption(key, value, 2, 4096);
+    else if (key == "transmittance_samples") s.transmittance_samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "multiple_scattering_lut") s.multiple_scattering_lut = ParseSizeOption(key, value, 2, 4096);
     else if (key == "multiple_scattering_directions") {
-      s.multiple_scattering_directions = ParseInt(key, value, 2, 65536);
+      s.multiple_scattering_directions = ParseIntOption(key, value, 2, 65536);
       if (s.multiple_scattering_directions % 2 != 0) {
         throw Error("option multiple_scattering_directions=" + value +
                     ": expected an even number (a lattice and its mirror image; 2 = up and down)");
       }
     }
-    else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseInt(key, value, 1, 100000);
-    else if (key == "sky_view_lut") s.sky_view_lut = ParseSize(key, value, 2, 8192);
-    else if (key == "sky_view_samples") s.sky_view_samples = ParseInt(key, value, 1, 100000);
-    else if (key == "ray_march_samples") s.ray_march_samples = ParseInt(key, value, 1, 100000);
-    else if (key == "ground_irradiance_lut") s.ground_irradiance_lut = ParseInt(key, value, 2, 4096);
-    else if (key == "ground_irradiance_directions") s.ground_irradiance_directions = ParseInt(key, value, 1, 65536);
-    else if (key == "ground_irradiance_samples") s.ground_irradiance_samples = ParseInt(key, value, 1, 100000);
+    else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "sky_view_lut") s.sky_view_lut = ParseSizeOption(key, value, 2, 8192);
+    else if (key == "sky_view_samples") s.sky_view_samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "ray_march_samples") s.ray_march_samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "ground_irradiance_lut") s.ground_irradiance_lut = ParseIntOption(key, value, 2, 4096);
+    else if (key == "ground_irradiance_directions") s.ground_irradiance_directions = ParseIntOption(key, value, 1, 65536);
+    else if (key == "ground_irradiance_samples") s.ground_irradiance_samples = ParseIntOption(key, value, 1, 100000);
     else if (key == "sky_view") {
       if (value != "auto" && value != "off") throw Error("option sky_view=" + value + ": expected auto or off");
       s.use_sky_view_lut = value == "auto";
