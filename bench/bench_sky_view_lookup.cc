@@ -37,7 +37,7 @@ const Frame& TheFrame() {
     atmo::shared::AtmosphereParameters atmosphere{};
     atmosphere.bottom_radius = 6360e3;
     atmosphere.top_radius = 6460e3;
-    f.beta = atmo::shared::GetHorizonDipAngle(atmosphere, atmosphere.bottom_radius);
+    f.beta = atmo::shared::GetHorizonNadirAngle(atmosphere, atmosphere.bottom_radius);
     const double sun_elevation = 30.0 * kPi / 180.0;
     f.sun = atmo::shared::GetDirectionFromAzimuthElevation(kPi, sun_elevation);
     const atmo::shared::CameraParameters camera = atmo::shared::MakeCameraParameters(

@@ -262,7 +262,7 @@ TEST(Hillaire, NoNanOrInfOverRandomParametersAltitudesAndDirections) {
     p.mie.phase = unit(rng) < 0.5 ? PhaseFunction::kCornetteShanks : PhaseFunction::kHenyeyGreenstein;
     p.ground_radius_m = log_uniform(1e6, 1e7);
     p.top_radius_m = p.ground_radius_m + log_uniform(20e3, 300e3);
-    const auto model = CreateModel("hillaire", p, {{"sky_view_lut", "48x27"}});
+    const auto model = CreateModel("hillaire", p, {{"sky_view_lut", "48x28"}});
     for (int view = 0; view < 6; ++view) {
       const double altitude = view == 0 ? 0.0 : log_uniform(1.0, 1e6);
       const auto sky = model->View(altitude, Sun(180.0 * unit(rng)));
@@ -290,7 +290,7 @@ TEST(Hillaire, RejectsWhatItCannotDo) {
   EXPECT_THROW(CreateModel("hillaire", Preset("earth"), {{"transmittance_samples", "abc"}}), Error);
   EXPECT_THROW(CreateModel("hillaire", Preset("earth"), {{"sky_view", "sometimes"}}), Error);
   EXPECT_THROW(CreateModel("nonexistent", Preset("earth")), Error);
-  const auto model = CreateModel("hillaire", Preset("earth"), {{"sky_view_lut", "16x9"}});
+  const auto model = CreateModel("hillaire", Preset("earth"), {{"sky_view_lut", "16x10"}});
   EXPECT_THROW(model->View(-1.0, Sun(30.0)), Error);
   EXPECT_THROW(model->View(std::nan(""), Sun(30.0)), Error);
   EXPECT_THROW(model->View(0.0, glm::dvec3(0.0)), Error);

@@ -162,22 +162,26 @@ TEST(SkyViewLut, UvRoundTripAtSeveralAltitudes) {
         GetViewAnglesFromSkyViewTextureUv(a, size, r, vec2(u, v), mu, azimuth);
         const vec2 uv = GetSkyViewTextureUvFromViewAngles(a, size, r, mu, azimuth);
         EXPECT_NEAR(uv.x, u, 1e-9);
-        if (altitude > 0.0 || v < 0.5) {
-          EXPECT_NEAR(uv.y, v, 1e-6) << "altitude " << altitude;
+        // Between the two halves' outer texel centres (|v - 0.5| < 0.5 / height) lies no direction:
+        // the forward mapping never lands there.
+        if (std::abs(v - 0.5) >= 0.5 / 108) {
+          EXPECT_NEAR(uv.y, v, 1e-6) << "altitude " << altitude << " v " << v;
         }
       }
     }
   }
 }
 
-TEST(SkyViewLut, HorizonIsAtTheMiddleAndFollowsTheDip) {
+TEST(SkyViewLut, HorizonSplitsTheRowsAndFollowsTheDip) {
   const AtmosphereParameters a = EarthLike();
   const ivec2 size(192, 108);
-  for (double altitude : {100.0, 10e3, 80e3}) {
+  for (double altitude : {0.0, 100.0, 10e3, 80e3}) {
     const double r = a.bottom_radius + altitude;
     const double mu_h = CosineOfHorizonZenith(a, r);
-    const double v = GetSkyViewTextureUvFromViewAngles(a, size, r, mu_h, 0.0).y;
-    EXPECT_NEAR(GetUnitRangeFromTextureCoord(v, size.y), 0.5, 1e-6);
+    // The horizon is the last sky row's centre (a ray along it is a sky ray) and just below it
+    // the first ground row's: filtering never blends the two halves.
+    EXPECT_NEAR(GetSkyViewTextureUvFromViewAngles(a, size, r, mu_h + 1e-12, 0.0).y * size.y - 0.5, 53.0, 1e-3);
+    EXPECT_NEAR(GetSkyViewTextureUvFromViewAngles(a, size, r, mu_h - 1e-12, 0.0).y * size.y - 0.5, 54.0, 1e-3);
     // Zenith at the top row's centre, nadir at the bottom row's.
     EXPECT_NEAR(GetSkyViewTextureUvFromViewAngles(a, size, r, 1.0, 0.0).y, 0.5 / 108, 1e-9);
     EXPECT_NEAR(GetSkyViewTextureUvFromViewAngles(a, size, r, -1.0, 0.0).y, 1.0 - 0.5 / 108, 1e-9);

@@ -156,7 +156,7 @@ void CompareWithSharedPath(const shared::Texture2D& table, double altitude_m, co
                            unsigned seed, Errors* errors) {
   const shared::AtmosphereParameters atmosphere = testing::EarthLike();
   const double r = atmosphere.bottom_radius + altitude_m;
-  const double beta = shared::GetHorizonDipAngle(atmosphere, r);
+  const double beta = shared::GetHorizonNadirAngle(atmosphere, r);
   const glm::dvec3 sun = glm::normalize(sun_direction);
   const SkyViewLookup lookup = MakeSkyViewLookup(table, beta, sun);
   const Directions d = TestDirections(shared::CosineOfHorizonZenith(atmosphere, r), sun, seed);
@@ -179,6 +179,14 @@ void CompareWithSharedPath(const shared::Texture2D& table, double altitude_m, co
     double ds = s[i] - (uv.x * size.x - 0.5);
     ds -= size.x * std::round(ds / size.x);  // the wrap
     const double dt = t[i] - (uv.y * size.y - 0.5);
+    // A direction on the horizon to within float rounding may land on either half's edge row
+    // (height/2 - 1 for the sky, height/2 for the ground): both hold the ray along the horizon in a
+    // real table (a made-up table may differ there, so such ties are not compared further).
+    const double sky_edge = size.y / 2 - 1;
+    const bool horizon_tie = std::fabs(std::fabs(dt) - 1.0) < kTexelToleranceT &&
+                             std::min(t[i], float(uv.y * size.y - 0.5)) > sky_edge - kTexelToleranceT &&
+                             std::max(t[i], float(uv.y * size.y - 0.5)) < sky_edge + 1.0 + kTexelToleranceT;
+    if (horizon_tie) continue;
     errors->s = std::max(errors->s, std::fabs(ds));
     errors->t = std::max(errors->t, std::fabs(dt));
     ASSERT_LE(std::fabs(ds), kTexelToleranceS) << "direction " << i << " (" << view.x << ", " << view.y << ", "
@@ -214,7 +222,7 @@ std::vector<glm::dvec3> TestSuns() {
 TEST(SkyViewLookup, SmoothTableMatchesSharedPath) {
   unsigned seed = 1;
   Errors errors;
-  for (const glm::ivec2 size : {glm::ivec2(192, 108), glm::ivec2(37, 21)}) {
+  for (const glm::ivec2 size : {glm::ivec2(192, 108), glm::ivec2(37, 22)}) {
     const shared::Texture2D table = SmoothTable(size.x, size.y, seed);
     for (double altitude : kAltitudesM) {
       for (const glm::dvec3& sun : TestSuns()) CompareWithSharedPath(table, altitude, sun, ++seed, &errors);

@@ -70,7 +70,7 @@ void SqrtInPlace(float* v, int n) {
 }
 
 // The texel coordinates of n <= kChunk directions: s = azimuth from the sun (signed, in
-// [-pi, pi]) * width / (2 pi), not yet wrapped; t = y * (height - 1), y the latitude coordinate of
+// [-pi, pi]) * width / (2 pi), not yet wrapped; t the row coordinate within the sky or ground half of
 // GetSkyViewTextureUvFromBeta (the sampler's v * height - 0.5).
 void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float* y, const float* z, int n, float* s,
                              float* t) {
@@ -84,7 +84,7 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
   const float sun_y = l.sun_y;
   const float texels_per_radian = l.texels_per_radian;
   const float theta_h = l.horizon_zenith_rad;
-  const float beta = l.horizon_dip_rad;
+  const float beta = l.horizon_nadir_angle_rad;
   const float inverse_theta_h = l.inverse_horizon_zenith;
   const float inverse_beta = l.inverse_horizon_dip;
   const float horizon_a = l.horizon_a;
@@ -133,26 +133,29 @@ void ComputeTexelCoordinates(const SkyViewLookup& l, const float* x, const float
   }
   SqrtInPlace(root, n);
   for (int i = 0; i < n; ++i) {
-    // y = 0.5 (1 - sqrt(-d / theta_h)) above the horizon (d < 0), 0.5 (1 + sqrt(min(d / beta, 1)))
-    // below it.
+    // Above the horizon (d <= 0, as in the shared mapping) the sky half's y = 1 - sqrt(-d / theta_h),
+    // below it the ground half's y = sqrt(min(d / beta, 1)).
     const float d = offset[i] + sign[i] * (root[i] * factor[i]);
-    const bool above = d < 0.0f;
+    const bool above = !(d > 0.0f);
     const float q = std::fabs(d) * Select(above, inverse_theta_h, inverse_beta);
     root[i] = Select(q < 1.0f, q, 1.0f);  // also NaN -> 1
     sign[i] = Select(above, -1.0f, 1.0f);
   }
   SqrtInPlace(root, n);
+  // Each half of the rows maps its y onto its own texel centres: the sky half onto rows
+  // 0 .. height/2 - 1 (t = y (height/2 - 1)), the ground half onto rows height/2 .. height - 1.
   const float last_row = static_cast<float>(l.height - 1);
-  const float half_range = 0.5f * last_row;
+  const float half_last = static_cast<float>(l.height / 2 - 1);
+  const float ground_first = static_cast<float>(l.height / 2);
   for (int i = 0; i < n; ++i) {
-    const float ti = half_range + sign[i] * (half_range * root[i]);
+    const float ti = Select(sign[i] < 0.0f, half_last - half_last * root[i], ground_first + half_last * root[i]);
     t[i] = Select(ti > 0.0f, Select(ti < last_row, ti, last_row), 0.0f);
   }
 }
 
 }  // namespace
 
-SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
+SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_nadir_angle_rad,
                                 const glm::dvec3& sun_direction) {
   SkyViewLookup l;
   l.texels.reserve(sky_view.texels.size());
@@ -163,10 +166,10 @@ SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizo
   l.sun_y = static_cast<float>(sun_direction.y);
   l.texels_per_radian = static_cast<float>(sky_view.width / (2.0 * kPi));
 
-  const double beta = horizon_dip_rad;
+  const double beta = horizon_nadir_angle_rad;
   const double theta_h = kPi - beta;
   l.horizon_zenith_rad = static_cast<float>(theta_h);
-  l.horizon_dip_rad = static_cast<float>(beta);
+  l.horizon_nadir_angle_rad = static_cast<float>(beta);
   l.inverse_horizon_zenith = static_cast<float>(1.0 / theta_h);
   l.inverse_horizon_dip = static_cast<float>(1.0 / beta);
 

@@ -37,14 +37,14 @@ struct SkyViewLookup {
   float sun_y = 0.0f;
   float texels_per_radian = 0.0f;
 
-  // Latitude. beta is the horizon dip angle (shared::GetHorizonDipAngle), theta_h = pi - beta
+  // Latitude. beta is the horizon-nadir angle (shared::GetHorizonNadirAngle), theta_h = pi - beta
   // the zenith angle of the horizon, d = acos(mu) - theta_h the view zenith angle past the
   // horizon (rad). With a = |mu| and g(a) = acos(a): d = g(a) - theta_h for mu >= 0 and
   // d = beta - g(a) for mu < 0.
   float horizon_zenith_rad = 0.0f;      // theta_h
-  float horizon_dip_rad = 0.0f;         // beta
+  float horizon_nadir_angle_rad = 0.0f;         // beta
   float inverse_horizon_zenith = 0.0f;  // 1 / theta_h
-  float inverse_horizon_dip = 0.0f;     // 1 / beta
+  float inverse_horizon_dip = 0.0f;     // 1 / beta (the horizon-nadir angle)
   // Near the horizon (|a - horizon_a| < near_horizon_window), where the mapping has a square
   // root singularity and d must be accurate to far better than a float ulp of pi, d is formed
   // from constants computed in double and a Taylor polynomial of g about horizon_a:
@@ -58,10 +58,10 @@ struct SkyViewLookup {
 };
 
 // The lookup of `sky_view` (a table made for one observer and a sun at azimuth 0, as
-// HillaireModel::ComputeSkyViewLut makes it) for the horizon dip angle `horizon_dip_rad`
-// (shared::GetHorizonDipAngle(atmosphere, r)) and the sun direction `sun_direction` (the local
+// HillaireModel::ComputeSkyViewLut makes it) for the horizon-nadir angle `horizon_nadir_angle_rad`
+// (shared::GetHorizonNadirAngle(atmosphere, r)) and the sun direction `sun_direction` (the local
 // frame, normalised). Copies the table (for 192 x 108 texels, ~0.3 MiB).
-SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_dip_rad,
+SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizon_nadir_angle_rad,
                                 const glm::dvec3& sun_direction);
 
 // Writes the table's radiance for the `count` directions (x[i], y[i], z[i]) to out[3 i + c],

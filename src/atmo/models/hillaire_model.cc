@@ -33,7 +33,12 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
       }
     }
     else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseIntOption(key, value, 1, 100000);
-    else if (key == "sky_view_lut") s.sky_view_lut = ParseSizeOption(key, value, 2, 8192);
+    else if (key == "sky_view_lut") {
+      s.sky_view_lut = ParseSizeOption(key, value, 2, 8192);
+      if (s.sky_view_lut.y % 2 != 0 || s.sky_view_lut.y < 4) {
+        throw Error("option sky_view_lut=" + value + ": the height must be even and >= 4 (sky and ground halves)");
+      }
+    }
     else if (key == "sky_view_samples") s.sky_view_samples = ParseIntOption(key, value, 1, 100000);
     else if (key == "ray_march_samples") s.ray_march_samples = ParseIntOption(key, value, 1, 100000);
     else if (key == "ground_irradiance_lut") s.ground_irradiance_lut = ParseIntOption(key, value, 2, 4096);
@@ -129,7 +134,7 @@ class HillaireSkyView final : public SkyView {
         r_(model.parameters().ground_radius_m + altitude_m),
         mu_s_(shared::ClampCosine(sun.z)) {
     const auto& batches = model.batches();
-    horizon_dip_ = shared::GetHorizonDipAngle(batches.front().atmosphere, r_);
+    horizon_nadir_angle_ = shared::GetHorizonNadirAngle(batches.front().atmosphere, r_);
     if (model.settings().use_sky_view_lut && r_ <= batches.front().atmosphere.top_radius) {
       auto start = Clock::now();
       for (const auto& batch : batches) sky_view_.push_back(model.ComputeSkyViewLut(batch, r_, mu_s_));
@@ -143,8 +148,8 @@ class HillaireSkyView final : public SkyView {
       model.RecordPass("ground_view_lut", MillisecondsSince(start));
       // Three channels: the frame kernel's float copies of both tables.
       if (batches.size() == 1) {
-        sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_dip_, sun);
-        sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_dip_, sun);
+        sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun);
+        sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun);
       }
     }
   }
@@ -229,7 +234,7 @@ class HillaireSkyView final : public SkyView {
         const glm::dvec3& view = views[i];
         const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
         const shared::vec2 uv =
-            shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_dip_, view.z, azimuth);
+            shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_nadir_angle_, view.z, azimuth);
         for (std::size_t b = 0; b < tables.size(); ++b) {
           const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
           for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
@@ -263,7 +268,7 @@ class HillaireSkyView final : public SkyView {
   const HillaireModel& model_;
   double r_;
   double mu_s_;
-  double horizon_dip_;                       // GetHorizonDipAngle(r_), for per-pixel lookups
+  double horizon_nadir_angle_;                       // GetHorizonNadirAngle(r_), for per-pixel lookups
   std::vector<shared::Texture2D> sky_view_;  // one per batch; empty where the table does not serve
   std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
   cpu::SkyViewLookup sky_lookup_;             // float frame-kernel copies (three channels only)

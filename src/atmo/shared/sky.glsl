@@ -107,49 +107,55 @@ vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTex
 // The sky-view table (Hillaire 2020, section 5.3) for one observer radius: x is the azimuth from
 // the sun over the full 360 degrees (texel i centred on 2 pi i / width; the sampler repeats in x),
 // y the view zenith with the non-linear latitude of the seed, which puts the horizon, dipping as
-// the observer rises, at y = 0.5 and samples densely around it:
-//   above the horizon  y = 0.5 * (1 - sqrt(1 - theta / theta_h)),
-//   below the horizon  y = 0.5 + 0.5 * sqrt((theta - theta_h) / beta),
-// where theta_h = pi - beta is the zenith angle of the horizon and cos beta = sqrt(r^2 - R^2) / r.
-// The angle beta between the horizontal and the geometric horizon seen from radius r.
-Number GetHorizonDipAngle(IN(AtmosphereParameters) atmosphere, Number r) {
+// the observer rises, in the middle and samples densely around it:
+//   above the horizon  y = 1 - sqrt(1 - theta / theta_h)        over the upper half of the rows,
+//   below the horizon  y = sqrt((theta - theta_h) / beta)        over the lower half,
+// where theta_h = pi - beta is the zenith angle of the horizon and beta the angle between the
+// nadir and the horizon, cos beta = sqrt(r^2 - R^2) / r (pi/2 on the ground, -> 0 far away). Each
+// half maps its y in [0, 1] onto its own texel centres (after Bruneton's split of the scattering
+// texture), so that bilinear filtering never blends a sky row with a ground row: seen from the
+// ground, rays just below the horizon have zero length and rays just above it cross the whole
+// atmosphere. The height must be even. A ray exactly along the horizon is a sky ray, as in
+// RayIntersectsGround.
+Number GetHorizonNadirAngle(IN(AtmosphereParameters) atmosphere, Number r) {
   Number cos_beta = clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0);
   return max(acos(cos_beta), 1e-9);
 }
 
-// The mapping with beta = GetHorizonDipAngle(r) computed once per observer.
+// The mapping with beta = GetHorizonNadirAngle(r) computed once per observer.
 vec2 GetSkyViewTextureUvFromBeta(IN(ivec2) texture_size, Number beta, Number mu, Number azimuth) {
   Number zenith_horizon_angle = kPi - beta;
   Number view_zenith = acos(ClampCosine(mu));
-  Number y;
-  if (view_zenith < zenith_horizon_angle) {
-    Number coord = view_zenith / zenith_horizon_angle;
-    y = 0.5 * (1.0 - SafeSqrt(1.0 - coord));
+  int half_height = texture_size.y / 2;
+  Number v;
+  if (view_zenith <= zenith_horizon_angle) {
+    Number y = 1.0 - SafeSqrt(1.0 - view_zenith / zenith_horizon_angle);
+    v = 0.5 * GetTextureCoordFromUnitRange(y, half_height);
   } else {
-    Number coord = min((view_zenith - zenith_horizon_angle) / beta, 1.0);
-    y = 0.5 + 0.5 * SafeSqrt(coord);
+    Number y = SafeSqrt(min((view_zenith - zenith_horizon_angle) / beta, 1.0));
+    v = 0.5 + 0.5 * GetTextureCoordFromUnitRange(y, half_height);
   }
   Number x = azimuth / (2.0 * kPi);
-  return vec2(x + 0.5 / Number(texture_size.x), GetTextureCoordFromUnitRange(y, texture_size.y));
+  return vec2(x + 0.5 / Number(texture_size.x), v);
 }
 
 vec2 GetSkyViewTextureUvFromViewAngles(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
     Number mu, Number azimuth) {
-  return GetSkyViewTextureUvFromBeta(texture_size, GetHorizonDipAngle(atmosphere, r), mu, azimuth);
+  return GetSkyViewTextureUvFromBeta(texture_size, GetHorizonNadirAngle(atmosphere, r), mu, azimuth);
 }
 
 void GetViewAnglesFromSkyViewTextureUv(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, Number r,
     IN(vec2) uv, OUT(Number) mu, OUT(Number) azimuth) {
-  Number beta = GetHorizonDipAngle(atmosphere, r);
+  Number beta = GetHorizonNadirAngle(atmosphere, r);
   Number zenith_horizon_angle = kPi - beta;
-  Number y = clamp(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
+  int half_height = texture_size.y / 2;
   Number view_zenith;
-  if (y < 0.5) {
-    Number coord = 1.0 - 2.0 * y;  // = sqrt(1 - theta / theta_h)
-    view_zenith = zenith_horizon_angle * (1.0 - coord * coord);
+  if (uv.y < 0.5) {
+    Number y = clamp(GetUnitRangeFromTextureCoord(2.0 * uv.y, half_height), 0.0, 1.0);
+    view_zenith = zenith_horizon_angle * (1.0 - (1.0 - y) * (1.0 - y));
   } else {
-    Number coord = 2.0 * y - 1.0;  // = sqrt((theta - theta_h) / beta)
-    view_zenith = zenith_horizon_angle + beta * coord * coord;
+    Number y = clamp(GetUnitRangeFromTextureCoord(2.0 * uv.y - 1.0, half_height), 0.0, 1.0);
+    view_zenith = zenith_horizon_angle + beta * y * y;
   }
   mu = cos(view_zenith);
   azimuth = (uv.x - 0.5 / Number(texture_size.x)) * 2.0 * kPi;
