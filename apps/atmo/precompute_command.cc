@@ -1,0 +1,30 @@
+// `atmo precompute`: computes a model's table and exports it. Today only model elek has an
+// exportable table (NAME.exr, NAME.raw, NAME.json; the format is in include/atmo/elek.h and
+// docs/models/elek.md). The files are written atomically, the manifest last.
+#include <chrono>
+#include <cstdio>
+
+#include "atmo/elek.h"
+#include "atmo/error.h"
+#include "commands.h"
+
+namespace atmo::cli {
+
+int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command) {
+  CheckBackend(common);
+  if (common.model != "elek") {
+    throw Error("precompute exports the table of model elek; model " + common.model + " has none (use --model elek)");
+  }
+  const AtmosphereParameters parameters = LoadParameters(common);
+  const ElekTableFiles files = ElekTableFilesFor(command.out);
+  for (const auto& path : {files.exr, files.raw, files.json}) CheckOutputWritable(path);
+  const auto start = std::chrono::steady_clock::now();
+  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  ExportElekTable(*model, command.out);
+  std::printf("wrote %s, %s, %s (elek, %s, precomputed in %.1f ms)\n", files.exr.string().c_str(),
+              files.raw.string().c_str(), files.json.string().c_str(), parameters.name.c_str(), ms);
+  return 0;
+}
+
+}  // namespace atmo::cli

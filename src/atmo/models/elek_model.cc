@@ -1,0 +1,272 @@
+#include "models/elek_model.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "atmo/error.h"
+#include "cpu/hillaire_tables.h"
+#include "io/elek_table_file.h"
+#include "models/model_options.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+glm::ivec3 ParseSize3(const std::string& key, const std::string& value) {
+  const std::size_t a = value.find('x');
+  const std::size_t b = a == std::string::npos ? std::string::npos : value.find('x', a + 1);
+  if (b == std::string::npos) throw Error("option " + key + "=" + value + ": expected WxHxD, e.g. 32x256x32");
+  return {ParseIntOption(key, value.substr(0, a), 2, 1024), ParseIntOption(key, value.substr(a + 1, b - a - 1), 2, 4096),
+          ParseIntOption(key, value.substr(b + 1), 2, 1024)};
+}
+
+std::string Choice(const std::string& key, const std::string& value, std::initializer_list<const char*> choices) {
+  std::string known;
+  for (const char* c : choices) {
+    if (value == c) return value;
+    known += (known.empty() ? "" : " or ") + std::string(c);
+  }
+  throw Error("option " + key + "=" + value + ": expected " + known);
+}
+
+}  // namespace
+
+ElekSettings ElekSettings::FromOptions(const ModelOptions& options) {
+  ElekSettings s;
+  for (const auto& [key, value] : options) {
+    if (key == "size") s.size = ParseSize3(key, value);
+    else if (key == "mapping") {
+      s.mapping = Choice(key, value, {"nonlinear", "linear"}) == "linear" ? shared::kElekMappingLinear
+                                                                          : shared::kElekMappingNonLinear;
+    } else if (key == "orders") s.orders = ParseIntOption(key, value, 1, 16);
+    else if (key == "samples") s.samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "steps") {
+      s.steps = Choice(key, value, {"quadratic", "uniform"}) == "uniform" ? shared::kElekStepsUniform
+                                                                          : shared::kElekStepsQuadratic;
+    } else if (key == "rayleigh_phase") s.rayleigh_phase = Choice(key, value, {"parameters", "rayleigh", "modified"});
+    else if (key == "gather") s.phase_gather = Choice(key, value, {"seed", "phase"}) == "phase";
+    else if (key == "coupling") s.coupled = Choice(key, value, {"separate", "total"}) == "total";
+    else if (key == "mie") s.mie_per_channel = Choice(key, value, {"alpha", "rgb"}) == "rgb";
+    else if (key == "gather_rows") s.gather_rows = ParseIntOption(key, value, 2, 4096);
+    else if (key == "gather_points") {
+      s.gather_points = ParseIntOption(key, value, 1, 4);
+      if (s.gather_points == 3) throw Error("option gather_points=3: expected 1, 2 or 4");
+    } else if (key == "gather_azimuths") s.gather_azimuths = ParseIntOption(key, value, 2, 65536);
+    else if (key == "transmittance_lut") s.transmittance_lut = ParseSizeOption(key, value, 2, 4096);
+    else if (key == "transmittance_samples") s.transmittance_samples = ParseIntOption(key, value, 1, 100000);
+    else if (key == "table") {
+      if (value.empty()) throw Error("option table= needs a file name (NAME of NAME.json, NAME.raw)");
+      s.table = value;
+    } else {
+      throw Error("unknown option '" + key + "' for model elek (known: size, mapping, orders, samples, steps, "
+                  "rayleigh_phase, gather, coupling, mie, gather_rows, gather_points, gather_azimuths, "
+                  "transmittance_lut, transmittance_samples, table)");
+    }
+  }
+  if (s.mie_per_channel && !s.table.empty()) {
+    throw Error("option mie=rgb needs the per-channel Mie of a computed table; a loaded table has one Mie channel");
+  }
+  return s;
+}
+
+std::vector<std::pair<std::string, std::string>> ElekSettings::TableOptions() const {
+  const auto i = [](int v) { return std::to_string(v); };
+  return {
+      {"size", i(size.x) + "x" + i(size.y) + "x" + i(size.z)},
+      {"mapping", mapping == shared::kElekMappingLinear ? "linear" : "nonlinear"},
+      {"orders", i(orders)},
+      {"samples", i(samples)},
+      {"steps", steps == shared::kElekStepsUniform ? "uniform" : "quadratic"},
+      {"rayleigh_phase", rayleigh_phase},
+      {"gather", phase_gather ? "phase" : "seed"},
+      {"coupling", coupled ? "total" : "separate"},
+      {"gather_rows", i(gather_rows)},
+      {"gather_points", i(gather_points)},
+      {"gather_azimuths", i(gather_azimuths)},
+      {"transmittance_lut", i(transmittance_lut.x) + "x" + i(transmittance_lut.y)},
+      {"transmittance_samples", i(transmittance_samples)},
+  };
+}
+
+ElekModel::ElekModel(const AtmosphereParameters& parameters, const ElekSettings& settings)
+    : Model(parameters), settings_(settings) {
+  Validate(parameters);
+  if (parameters.geometry != Geometry::kSpherical) {
+    throw Error("model elek needs a spherical atmosphere; the half-space of preset '" + parameters.name +
+                "' is the geometry of the simple model");
+  }
+  for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
+    Batch batch;
+    batch.atmosphere = ToSharedParameters(parameters, b);
+    if (settings.rayleigh_phase == "rayleigh") batch.atmosphere.rayleigh_phase = shared::kPhaseRayleigh;
+    if (settings.rayleigh_phase == "modified") batch.atmosphere.rayleigh_phase = shared::kPhaseModifiedRayleigh;
+    batches_.push_back(std::move(batch));
+  }
+}
+
+cpu::ElekGrid ElekModel::grid() const {
+  cpu::ElekGrid grid;
+  grid.size = settings_.size;
+  grid.mapping = settings_.mapping;
+  grid.steps = settings_.steps;
+  grid.sample_count = settings_.samples;
+  return grid;
+}
+
+// Passes: the transmittance table (sun rays), order 1, then per order k the gather of order k - 1
+// (its own 3D table, W x gather_rows x D, see elek.glsl) and the scattering pass that reads it.
+void ElekModel::ComputeTables(Batch& batch) const {
+  const cpu::ElekGrid g = grid();
+  auto start = Clock::now();
+  batch.orders.assign(1, cpu::ElekScattering());
+  cpu::ComputeElekSingleScatteringTable(batch.atmosphere, batch.transmittance, g, batch.orders[0]);
+  RecordPass("elek_single_lut", MillisecondsSince(start));
+  std::vector<glm::dvec2> matrix;
+  if (settings_.orders >= 2) {
+    start = Clock::now();
+    matrix = cpu::ComputeElekGatherMatrix(batch.atmosphere, g.mapping, settings_.gather_rows, g.size.y,
+                                          settings_.gather_points, settings_.gather_azimuths);
+    RecordPass("elek_gather_matrix_lut", MillisecondsSince(start));
+  }
+  for (int k = 2; k <= settings_.orders; ++k) {
+    start = Clock::now();
+    cpu::ElekScattering gather_0, gather_pi;
+    const bool phase = settings_.phase_gather && k == 2;
+    if (phase) {
+      cpu::ComputeElekPhaseGatherTables(batch.atmosphere, g.mapping, settings_.gather_rows, batch.orders[0],
+                                        settings_.coupled, settings_.gather_points == 4 ? 2 : settings_.gather_points,
+                                        settings_.gather_azimuths, gather_0, gather_pi);
+    } else {
+      cpu::ComputeElekGatherTable(matrix, settings_.gather_rows, batch.orders[k - 2], settings_.coupled, gather_0);
+    }
+    RecordPass("elek_gather_" + std::to_string(k) + "_lut", MillisecondsSince(start));
+    start = Clock::now();
+    cpu::ElekScattering order;
+    cpu::ComputeElekMultipleScatteringTable(batch.atmosphere, gather_0, phase ? gather_pi : gather_0, g, order);
+    batch.orders.push_back(std::move(order));
+    RecordPass("elek_scatter_" + std::to_string(k) + "_lut", MillisecondsSince(start));
+  }
+  start = Clock::now();
+  batch.total = batch.orders[0];
+  for (std::size_t k = 1; k < batch.orders.size(); ++k) {
+    auto& r = batch.total.rayleigh.texels;
+    auto& m = batch.total.mie.texels;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      r[i] += batch.orders[k].rayleigh.texels[i];
+      m[i] += batch.orders[k].mie.texels[i];
+    }
+  }
+  RecordPass("elek_sum_lut", MillisecondsSince(start));
+}
+
+void ElekModel::Precompute() {
+  auto start = Clock::now();
+  for (Batch& batch : batches_) {
+    batch.transmittance = shared::Texture2D(settings_.transmittance_lut.x, settings_.transmittance_lut.y);
+    cpu::ComputeTransmittanceTable(batch.atmosphere, settings_.transmittance_samples, batch.transmittance);
+  }
+  RecordPass("elek_transmittance_lut", MillisecondsSince(start));
+  if (!settings_.table.empty()) {
+    start = Clock::now();
+    LoadElekTable(settings_.table, *this);
+    RecordPass("elek_load", MillisecondsSince(start));
+    return;
+  }
+  for (Batch& batch : batches_) ComputeTables(batch);
+}
+
+std::vector<float> ElekModel::Rgba(std::size_t b) const {
+  const Batch& batch = batches_.at(b);
+  const std::size_t n = batch.total.rayleigh.texels.size();
+  std::vector<float> rgba(4 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec3 r = batch.total.rayleigh.texels[i];
+    rgba[4 * i + 0] = r.x;
+    rgba[4 * i + 1] = r.y;
+    rgba[4 * i + 2] = r.z;
+    rgba[4 * i + 3] = batch.total.mie.texels[i].x;  // the Mie of the batch's first channel
+  }
+  return rgba;
+}
+
+void ElekModel::SetRgba(std::size_t b, const std::vector<float>& rgba) {
+  Batch& batch = batches_.at(b);
+  const glm::ivec3 s = settings_.size;
+  batch.orders.clear();
+  batch.total = cpu::ElekScattering(s.x, s.y, s.z);
+  const std::size_t n = batch.total.rayleigh.texels.size();
+  if (rgba.size() != 4 * n) throw Error("elek table: expected " + std::to_string(4 * n) + " floats");
+  for (std::size_t i = 0; i < n; ++i) {
+    batch.total.rayleigh.texels[i] = glm::vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+    batch.total.mie.texels[i] = glm::vec3(rgba[4 * i + 3]);
+  }
+}
+
+shared::vec3 ElekModel::BatchRadiance(const Batch& batch, double r, double mu, double mu_s, double nu) const {
+  const shared::AtmosphereParameters& a = batch.atmosphere;
+  double t_limit = 1e300;
+  if (!shared::MoveToAtmosphereEntry(a, r, mu, mu_s, nu, t_limit)) return shared::vec3(0.0);
+  const double h = r - a.bottom_radius;
+  const shared::vec3 rayleigh = shared::GetElekTableValue(a, batch.total.rayleigh, settings_.mapping, h, mu, mu_s);
+  const shared::vec3 mie_table = shared::GetElekTableValue(a, batch.total.mie, settings_.mapping, h, mu, mu_s);
+  const shared::vec3 mie =
+      settings_.mie_per_channel ? mie_table : shared::GetElekMieFromFirstChannel(a, rayleigh, mie_table.x);
+  return shared::GetRayleighPhase(a, nu) * rayleigh + shared::GetMiePhase(a, nu) * mie;
+}
+
+// The per-view state: the observer radius and the sun. The table has no per-view part.
+class ElekSkyView final : public SkyView {
+ public:
+  ElekSkyView(const ElekModel& model, double altitude_m, const glm::dvec3& sun)
+      : SkyView(altitude_m, sun, model.channel_count()),
+        model_(model),
+        r_(model.parameters().ground_radius_m + altitude_m),
+        mu_s_(shared::ClampCosine(sun.z)) {}
+
+  void Radiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = shared::ClampCosine(glm::dot(view, sun_direction()));
+    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+      return model_.BatchRadiance(batch, r_, shared::ClampCosine(view.z), mu_s_, nu);
+    });
+  }
+
+  void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
+    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+      return shared::GetViewTransmittance(batch.atmosphere, batch.transmittance, r_, shared::ClampCosine(view.z));
+    });
+  }
+
+  void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = glm::dot(view, sun_direction());
+    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+      return shared::GetSunDiscRadiance(batch.atmosphere, batch.transmittance, r_, shared::ClampCosine(view.z), nu);
+    });
+  }
+
+ private:
+  template <typename F>
+  void ForEachBatch(std::span<double> out, const F& f) const {
+    const auto& batches = model_.batches();
+    for (std::size_t b = 0; b < batches.size(); ++b) {
+      const shared::vec3 v = f(batches[b]);
+      for (std::size_t c = 0; c < 3 && 3 * b + c < out.size(); ++c) out[3 * b + c] = v[static_cast<int>(c)];
+    }
+  }
+
+  const ElekModel& model_;
+  double r_;
+  double mu_s_;
+};
+
+std::unique_ptr<SkyView> ElekModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
+  if (!std::isfinite(altitude_m) || altitude_m < 0.0) {
+    throw Error("altitude_m must be finite and >= 0 for model elek (got " + std::to_string(altitude_m) + ")");
+  }
+  CheckDirection(sun_direction, "the sun direction");
+  return std::make_unique<ElekSkyView>(*this, altitude_m, glm::normalize(sun_direction));
+}
+
+}  // namespace atmo
