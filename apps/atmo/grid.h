@@ -1,0 +1,32 @@
+// Grids of query configurations, shared by `atmo sample` and `atmo compare` (DESIGN.md §4):
+//
+//   IN.csv : altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg          (header line first)
+//
+// Angles in degrees; the sun lies at compass azimuth 0 and the view at `azimuth_deg`, so the
+// azimuth is the one between the horizontal projections of the view and sun directions.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace atmo::cli {
+
+inline constexpr const char* kGridHeader = "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg";
+
+struct SamplePoint {
+  double altitude_m = 0.0;
+  double sun_zenith_deg = 0.0;
+  double view_zenith_deg = 0.0;
+  double azimuth_deg = 0.0;
+  std::string location;  // "grid.csv:3" for error messages, or "" for the single configuration
+};
+
+// Checks the values of one point (finite, zenith angles in [0, 180]); `where` prefixes the
+// message ("grid.csv:3: " or ""). Throws atmo::Error.
+void CheckPoint(const SamplePoint& point, const std::string& where);
+
+// Reads and checks a whole IN.csv grid before any model work, so a bad file fails fast; errors
+// name the file and line. Throws atmo::Error.
+std::vector<SamplePoint> ReadGrid(const std::string& path);
+
+}  // namespace atmo::cli
