@@ -1,0 +1,591 @@
+#include "cpu/path_tracer.h"
+
+#include <cstring>
+#include <functional>
+#include <limits>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo::cpu {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// Paths per block of the parallel loop; blocks are reduced in index order.
+constexpr std::uint64_t kBlockPaths = 128;
+// Absolute tolerance on optical depths (unitless) of the adaptive Simpson quadrature: its error
+// in a transmittance T is <= T * 1e-10, far below any Monte Carlo noise.
+constexpr double kOpticalDepthTolerance = 1e-10;
+
+// splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
+std::uint64_t Mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+std::uint64_t HashDoubles(std::uint64_t h, std::initializer_list<double> values) {
+  for (double v : values) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    h = Mix64(h ^ bits) + 0x9E3779B97F4A7C15ull;
+  }
+  return h;
+}
+
+std::uint64_t QueryKey(const TraceQuery& q) {
+  return HashDoubles(q.include_first_ground_hit ? 0x5EEDull : 0x0ull,
+                     {q.origin.x, q.origin.y, q.origin.z, q.sun.x, q.sun.y, q.sun.z, q.view.x, q.view.y, q.view.z});
+}
+
+// The stream of one path of one channel.
+std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t key, std::uint64_t path, std::uint64_t channel) {
+  return Mix64(Mix64(Mix64(seed ^ 0xA7305EEDull) ^ key) ^ (path * 0x100000001B3ull + channel));
+}
+
+// An orthonormal basis around a unit vector n (Duff et al. 2017, "Building an orthonormal basis,
+// revisited"), and the direction with cosine `mu` to n and azimuth `phi` about it.
+glm::dvec3 DirectionAbout(const glm::dvec3& n, double mu, double phi) {
+  const double sign = std::copysign(1.0, n.z);
+  const double a = -1.0 / (sign + n.z);
+  const double b = n.x * n.y * a;
+  const glm::dvec3 t1(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+  const glm::dvec3 t2(b, sign + n.y * n.y * a, -n.y);
+  const double sin_theta = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+  return glm::normalize(mu * n + sin_theta * (std::cos(phi) * t1 + std::sin(phi) * t2));
+}
+
+// 8-point Gauss-Legendre rule on [-1, 1] (Abramowitz & Stegun table 25.4), nodes ascending.
+constexpr double kGaussNodes[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
+                                   -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
+                                   0.7966664774136267,  0.9602898564975363};
+constexpr double kGaussWeights[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
+                                     0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
+                                     0.2223810344533745, 0.1012285362903763};
+
+}  // namespace
+
+// splitmix64 (Steele, Lea, Flood 2014): a counter with a strong output mix, so any seed gives an
+// independent-looking stream; uniform doubles in [0, 1) with 53 random bits.
+class PathTracer::Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : state_(seed) {}
+  double Uniform() {
+    state_ += 0x9E3779B97F4A7C15ull;
+    return static_cast<double>(Mix64(state_) >> 11) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+void PathTally::Merge(const PathTally& other) {
+  paths += other.paths;
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    sum[i] += other.sum[i];
+    sum_sq[i] += other.sum_sq[i];
+  }
+}
+
+Estimate PathTally::Get(std::size_t channel, int slot) const {
+  Estimate e;
+  if (paths == 0) return e;
+  const std::size_t i = channel * kTallySlots + static_cast<std::size_t>(slot);
+  const double n = static_cast<double>(paths);
+  e.mean = sum[i] / n;
+  if (paths > 1) {
+    const double variance = std::max(0.0, (sum_sq[i] - n * e.mean * e.mean) / (n - 1.0));
+    e.standard_error = std::sqrt(variance / n);
+  }
+  return e;
+}
+
+PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerSettings& settings)
+    : settings_(settings) {
+  Validate(parameters);
+  half_space_ = parameters.geometry == Geometry::kHalfSpace;
+  atmosphere_ = ToSharedParameters(parameters, 0);
+  rayleigh_phase_ = atmosphere_.rayleigh_phase;
+  mie_phase_ = atmosphere_.mie_phase;
+  rayleigh_g_ = parameters.rayleigh.phase_g;
+  mie_g_ = parameters.mie.phase_g;
+  max_extinction_ = glm::dvec3(0.0);
+  for (std::size_t c = 0; c < parameters.channel_count(); ++c) {
+    Channel ch;
+    ch.rayleigh_scattering = parameters.rayleigh.scattering_per_m[c];
+    ch.rayleigh_extinction = parameters.rayleigh.extinction_per_m(c);
+    ch.mie_scattering = parameters.mie.scattering_per_m[c];
+    ch.mie_extinction = parameters.mie.extinction_per_m(c);
+    ch.ozone_extinction = parameters.ozone.extinction_per_m(c);
+    // Densities are clamped to [0, 1] (shared/medium.glsl), so this bounds sigma_t everywhere.
+    ch.majorant = ch.rayleigh_extinction + ch.mie_extinction + ch.ozone_extinction;
+    ch.albedo = half_space_ ? 0.0 : parameters.ground_albedo[c];
+    channels_.push_back(ch);
+    max_extinction_ = glm::max(max_extinction_,
+                               glm::dvec3(ch.rayleigh_extinction, ch.mie_extinction, ch.ozone_extinction));
+  }
+  // The half-space is homogeneous: the media at the density of altitude 0.
+  half_space_densities_ = shared::GetDensities(atmosphere_, atmosphere_.bottom_radius);
+  if (half_space_) {
+    for (Channel& ch : channels_) ch.majorant = OpticalDepth(ch, half_space_densities_);
+  }
+  // Altitudes where a profile may have a kink: layer boundaries, and where a linear layer meets
+  // the clamp at 0 or 1 (the ozone tent).
+  const double thickness = atmosphere_.top_radius - atmosphere_.bottom_radius;
+  for (const shared::DensityProfile* profile :
+       {&atmosphere_.rayleigh_density, &atmosphere_.mie_density, &atmosphere_.absorption_density}) {
+    kink_altitudes_.push_back(profile->layers[0].width);
+    for (const shared::DensityProfileLayer& layer : profile->layers) {
+      if (layer.exp_term == 0.0 && layer.linear_term != 0.0) {
+        kink_altitudes_.push_back(-layer.constant_term / layer.linear_term);
+        kink_altitudes_.push_back((1.0 - layer.constant_term) / layer.linear_term);
+      }
+    }
+  }
+  std::erase_if(kink_altitudes_, [&](double h) { return !(h > 0.0 && h < thickness); });
+}
+
+glm::dvec3 PathTracer::ObserverPosition(double altitude_m) const {
+  return glm::dvec3(0.0, 0.0, half_space_ ? altitude_m : atmosphere_.bottom_radius + altitude_m);
+}
+
+glm::dvec3 PathTracer::Densities(const glm::dvec3& p) const {
+  return half_space_ ? half_space_densities_ : shared::GetDensities(atmosphere_, glm::length(p));
+}
+
+namespace {
+
+// The largest density of one layer over altitudes [a, b]. exp_term exp(exp_scale h) and
+// linear_term h are each monotone, and so is their sum when both vary the same way; clamping to
+// [0, 1] keeps monotonicity, so the maximum is at an end. Otherwise 1 (the clamp) bounds it.
+double LayerMaximum(const shared::DensityProfileLayer& layer, double a, double b) {
+  if (layer.exp_term * layer.exp_scale * layer.linear_term < 0.0) return 1.0;
+  return std::max(shared::GetLayerDensity(layer, a), shared::GetLayerDensity(layer, b));
+}
+
+double ProfileMaximumAbove(const shared::DensityProfile& profile, double h, double top) {
+  const double width = profile.layers[0].width;
+  double m = h < width ? LayerMaximum(profile.layers[0], h, width) : 0.0;
+  return std::max(m, LayerMaximum(profile.layers[1], std::max(h, width), std::max(top, width)));
+}
+
+}  // namespace
+
+glm::dvec3 PathTracer::MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const {
+  // Lowest point of the segment: its perigee when inside, else the nearer end.
+  const double b = glm::dot(p, d);
+  double r_min;
+  if (-b > 0.0 && -b < length) {
+    r_min = glm::length(glm::cross(p, d));
+  } else {
+    r_min = std::min(glm::length(p), glm::length(p + std::min(length, 1e300) * d));
+  }
+  const double top = atmosphere_.top_radius - atmosphere_.bottom_radius;
+  const double h = std::max(r_min - atmosphere_.bottom_radius, 0.0);
+  return glm::dvec3(ProfileMaximumAbove(atmosphere_.rayleigh_density, h, top),
+                    ProfileMaximumAbove(atmosphere_.mie_density, h, top),
+                    ProfileMaximumAbove(atmosphere_.absorption_density, h, top));
+}
+
+void PathTracer::Segment(const glm::dvec3& p, const glm::dvec3& d, double& length, bool& ground) const {
+  if (half_space_) {
+    ground = false;
+    length = d.z > 0.0 ? std::max(-p.z, 0.0) / d.z : kInfinity;
+    return;
+  }
+  const double r = glm::length(p);
+  const double mu = shared::ClampCosine(glm::dot(p, d) / r);
+  ground = shared::RayIntersectsGround(atmosphere_, r, mu);
+  length = shared::DistanceToNearestAtmosphereBoundary(atmosphere_, r, mu, ground);
+}
+
+bool PathTracer::EnterAtmosphere(glm::dvec3& p, const glm::dvec3& d) const {
+  if (half_space_) {
+    if (p.z <= 0.0) return true;
+    if (d.z >= 0.0) return false;
+    p += (-p.z / d.z) * d;
+    p.z = 0.0;
+    return true;
+  }
+  const double r = glm::length(p);
+  if (r <= atmosphere_.top_radius) return true;
+  const double t = shared::DistanceToAtmosphereEntry(atmosphere_, r, glm::dot(p, d) / r);
+  if (t < 0.0) return false;
+  p = glm::normalize(p + t * d) * atmosphere_.top_radius;
+  return true;
+}
+
+// Ratio tracking (Novak et al. 2014): the product of (1 - sigma_t / sigma_bar) over the
+// tentative collisions of a majorant process along the sun ray has expectation exp(-tau).
+// The half-space is homogeneous, so there the closed form is exact.
+double PathTracer::SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, const Channel& c, Rng& rng) const {
+  double length;
+  bool ground;
+  Segment(p, sun, length, ground);
+  if (ground || length == kInfinity) return 0.0;
+  if (half_space_) return std::exp(-c.majorant * length);
+  const double majorant = Majorant(c, p, sun, length);
+  if (majorant <= 0.0) return 1.0;
+  double transmittance = 1.0;
+  double t = 0.0;
+  while (true) {
+    t -= std::log1p(-rng.Uniform()) / majorant;
+    if (!(t < length)) return transmittance;
+    transmittance *= 1.0 - OpticalDepth(c, Densities(p + t * sun)) / majorant;
+  }
+}
+
+void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
+                           std::array<double, kOrderBins>& orders) const {
+  glm::dvec3 p = query.origin;
+  glm::dvec3 d = query.view;
+  if (!EnterAtmosphere(p, d)) return;
+  double weight = 1.0;
+  int order = 0;  // scattering events (and ground reflections) so far
+  const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
+  while (true) {
+    double length;
+    bool ground;
+    Segment(p, d, length, ground);
+    const bool end_scores = ground && c.albedo > 0.0 && (order > 0 || query.include_first_ground_hit);
+
+    // Delta tracking against the segment's majorant, the first tentative collision forced into
+    // the segment where allowed.
+    bool collided = false;
+    glm::dvec3 densities(0.0);
+    const double majorant = Majorant(c, p, d, length);
+    if (majorant > 0.0) {
+      const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
+      double t = 0.0;
+      bool first = true;
+      while (true) {
+        if (first && force) {
+          const double p_collide = -std::expm1(-majorant * length);
+          weight *= p_collide;
+          t -= std::log1p(-rng.Uniform() * p_collide) / majorant;
+        } else {
+          t -= std::log1p(-rng.Uniform()) / majorant;
+        }
+        first = false;
+        if (!(t < length)) break;
+        const glm::dvec3 x = p + t * d;
+        densities = Densities(x);
+        if (rng.Uniform() * majorant < OpticalDepth(c, densities)) {
+          p = x;
+          collided = true;
+          break;
+        }
+      }
+    }
+
+    if (collided) {
+      const double rayleigh = c.rayleigh_scattering * densities.x;
+      const double mie = c.mie_scattering * densities.y;
+      weight *= (rayleigh + mie) / OpticalDepth(c, densities);
+      if (weight <= 0.0) return;
+      ++order;
+      const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
+      const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
+      const double g = is_mie ? mie_g_ : rayleigh_g_;
+      const double sun_transmittance = SunTransmittance(p, query.sun, c, rng);
+      if (sun_transmittance != 0.0) {
+        add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
+      }
+      const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+      d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+    } else if (end_scores) {
+      const glm::dvec3 n = glm::normalize(p + length * d);
+      p = n * atmosphere_.bottom_radius;
+      ++order;
+      const double cos_sun = glm::dot(n, query.sun);
+      if (cos_sun > 0.0) {
+        add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
+      }
+      weight *= c.albedo;
+      if (weight <= 0.0) return;
+      // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
+      d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
+    } else {
+      return;  // escaped, or the view ray's own ground hit
+    }
+
+    if (order >= settings_.roulette_start_order) {
+      const double survival = std::min(weight, 0.95);
+      if (!(rng.Uniform() < survival)) return;
+      weight /= survival;
+    }
+  }
+}
+
+void PathTracer::TraceSerial(const TraceQuery& query, std::uint64_t seed, std::uint64_t first, std::uint64_t count,
+                             PathTally& tally) const {
+  const std::uint64_t key = QueryKey(query);
+  for (std::uint64_t i = first; i < first + count; ++i) {
+    for (std::size_t c = 0; c < channels_.size(); ++c) {
+      Rng rng(StreamSeed(seed, key, i, c));
+      std::array<double, kOrderBins> orders{};
+      TracePath(query, channels_[c], rng, orders);
+      double total = 0.0;
+      for (int k = 0; k < kOrderBins; ++k) {
+        const std::size_t slot = c * kTallySlots + 1 + static_cast<std::size_t>(k);
+        tally.sum[slot] += orders[k];
+        tally.sum_sq[slot] += orders[k] * orders[k];
+        total += orders[k];
+      }
+      tally.sum[c * kTallySlots] += total;
+      tally.sum_sq[c * kTallySlots] += total * total;
+    }
+  }
+  tally.paths += count;
+}
+
+namespace {
+
+// Runs trace_block(first, count, tally) over fixed blocks in parallel and merges them in order.
+PathTally TraceBlocks(std::size_t channels, std::uint64_t first, std::uint64_t count,
+                      const std::function<void(std::uint64_t, std::uint64_t, PathTally&)>& trace_block) {
+  const std::uint64_t blocks = (count + kBlockPaths - 1) / kBlockPaths;
+  std::vector<PathTally> tallies(blocks, PathTally(channels));
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::uint64_t>(0, blocks, 1),
+                            [&](const oneapi::tbb::blocked_range<std::uint64_t>& range) {
+                              for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+                                const std::uint64_t start = b * kBlockPaths;
+                                trace_block(first + start, std::min(kBlockPaths, count - start), tallies[b]);
+                              }
+                            });
+  PathTally total(channels);
+  for (const PathTally& t : tallies) total.Merge(t);
+  return total;
+}
+
+}  // namespace
+
+PathTally PathTracer::Trace(const TraceQuery& query, std::uint64_t seed, std::uint64_t first,
+                            std::uint64_t count) const {
+  return TraceBlocks(channels_.size(), first, count, [&](std::uint64_t start, std::uint64_t n, PathTally& tally) {
+    TraceSerial(query, seed, start, n, tally);
+  });
+}
+
+PathTally PathTracer::TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t seed, std::uint64_t count) const {
+  if (half_space_) throw Error("the flux estimator needs a spherical atmosphere");
+  constexpr std::uint64_t kKey = 0xF10A7ull;
+  return TraceBlocks(channels_.size(), 0, count, [&](std::uint64_t start, std::uint64_t n, PathTally& tally) {
+    for (std::uint64_t i = start; i < start + n; ++i) {
+      // The point and direction from their own stream (channel index = channel count).
+      Rng geometry(StreamSeed(seed, kKey, i, channels_.size()));
+      const double z = 1.0 - 2.0 * geometry.Uniform();
+      const double phi = 2.0 * kPi * geometry.Uniform();
+      const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const glm::dvec3 normal(s * std::cos(phi), s * std::sin(phi), z);
+      TraceQuery query;
+      query.origin = normal * atmosphere_.top_radius;
+      query.sun = sun;
+      query.view = -DirectionAbout(normal, std::sqrt(geometry.Uniform()), 2.0 * kPi * geometry.Uniform());
+      query.include_first_ground_hit = true;
+      for (std::size_t c = 0; c < channels_.size(); ++c) {
+        Rng rng(StreamSeed(seed, kKey, i, c));
+        std::array<double, kOrderBins> orders{};
+        TracePath(query, channels_[c], rng, orders);
+        double total = 0.0;
+        for (double v : orders) total += v;
+        tally.sum[c * kTallySlots] += total;
+        tally.sum_sq[c * kTallySlots] += total * total;
+      }
+    }
+    tally.paths += n;
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Quadratures.
+
+void PathTracer::AddBreakpoints(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1,
+                                std::vector<double>& ts) const {
+  if (half_space_) return;
+  const auto add = [&](double t) {
+    if (t > t0 && t < t1) ts.push_back(t);
+  };
+  const double b = glm::dot(p, d);
+  add(-b);  // the lowest point of the ray
+  const double r = glm::length(p);
+  for (double h : kink_altitudes_) {
+    const double radius = atmosphere_.bottom_radius + h;
+    const double c = (r - radius) * (r + radius);
+    const double discriminant = b * b - c;
+    if (discriminant < 0.0) continue;
+    // Roots of t^2 + 2 b t + c = 0 without cancellation: q = -(b + sign(b) sqrt(D)), q and c / q.
+    const double q = -(b + std::copysign(std::sqrt(discriminant), b));
+    add(q);
+    if (q != 0.0) add(c / q);
+  }
+}
+
+glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const {
+  if (!(t1 > t0)) return glm::dvec3(0.0);
+  if (half_space_) return half_space_densities_ * (t1 - t0);
+  std::vector<double> ts = {t0, t1};
+  AddBreakpoints(p, d, t0, t1, ts);
+  std::sort(ts.begin(), ts.end());
+  const auto f = [&](double t) { return shared::GetDensities(atmosphere_, glm::length(p + t * d)); };
+  // Adaptive Simpson; the error of a panel is measured as an optical depth (weights: the largest
+  // extinction of each medium), and the Richardson term is added to the result.
+  std::function<glm::dvec3(double, double, const glm::dvec3&, const glm::dvec3&, const glm::dvec3&,
+                           const glm::dvec3&, double, int)>
+      adapt = [&](double a, double b, const glm::dvec3& fa, const glm::dvec3& fm, const glm::dvec3& fb,
+                  const glm::dvec3& whole, double eps, int depth) -> glm::dvec3 {
+    const double m = 0.5 * (a + b);
+    const glm::dvec3 flm = f(0.5 * (a + m));
+    const glm::dvec3 frm = f(0.5 * (m + b));
+    const glm::dvec3 left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
+    const glm::dvec3 right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+    const glm::dvec3 delta = left + right - whole;
+    if (depth <= 0 || glm::dot(glm::abs(delta), max_extinction_) <= 15.0 * eps) return left + right + delta / 15.0;
+    return adapt(a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + adapt(m, b, fm, frm, fb, right, 0.5 * eps, depth - 1);
+  };
+  glm::dvec3 total(0.0);
+  constexpr int kPanels = 4;  // per piece, so that no feature hides between the first samples
+  for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
+    const double h = (ts[i + 1] - ts[i]) / kPanels;
+    if (!(h > 0.0)) continue;
+    for (int k = 0; k < kPanels; ++k) {
+      const double a = ts[i] + k * h;
+      const double b = k + 1 == kPanels ? ts[i + 1] : a + h;
+      const glm::dvec3 fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
+      total += adapt(a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), kOpticalDepthTolerance, 40);
+    }
+  }
+  return total;
+}
+
+void PathTracer::Transmittance(const glm::dvec3& origin, const glm::dvec3& view, std::span<double> out) const {
+  glm::dvec3 p = origin;
+  if (!EnterAtmosphere(p, view)) {
+    std::fill(out.begin(), out.end(), 1.0);
+    return;
+  }
+  double length;
+  bool ground;
+  Segment(p, view, length, ground);
+  if (ground || length == kInfinity) {
+    std::fill(out.begin(), out.end(), 0.0);
+    return;
+  }
+  const glm::dvec3 densities = DensityIntegral(p, view, 0.0, length);
+  for (std::size_t c = 0; c < channels_.size(); ++c) out[c] = std::exp(-OpticalDepth(channels_[c], densities));
+}
+
+void PathTracer::SingleScattering(const glm::dvec3& origin, const glm::dvec3& view, const glm::dvec3& sun,
+                                  double rel_tolerance, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+  glm::dvec3 p = origin;
+  if (!EnterAtmosphere(p, view)) return;
+  double length;
+  bool ground;
+  Segment(p, view, length, ground);
+  if (length == kInfinity) {
+    // A half-space seen downwards: stop where every channel's transmittance is below e^-60.
+    double smallest = kInfinity;
+    for (const Channel& c : channels_) {
+      if (c.majorant > 0.0) smallest = std::min(smallest, c.majorant);
+    }
+    if (smallest == kInfinity) return;
+    length = 60.0 / smallest;
+  }
+  std::vector<double> breaks = {0.0, length};
+  AddBreakpoints(p, view, 0.0, length, breaks);
+  if (!half_space_) {
+    // Edges of the planet's shadow: the cylinder of radius R_ground about the axis through the
+    // planet centre along the sun, on the side away from the sun.
+    const glm::dvec3 p_perp = p - glm::dot(p, sun) * sun;
+    const glm::dvec3 v_perp = view - glm::dot(view, sun) * sun;
+    const double a = glm::dot(v_perp, v_perp);
+    const double b = glm::dot(p_perp, v_perp);
+    const double c = glm::dot(p_perp, p_perp) - atmosphere_.bottom_radius * atmosphere_.bottom_radius;
+    const double discriminant = b * b - a * c;
+    if (a > 0.0 && discriminant >= 0.0) {
+      for (double t : {(-b - std::sqrt(discriminant)) / a, (-b + std::sqrt(discriminant)) / a}) {
+        if (t > 0.0 && t < length) breaks.push_back(t);
+      }
+    }
+  }
+  std::sort(breaks.begin(), breaks.end());
+
+  const double nu = glm::dot(view, sun);
+  const double rayleigh_phase = shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
+  const double mie_phase = shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  const std::size_t n = channels_.size();
+
+  const auto integrate = [&](int panels) {
+    std::vector<double> result(n, 0.0);
+    double t_previous = 0.0;
+    glm::dvec3 view_densities(0.0);  // density integrals from p to t_previous
+    for (std::size_t i = 0; i + 1 < breaks.size(); ++i) {
+      const double h = (breaks[i + 1] - breaks[i]) / panels;
+      if (!(h > 0.0)) continue;
+      for (int k = 0; k < panels; ++k) {
+        const double a = breaks[i] + k * h;
+        for (int j = 0; j < 8; ++j) {
+          const double t = a + 0.5 * h * (1.0 + kGaussNodes[j]);
+          const double w = 0.5 * h * kGaussWeights[j];
+          view_densities += DensityIntegral(p, view, t_previous, t);
+          t_previous = t;
+          const glm::dvec3 x = p + t * view;
+          double sun_length;
+          bool sun_ground;
+          Segment(x, sun, sun_length, sun_ground);
+          if (sun_ground || sun_length == kInfinity) continue;
+          const glm::dvec3 sun_densities = DensityIntegral(x, sun, 0.0, sun_length);
+          const glm::dvec3 densities = Densities(x);
+          for (std::size_t c = 0; c < n; ++c) {
+            const Channel& ch = channels_[c];
+            const double scattering = ch.rayleigh_scattering * densities.x * rayleigh_phase +
+                                      ch.mie_scattering * densities.y * mie_phase;
+            result[c] += w * scattering *
+                         std::exp(-OpticalDepth(ch, view_densities) - OpticalDepth(ch, sun_densities));
+          }
+        }
+      }
+    }
+    return result;
+  };
+
+  std::vector<double> previous = integrate(2);
+  for (int panels = 4; panels <= 4096; panels *= 2) {
+    const std::vector<double> current = integrate(panels);
+    double change = 0.0;
+    for (std::size_t c = 0; c < n; ++c) {
+      if (current[c] != 0.0) change = std::max(change, std::abs(current[c] - previous[c]) / std::abs(current[c]));
+    }
+    previous = current;
+    if (change <= rel_tolerance) break;
+  }
+  std::copy(previous.begin(), previous.end(), out.begin());
+}
+
+std::vector<double> PathTracer::DirectTransmittedPower() const {
+  if (half_space_) throw Error("the direct transmitted power needs a spherical atmosphere");
+  const double rg = atmosphere_.bottom_radius;
+  const double rt = atmosphere_.top_radius;
+  std::vector<double> power(channels_.size(), 0.0);
+  std::vector<double> transmittance(channels_.size());
+  constexpr int kPanels = 200;
+  const double h = (rt - rg) / kPanels;
+  for (int k = 0; k < kPanels; ++k) {
+    for (int j = 0; j < 8; ++j) {
+      const double b = rg + (k + 0.5 * (1.0 + kGaussNodes[j])) * h;
+      const double w = 0.5 * h * kGaussWeights[j];
+      // Enter the top sphere at impact parameter b, travelling along +z.
+      const glm::dvec3 entry(b, 0.0, -std::sqrt((rt - b) * (rt + b)));
+      Transmittance(entry, glm::dvec3(0.0, 0.0, 1.0), transmittance);
+      for (std::size_t c = 0; c < power.size(); ++c) power[c] += w * 2.0 * kPi * b * transmittance[c];
+    }
+  }
+  return power;
+}
+
+}  // namespace atmo::cpu

@@ -1,0 +1,228 @@
+// A Monte Carlo volumetric path tracer for the atmospheres of AtmosphereParameters: the engine of
+// the `reference` model (models/reference_model.h), and deterministic quadratures of the same
+// physics (transmittance, single scattering) to check it against.
+//
+// What it estimates: the radiance per unit solar irradiance at the top of the atmosphere that
+// reaches a point along -view after one or more scatterings (a point sun, so the sun disc itself
+// is never part of it), per channel. The media and phase functions are the shared definitions
+// (shared/medium.glsl, shared/phase.glsl), so the tracer describes the same atmosphere as every
+// model; it uses no table.
+//
+// The estimator, per channel (each channel traces its own path with its own majorant; there is no
+// spectral sharing of paths, so each channel is an ordinary unbiased path-tracing estimator):
+//   - free flights by delta tracking against the majorant sigma_bar = sum over media of their
+//     extinction at density 1 (densities are clamped to [0, 1], so sigma_t <= sigma_bar everywhere);
+//     a tentative collision is real with probability sigma_t / sigma_bar, and a real one scatters
+//     with weight sigma_s / sigma_t (ozone and Mie absorption only lower the weight);
+//   - optionally (on by default) the first tentative collision of a segment whose end contributes
+//     nothing (escape to space, or the first hit of the view ray on the ground, which DESIGN.md §4
+//     leaves out) is forced into the segment: sampled from the truncated exponential, weight
+//     1 - exp(-sigma_bar L). The event it removes (no tentative collision at all) scores 0, so the
+//     expectation is unchanged; thin atmospheres then get a sample on every path;
+//   - next-event estimation to the sun at every real scattering vertex: weight * phase(nu) * T_sun
+//     with nu = dot(path direction, sun), T_sun by ratio tracking (unbiased), 0 when the sun ray
+//     meets the ground (planet shadow);
+//   - the medium that scatters is Rayleigh or Mie with probability proportional to its scattering
+//     coefficient at the point; the new direction is sampled exactly from its phase function;
+//   - a Lambertian ground: next-event estimation albedo/pi * cos * T_sun and a cosine-weighted
+//     bounce with weight albedo (not at the view ray's own first hit, unless asked for);
+//   - unlimited orders; Russian roulette from order 3 on with survival min(weight, 0.95).
+// Direction convention (DESIGN.md §2): paths run from the observer outwards; at a vertex reached
+// along direction d, light that arrives from direction d' (travelling along -d') and leaves along
+// -d is scattered by the angle whose cosine is dot(-d', -d) = dot(d, d'). That cosine is the nu of
+// the phase functions: for the sun, d' = sun and nu = dot(view, sun). So phase sampling draws
+// cos(d, d') from p(nu): g > 0 keeps paths going forward, i.e. the peak is towards the sun.
+//
+// Randomness: every (seed, query, path index, channel) has its own splitmix64 stream, so results
+// do not depend on the thread count; paths are traced in fixed blocks that are reduced in order.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "atmo/parameters.h"
+#include "shared/shared.h"
+
+namespace atmo::cpu {
+
+// Contributions are kept separately for scattering orders 1, 2, 3, 4 and >= 5 (a ground
+// reflection counts as one order, like a scattering in the air).
+inline constexpr int kOrderBins = 5;
+// Tally slots per channel: 0 = all orders, 1 + k = order bin k.
+inline constexpr int kTallySlots = 1 + kOrderBins;
+
+struct Estimate {
+  double mean = 0.0;
+  double standard_error = 0.0;  // of the mean, from the sample variance of the per-path values
+};
+
+// Sums of per-path values and of their squares, per channel and slot.
+struct PathTally {
+  std::uint64_t paths = 0;
+  std::vector<double> sum;     // [channel * kTallySlots + slot]
+  std::vector<double> sum_sq;  // same layout
+
+  explicit PathTally(std::size_t channel_count = 0)
+      : sum(channel_count * kTallySlots, 0.0), sum_sq(channel_count * kTallySlots, 0.0) {}
+  void Merge(const PathTally& other);
+  Estimate Get(std::size_t channel, int slot) const;
+};
+
+struct PathTracerSettings {
+  bool forced_collisions = true;  // see the file comment
+  int roulette_start_order = 3;   // Russian roulette after this many scattering events
+};
+
+// One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
+struct TraceQuery {
+  glm::dvec3 origin;  // observer position
+  glm::dvec3 sun;     // unit, towards the sun
+  glm::dvec3 view;    // unit, from the observer outwards
+  // Whether the view ray's own first hit on the ground reflects light (the flux estimator needs
+  // it; radiance queries of DESIGN.md §4 leave it out).
+  bool include_first_ground_hit = false;
+};
+
+class PathTracer {
+ public:
+  // Throws atmo::Error for invalid parameters.
+  PathTracer(const AtmosphereParameters& parameters, const PathTracerSettings& settings = {});
+
+  std::size_t channel_count() const { return channels_.size(); }
+  bool half_space() const { return half_space_; }
+  // Frames: spherical, planet-centred with the observer on the +z axis, so the observer's local
+  // frame (x east, y north, z up) is the global one; half-space: the boundary plane is z = 0 and
+  // the medium fills z < 0 (homogeneous, at the density of altitude 0; no ground).
+  glm::dvec3 ObserverPosition(double altitude_m) const;
+
+  // Traces paths [first, first + count) of `query` in parallel over fixed blocks of paths and
+  // reduces the blocks in order: the result depends on (seed, query, first, count) only.
+  PathTally Trace(const TraceQuery& query, std::uint64_t seed, std::uint64_t first, std::uint64_t count) const;
+  // The same paths on the calling thread, added to `tally`.
+  void TraceSerial(const TraceQuery& query, std::uint64_t seed, std::uint64_t first, std::uint64_t count,
+                   PathTally& tally) const;
+
+  // Transmittance from `origin` along `view` to the top of the atmosphere by adaptive quadrature
+  // of the optical depth (no table); 0 where the ray meets the ground (or, in a half-space, goes
+  // down for ever); 1 for a ray that misses the atmosphere.
+  void Transmittance(const glm::dvec3& origin, const glm::dvec3& view, std::span<double> out) const;
+  // Single scattering by deterministic quadrature: composite 8-point Gauss-Legendre along the
+  // view ray between breakpoints (density kinks, the ray's lowest point, the edges of the planet
+  // shadow), panels doubled until the relative change is <= rel_tolerance; the optical depths of
+  // the view and sun rays by adaptive Simpson quadrature.
+  void SingleScattering(const glm::dvec3& origin, const glm::dvec3& view, const glm::dvec3& sun,
+                        double rel_tolerance, std::span<double> out) const;
+
+  // A flux estimator for energy checks: the radiance leaving the top of the atmosphere (ground
+  // reflections included) averaged over points uniform on the top sphere and directions
+  // cosine-weighted about the outward normal. Power out = 4 pi R_top^2 * pi * mean. Spherical
+  // geometry only.
+  PathTally TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t seed, std::uint64_t count) const;
+  // The unscattered sunlight that crosses the atmosphere without meeting the ground, as a power
+  // per unit irradiance (m^2): integral over impact parameters b in [R_ground, R_top] of
+  // 2 pi b T(b) db, by quadrature.
+  std::vector<double> DirectTransmittedPower() const;
+
+  // Phase-function sampling (exposed for tests): a cosine nu distributed with the normalised phase
+  // function `kind` (shared::kPhase*) of asymmetry g, from two uniform numbers in [0, 1) and a
+  // source of more for rejection.
+  template <typename Uniform>
+  static double SamplePhaseCosine(int kind, double g, Uniform&& uniform);
+
+ private:
+  struct Channel {
+    double rayleigh_scattering, rayleigh_extinction;
+    double mie_scattering, mie_extinction;
+    double ozone_extinction;
+    double majorant;
+    double albedo;
+  };
+  struct Collision;
+  class Rng;
+
+  glm::dvec3 Densities(const glm::dvec3& p) const;
+  // Upper bounds of the three densities on the segment [p, p + length d]: the profiles' maxima
+  // over the altitudes at or above the segment's lowest point.
+  glm::dvec3 MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const;
+  double Majorant(const Channel& c, const glm::dvec3& p, const glm::dvec3& d, double length) const {
+    return half_space_ ? c.majorant : OpticalDepth(c, MaxDensities(p, d, length));
+  }
+  // Distance along d to where the ray leaves the atmosphere, and whether it ends on the ground.
+  void Segment(const glm::dvec3& p, const glm::dvec3& d, double& length, bool& ground) const;
+  // Moves an observer above the atmosphere to where `d` enters it; false when the ray misses it.
+  bool EnterAtmosphere(glm::dvec3& p, const glm::dvec3& d) const;
+  double SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, const Channel& c, Rng& rng) const;
+  // One path of one channel; adds its contributions per order bin to `orders`.
+  void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
+  // Integrals of the three densities along p + t d over [t0, t1].
+  glm::dvec3 DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const;
+  // Parameters t in (t0, t1) where p + t d crosses an altitude at which a density profile may
+  // have a kink, and the ray's lowest point.
+  void AddBreakpoints(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1, std::vector<double>& t) const;
+  double OpticalDepth(const Channel& c, const glm::dvec3& densities) const {
+    return c.rayleigh_extinction * densities.x + c.mie_extinction * densities.y + c.ozone_extinction * densities.z;
+  }
+
+  shared::AtmosphereParameters atmosphere_;  // profiles and radii (channels come from channels_)
+  std::vector<Channel> channels_;
+  int rayleigh_phase_, mie_phase_;
+  double rayleigh_g_, mie_g_;
+  bool half_space_;
+  glm::dvec3 half_space_densities_;
+  std::vector<double> kink_altitudes_;
+  glm::dvec3 max_extinction_;  // per medium, over channels: weights of the quadrature error
+  PathTracerSettings settings_;
+};
+
+// Depressed cubic x^3 + p x + q = 0 with p > 0 (one real root), by Cardano's formula in a form
+// without cancellation for either sign of q.
+inline double SolveDepressedCubic(double p, double q) {
+  const double z = -0.5 * q;
+  const double k = p / 3.0;
+  const double a = std::cbrt(std::abs(z) + std::sqrt(z * z + k * k * k));
+  const double root = a - k / a;
+  return z < 0.0 ? -root : root;
+}
+
+template <typename Uniform>
+double PathTracer::SamplePhaseCosine(int kind, double g, Uniform&& uniform) {
+  const double u = uniform();
+  switch (kind) {
+    case shared::kPhaseRayleigh:
+      // CDF (nu^3 + 3 nu + 4) / 8 = u: nu^3 + 3 nu + (4 - 8 u) = 0.
+      return std::clamp(SolveDepressedCubic(3.0, 4.0 - 8.0 * u), -1.0, 1.0);
+    case shared::kPhaseModifiedRayleigh:
+      // CDF of 1.4 + 0.5 nu^2 over its integral 47/15: (1.4 nu + nu^3/6 + 1.4 + 1/6) / (47/15) = u,
+      // times 6: nu^3 + 8.4 nu + (9.4 - 18.8 u) = 0.
+      return std::clamp(SolveDepressedCubic(8.4, 9.4 - 18.8 * u), -1.0, 1.0);
+    case shared::kPhaseHenyeyGreenstein:
+    case shared::kPhaseCornetteShanks: {
+      // Henyey-Greenstein by inversion of its CDF; below |g| = 1e-6 the phase function differs
+      // from isotropic by < 3e-6 relative, and the inversion formula loses precision, so use 1 - 2u.
+      // Cornette-Shanks = HG * 3 (1 + nu^2) / (2 (2 + g^2)) <= HG * 3 / (2 + g^2): rejection
+      // against HG with acceptance (1 + nu^2) / 2 (mean acceptance (2 + g^2) / 3 >= 2/3).
+      double v = u;
+      while (true) {
+        double nu;
+        if (std::abs(g) < 1e-6) {
+          nu = 1.0 - 2.0 * v;
+        } else {
+          const double s = (1.0 - g * g) / (1.0 - g + 2.0 * g * v);
+          nu = std::clamp((1.0 + g * g - s * s) / (2.0 * g), -1.0, 1.0);
+        }
+        if (kind == shared::kPhaseHenyeyGreenstein || uniform() * 2.0 < 1.0 + nu * nu) return nu;
+        v = uniform();
+      }
+    }
+    default:
+      return 1.0 - 2.0 * u;
+  }
+}
+
+}  // namespace atmo::cpu

@@ -1,0 +1,174 @@
+#include "models/reference_model.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "atmo/error.h"
+#include "models/model_options.h"
+
+namespace atmo {
+namespace {
+
+std::uint64_t ParseCount(const std::string& key, const std::string& value, std::uint64_t lo, std::uint64_t hi) {
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(value.c_str(), &end, 10);
+  if (value.empty() || value.find_first_not_of("0123456789") != std::string::npos || *end != '\0' || v < lo ||
+      v > hi) {
+    throw Error("option " + key + "=" + value + ": expected an integer in [" + std::to_string(lo) + ", " +
+                std::to_string(hi) + "]");
+  }
+  return v;
+}
+
+}  // namespace
+
+ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
+  constexpr std::uint64_t kMaxPaths = std::uint64_t{1} << 40;
+  ReferenceSettings s;
+  bool max_given = false;
+  for (const auto& [key, value] : options) {
+    if (key == "samples") {
+      s.samples = ParseCount(key, value, 2, kMaxPaths);
+    } else if (key == "target_rel_error") {
+      s.target_rel_error = ParseDoubleOption(key, value, 0.0, 1.0);
+    } else if (key == "max_samples") {
+      s.max_samples = ParseCount(key, value, 2, kMaxPaths);
+      max_given = true;
+    } else if (key == "estimator") {
+      if (value == "path") s.estimator = Estimator::kPath;
+      else if (value == "single_quadrature") s.estimator = Estimator::kSingleQuadrature;
+      else throw Error("option estimator=" + value + ": expected path or single_quadrature");
+    } else if (key == "forced_collisions") {
+      if (value != "on" && value != "off") throw Error("option forced_collisions=" + value + ": expected on or off");
+      s.forced_collisions = value == "on";
+    } else if (key == "quadrature_tolerance") {
+      s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
+    } else if (key == "seed") {
+      s.seed = ParseCount(key, value, 0, ~std::uint64_t{0});
+    } else {
+      throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
+                  "max_samples, estimator, forced_collisions, quadrature_tolerance, seed)");
+    }
+  }
+  if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
+  if (s.max_samples < s.samples) {
+    throw Error("option max_samples=" + std::to_string(s.max_samples) + " is below samples=" +
+                std::to_string(s.samples));
+  }
+  return s;
+}
+
+ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const ReferenceSettings& settings)
+    : Model(parameters),
+      settings_(settings),
+      tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3}) {}
+
+std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
+  if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {
+    throw Error("altitude_m must be finite (and >= 0 above a planet) for model reference (got " +
+                std::to_string(altitude_m) + ")");
+  }
+  CheckDirection(sun_direction, "the sun direction");
+  return std::make_unique<ReferenceSkyView>(*this, altitude_m, glm::normalize(sun_direction));
+}
+
+ReferenceSkyView::ReferenceSkyView(const ReferenceModel& model, double altitude_m, const glm::dvec3& sun)
+    : SkyView(altitude_m, sun, model.channel_count()),
+      model_(model),
+      origin_(model.tracer().ObserverPosition(altitude_m)) {}
+
+cpu::TraceQuery ReferenceSkyView::Query(const glm::dvec3& view) const {
+  CheckDirection(view, "the view direction");
+  cpu::TraceQuery query;
+  query.origin = origin_;
+  query.sun = sun_direction();
+  query.view = glm::normalize(view);
+  return query;
+}
+
+namespace {
+
+OrderEstimate ToOrderEstimate(const cpu::PathTally& tally, std::size_t channels) {
+  OrderEstimate e;
+  e.paths = tally.paths;
+  for (std::size_t c = 0; c < channels; ++c) {
+    e.total.push_back(tally.Get(c, 0));
+    std::array<cpu::Estimate, cpu::kOrderBins> orders;
+    for (int k = 0; k < cpu::kOrderBins; ++k) orders[k] = tally.Get(c, 1 + k);
+    e.orders.push_back(orders);
+  }
+  return e;
+}
+
+bool Converged(const cpu::PathTally& tally, std::size_t channels, double target) {
+  for (std::size_t c = 0; c < channels; ++c) {
+    const cpu::Estimate e = tally.Get(c, 0);
+    if (e.standard_error > target * std::abs(e.mean)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+OrderEstimate ReferenceSkyView::EstimateByOrder(const glm::dvec3& view, std::uint64_t paths) const {
+  const cpu::TraceQuery query = Query(view);
+  return ToOrderEstimate(model_.tracer().Trace(query, model_.settings().seed, 0, paths), channel_count());
+}
+
+OrderEstimate ReferenceSkyView::EstimateByOrder(const glm::dvec3& view) const {
+  const ReferenceSettings& s = model_.settings();
+  const cpu::TraceQuery query = Query(view);
+  cpu::PathTally tally = model_.tracer().Trace(query, s.seed, 0, s.samples);
+  // Doubling: paths [n, 2n) are added to [0, n), so the result is that of the first 2n paths.
+  while (s.target_rel_error > 0.0 && tally.paths < s.max_samples &&
+         !Converged(tally, channel_count(), s.target_rel_error)) {
+    const std::uint64_t more = std::min(tally.paths, s.max_samples - tally.paths);
+    tally.Merge(model_.tracer().Trace(query, s.seed, tally.paths, more));
+  }
+  return ToOrderEstimate(tally, channel_count());
+}
+
+void ReferenceSkyView::SingleScatteringQuadrature(const glm::dvec3& view, std::span<double> out) const {
+  const cpu::TraceQuery query = Query(view);
+  model_.tracer().SingleScattering(query.origin, query.view, query.sun, model_.settings().quadrature_tolerance, out);
+}
+
+void ReferenceSkyView::RadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                                        std::span<double> standard_error) const {
+  if (model_.settings().estimator == ReferenceSettings::Estimator::kSingleQuadrature) {
+    SingleScatteringQuadrature(view, radiance);
+    std::fill(standard_error.begin(), standard_error.end(), 0.0);
+    return;
+  }
+  const OrderEstimate e = EstimateByOrder(view);
+  for (std::size_t c = 0; c < channel_count(); ++c) {
+    radiance[c] = e.total[c].mean;
+    standard_error[c] = e.total[c].standard_error;
+  }
+}
+
+void ReferenceSkyView::Radiance(const glm::dvec3& view, std::span<double> out) const {
+  std::vector<double> standard_error(channel_count());
+  RadianceEstimate(view, out, standard_error);
+}
+
+void ReferenceSkyView::Transmittance(const glm::dvec3& view, std::span<double> out) const {
+  const cpu::TraceQuery query = Query(view);
+  model_.tracer().Transmittance(query.origin, query.view, out);
+}
+
+void ReferenceSkyView::SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const {
+  // A uniform disc of unit irradiance: radiance 1 / solid angle, attenuated along the view.
+  const double cos_alpha = std::cos(model_.parameters().sun_angular_radius_rad);
+  const glm::dvec3 v = glm::normalize(view);
+  if (glm::dot(v, sun_direction()) < cos_alpha) {
+    std::fill(out.begin(), out.end(), 0.0);
+    return;
+  }
+  Transmittance(v, out);
+  for (double& value : out) value /= 2.0 * 3.14159265358979323846 * (1.0 - cos_alpha);
+}
+
+}  // namespace atmo

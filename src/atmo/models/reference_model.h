@@ -1,0 +1,91 @@
+// Model `reference`: a Monte Carlo volumetric path tracer (cpu/path_tracer.h), the model every
+// other model is judged by (DESIGN.md §5). It uses no table: every query traces paths through
+// the shared media and phase functions, and carries its standard error.
+//
+// Options (`--option key=value`; docs/models/reference.md):
+//   samples=4096            paths per query and channel (`atmo sample --samples N`)
+//   target_rel_error=0      > 0: double the paths until standard error / mean <= this for every
+//                           channel, or until max_samples (`atmo sample --target-rel-error E`)
+//   max_samples=16777216    cap of the doubling
+//   estimator=path          path: all orders by path tracing; single_quadrature: single scattering
+//                           only, by deterministic quadrature (standard error 0)
+//   forced_collisions=on    force the first tentative collision of segments whose end scores 0
+//   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
+//   seed=0                  the common seed (`--seed`)
+// Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
+// is computed by quadrature; the sun disc radiance is the transmittance over the disc's solid angle.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "atmo/model.h"
+#include "cpu/path_tracer.h"
+
+namespace atmo {
+
+struct ReferenceSettings {
+  enum class Estimator { kPath, kSingleQuadrature };
+
+  std::uint64_t samples = 4096;
+  double target_rel_error = 0.0;  // 0: a fixed number of samples
+  std::uint64_t max_samples = std::uint64_t{1} << 24;
+  Estimator estimator = Estimator::kPath;
+  bool forced_collisions = true;
+  double quadrature_tolerance = 1e-6;
+  std::uint64_t seed = 0;
+
+  // Throws atmo::Error for an unknown key or a value out of range.
+  static ReferenceSettings FromOptions(const ModelOptions& options);
+};
+
+// A radiance estimate split by scattering order, per channel.
+struct OrderEstimate {
+  std::uint64_t paths = 0;
+  std::vector<cpu::Estimate> total;                                // all orders
+  std::vector<std::array<cpu::Estimate, cpu::kOrderBins>> orders;  // orders 1, 2, 3, 4, >= 5
+};
+
+class ReferenceModel final : public Model {
+ public:
+  ReferenceModel(const AtmosphereParameters& parameters, const ReferenceSettings& settings);
+
+  std::string_view name() const override { return "reference"; }
+  void Precompute() override {}  // nothing to precompute
+  std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const override;
+
+  const ReferenceSettings& settings() const { return settings_; }
+  const cpu::PathTracer& tracer() const { return tracer_; }
+
+ private:
+  ReferenceSettings settings_;
+  cpu::PathTracer tracer_;
+};
+
+class ReferenceSkyView final : public SkyView {
+ public:
+  ReferenceSkyView(const ReferenceModel& model, double altitude_m, const glm::dvec3& sun);
+
+  // Path tracing with the model's settings (samples, target_rel_error, max_samples).
+  OrderEstimate EstimateByOrder(const glm::dvec3& view) const;
+  // Exactly `paths` paths per channel (indices [0, paths)).
+  OrderEstimate EstimateByOrder(const glm::dvec3& view, std::uint64_t paths) const;
+  // Single scattering by deterministic quadrature (no tables).
+  void SingleScatteringQuadrature(const glm::dvec3& view, std::span<double> out) const;
+
+  void Radiance(const glm::dvec3& view, std::span<double> out) const override;
+  void RadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                        std::span<double> standard_error) const override;
+  void Transmittance(const glm::dvec3& view, std::span<double> out) const override;
+  void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override;
+
+ private:
+  cpu::TraceQuery Query(const glm::dvec3& view) const;
+
+  const ReferenceModel& model_;
+  glm::dvec3 origin_;
+};
+
+}  // namespace atmo
