@@ -75,6 +75,24 @@ struct SampleCommand {
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
 
+// `atmo compare`: --model (M) against --against (R) on a grid; see compare_command.cc.
+struct CompareCommand {
+  std::string against = "reference";
+  std::vector<std::string> against_options;  // KEY=VALUE for the reference model
+  std::string grid = "standard";             // "standard" or an IN.csv path (as `atmo sample`)
+  // Rows with R <= floor x the largest R of their sky (altitude, sun zenith, channel) are left
+  // out of the relative statistics.
+  double floor = 1e-4;
+  std::string csv_path;    // empty: none
+  std::string json_path;   // empty: none
+  std::string image_path;  // empty: none
+  double image_altitude_m = 0.0;
+  double image_sun_zenith_deg = 60.0;
+  double image_range_percent = 10.0;  // colour scale: -range .. +range
+  int image_size = 256;               // pixels per fisheye
+};
+int RunCompare(const CommonOptions& common, const CompareCommand& command);
+
 struct PresetsCommand {
   std::string dump;  // a preset name to print as JSON; empty: list the presets
 };
@@ -87,5 +105,12 @@ struct BenchCommand {
   int height = 1080;
 };
 int RunBench(const CommonOptions& common, const BenchCommand& command);
+
+// `atmo precompute`: computes the model's table and exports it (model elek: NAME.exr, NAME.raw,
+// NAME.json; include/atmo/elek.h).
+struct PrecomputeCommand {
+  std::string out;  // NAME, without extension
+};
+int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command);
 
 }  // namespace atmo::cli

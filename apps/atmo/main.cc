@@ -3,8 +3,12 @@
 //   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [--exr F] [--png F]
 //   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv | --altitude --sun-zenith
 //                --view-zenith --azimuth) [--out OUT.csv]
+//   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|IN.csv] [--csv F]
+//                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
 //   atmo presets [--dump NAME]
 //   atmo bench   [--repeat N | --quick] [--width W --height H]
+//   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json)
+// render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
@@ -165,6 +169,10 @@ int main(int argc, char** argv) {
   render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
   render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")
       ->capture_default_str();
+  std::optional<std::uint64_t> render_spp;
+  render_app->add_option_function<std::uint64_t>(
+      "--spp", [&render_spp](const std::uint64_t& n) { render_spp = n; },
+      "Monte Carlo paths per pixel (model reference; becomes --option samples=N)");
 
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
@@ -184,6 +192,42 @@ int main(int argc, char** argv) {
                         "azimuth between view and sun in degrees (0: towards the sun)"),
   };
   for (CLI::Option* option : single) grid->excludes(option);
+  // Monte Carlo settings: they become the model options samples= and target_rel_error= (models
+  // that take no such option reject them).
+  std::optional<std::uint64_t> sample_paths;
+  std::optional<double> target_rel_error;
+  sample_app->add_option_function<std::uint64_t>(
+      "--samples", [&sample_paths](const std::uint64_t& n) { sample_paths = n; },
+      "Monte Carlo paths per query (model reference)");
+  AddOptionalNumber(sample_app, "--target-rel-error", target_rel_error,
+                    "keep adding paths until standard error / radiance <= this (model reference)")
+      ->check(RangeOf(0.0, 1.0));
+
+  atmo::cli::CompareCommand compare;
+  CLI::App* compare_app =
+      app.add_subcommand("compare", "relative error of --model against a reference model on a grid");
+  AddCommonOptions(compare_app, common);
+  compare_app->add_option("--against", compare.against, "the reference model")->capture_default_str();
+  compare_app->add_option("--against-option", compare.against_options, "reference model setting KEY=VALUE (repeatable)")
+      ->expected(1)
+      ->take_all();
+  compare_app->add_option("--grid", compare.grid, "'standard' or a CSV like `atmo sample --grid`")
+      ->capture_default_str();
+  AddNumber(compare_app, "--floor", compare.floor,
+            "leave out rows whose reference is at most FLOOR x the largest of their sky")
+      ->check(RangeOf(0.0, 1.0));
+  compare_app->add_option("--csv", compare.csv_path, "per-row CSV output (one row per configuration and channel)");
+  compare_app->add_option("--json", compare.json_path, "summary JSON output");
+  compare_app->add_option("--image", compare.image_path, "false-colour relative-error fisheye PNG");
+  AddNumber(compare_app, "--altitude", compare.image_altitude_m, "observer altitude of the --image in metres");
+  AddNumber(compare_app, "--sun-zenith", compare.image_sun_zenith_deg, "sun zenith of the --image in degrees")
+      ->check(RangeOf(0.0, 180.0));
+  AddNumber(compare_app, "--image-range", compare.image_range_percent,
+            "colour scale of the --image: -PERCENT .. +PERCENT relative error")
+      ->check(kPositive);
+  compare_app->add_option("--image-size", compare.image_size, "--image fisheye diameter in pixels")
+      ->check(CLI::Range(16, 4096))
+      ->capture_default_str();
 
   atmo::cli::PresetsCommand presets;
   CLI::App* presets_app = app.add_subcommand("presets", "list the presets, or print one as JSON");
@@ -203,6 +247,18 @@ int main(int argc, char** argv) {
   bench_app->add_option("--height", bench.height, "frame height" + side_help)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
+
+  atmo::cli::PrecomputeCommand precompute;
+  CLI::App* precompute_app =
+      app.add_subcommand("precompute", "export the model's table (elek: NAME.exr, NAME.raw, NAME.json)");
+  AddCommonOptions(precompute_app, common);
+  precompute_app->add_option("--out", precompute.out, "output NAME (without extension)")->required();
+
+  // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
+  std::string table;
+  for (CLI::App* table_app : {render_app, sample_app, bench_app}) {
+    table_app->add_option("--table", table, "load the table NAME written by `atmo precompute` (model elek)");
+  }
 
   try {
     app.parse(argc, argv);
@@ -224,6 +280,12 @@ int main(int argc, char** argv) {
     std::fputs(app.help().c_str(), stderr);
     return 2;
   }
+  if (sample_app->parsed() && sample_paths) common.options.push_back("samples=" + std::to_string(*sample_paths));
+  if (sample_app->parsed() && target_rel_error) {
+    common.options.push_back(atmo::cli::Format("target_rel_error=%.17g", *target_rel_error));
+  }
+  if (!table.empty()) common.options.push_back("table=" + table);
+  if (render_app->parsed() && render_spp) common.options.push_back("samples=" + std::to_string(*render_spp));
 
   try {
     std::optional<oneapi::tbb::global_control> thread_limit;
@@ -233,8 +295,10 @@ int main(int argc, char** argv) {
     }
     if (render_app->parsed()) return atmo::cli::RunRender(common, render);
     if (sample_app->parsed()) return atmo::cli::RunSample(common, sample);
+    if (compare_app->parsed()) return atmo::cli::RunCompare(common, compare);
     if (presets_app->parsed()) return atmo::cli::RunPresets(common, presets);
     if (bench_app->parsed()) return atmo::cli::RunBench(common, bench);
+    if (precompute_app->parsed()) return atmo::cli::RunPrecompute(common, precompute);
     return 2;
   } catch (const atmo::Error& error) {
     PrintError(error.what());

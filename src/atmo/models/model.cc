@@ -4,7 +4,10 @@
 #include <cmath>
 
 #include "atmo/error.h"
+#include "models/elek_model.h"
 #include "models/hillaire_model.h"
+#include "models/reference_model.h"
+#include "models/simple_model.h"
 
 namespace atmo {
 
@@ -47,7 +50,7 @@ void SkyView::ScatteringAlongSegment(const glm::dvec3&, double, std::span<double
   throw Error("this model does not provide aerial perspective");
 }
 
-std::vector<std::string> ModelNames() { return {"hillaire"}; }
+std::vector<std::string> ModelNames() { return {"elek", "hillaire", "reference", "simple"}; }
 
 std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParameters& parameters,
                                    const ModelOptions& options) {
@@ -60,9 +63,17 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
     }
   }
   std::unique_ptr<Model> model;
-  if (name == "hillaire") {
+  if (name == "elek") {
+    model_options.erase("seed");
+    model = std::make_unique<ElekModel>(parameters, ElekSettings::FromOptions(model_options));
+  } else if (name == "hillaire") {
     model_options.erase("seed");
     model = std::make_unique<HillaireModel>(parameters, HillaireSettings::FromOptions(model_options));
+  } else if (name == "reference") {
+    model = std::make_unique<ReferenceModel>(parameters, ReferenceSettings::FromOptions(model_options));
+  } else if (name == "simple") {
+    model_options.erase("seed");
+    model = std::make_unique<SimpleModel>(parameters, model_options);
   } else {
     std::string known;
     for (const std::string& n : ModelNames()) known += (known.empty() ? "" : ", ") + n;

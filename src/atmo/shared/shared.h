@@ -21,6 +21,8 @@ namespace {
 #include "multiple_scattering.glsl"
 #include "sky.glsl"
 #include "camera.glsl"
+#include "elek.glsl"
+#include "simple.glsl"
 }  // namespace
 }  // namespace atmo::shared
 
