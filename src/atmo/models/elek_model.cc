@@ -228,33 +228,28 @@ class ElekSkyView final : public SkyView {
 
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
     const double nu = shared::ClampCosine(glm::dot(view, sun_direction()));
-    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const ElekModel::Batch& batch = model_.batches()[b];
       return model_.BatchRadiance(batch, r_, shared::ClampCosine(view.z), mu_s_, nu);
     });
   }
 
   void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
-    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const ElekModel::Batch& batch = model_.batches()[b];
       return shared::GetViewTransmittance(batch.atmosphere, batch.transmittance, r_, shared::ClampCosine(view.z));
     });
   }
 
   void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
     const double nu = glm::dot(view, sun_direction());
-    ForEachBatch(out, [&](const ElekModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const ElekModel::Batch& batch = model_.batches()[b];
       return shared::GetSunDiscRadiance(batch.atmosphere, batch.transmittance, r_, shared::ClampCosine(view.z), nu);
     });
   }
 
  private:
-  template <typename F>
-  void ForEachBatch(std::span<double> out, const F& f) const {
-    const auto& batches = model_.batches();
-    for (std::size_t b = 0; b < batches.size(); ++b) {
-      const shared::vec3 v = f(batches[b]);
-      for (std::size_t c = 0; c < 3 && 3 * b + c < out.size(); ++c) out[3 * b + c] = v[static_cast<int>(c)];
-    }
-  }
 
   const ElekModel& model_;
   double r_;

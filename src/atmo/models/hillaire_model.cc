@@ -157,7 +157,8 @@ class HillaireSkyView final : public SkyView {
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
     const double nu = glm::dot(view, sun_direction());
     const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
-    ForEachBatch(out, [&](std::size_t b, const HillaireModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const HillaireModel::Batch& batch = model_.batches()[b];
       if (!sky_view_.empty()) {
         return shared::GetSkyRadianceFromSkyView(batch.atmosphere, sky_view_[b], r_, view.z, azimuth);
       }
@@ -169,21 +170,24 @@ class HillaireSkyView final : public SkyView {
   }
 
   void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
-    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const HillaireModel::Batch& batch = model_.batches()[b];
       return shared::GetViewTransmittance(batch.atmosphere, batch.transmittance, r_, view.z);
     });
   }
 
   void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
     const double nu = glm::dot(view, sun_direction());
-    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const HillaireModel::Batch& batch = model_.batches()[b];
       return shared::GetSunDiscRadiance(batch.atmosphere, batch.transmittance, r_, view.z, nu);
     });
   }
 
   void GroundRadiance(const glm::dvec3& view, std::span<double> out) const override {
     const double nu = glm::dot(view, sun_direction());
-    ForEachBatch(out, [&](std::size_t, const HillaireModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const HillaireModel::Batch& batch = model_.batches()[b];
       return shared::GetGroundRadiance(batch.atmosphere, batch.transmittance, batch.ground_irradiance, r_, view.z, mu_s_,
                                        nu);
     });
@@ -255,15 +259,6 @@ class HillaireSkyView final : public SkyView {
   }
 
  private:
-  // Evaluates f(batch index, batch) -> vec3 for every batch and scatters it into out.
-  template <typename F>
-  void ForEachBatch(std::span<double> out, const F& f) const {
-    const auto& batches = model_.batches();
-    for (std::size_t b = 0; b < batches.size(); ++b) {
-      const shared::vec3 v = f(b, batches[b]);
-      for (std::size_t c = 0; c < 3 && 3 * b + c < out.size(); ++c) out[3 * b + c] = v[static_cast<int>(c)];
-    }
-  }
 
   const HillaireModel& model_;
   double r_;

@@ -13,17 +13,6 @@ namespace {
 // The closed form's up vector u in the local frame (x east, y north, z up).
 const shared::vec3 kUp(0.0, 0.0, 1.0);
 
-int ToSharedPhase(PhaseFunction phase) {
-  switch (phase) {
-    case PhaseFunction::kIsotropic: return shared::kPhaseIsotropic;
-    case PhaseFunction::kRayleigh: return shared::kPhaseRayleigh;
-    case PhaseFunction::kModifiedRayleigh: return shared::kPhaseModifiedRayleigh;
-    case PhaseFunction::kCornetteShanks: return shared::kPhaseCornetteShanks;
-    case PhaseFunction::kHenyeyGreenstein: return shared::kPhaseHenyeyGreenstein;
-  }
-  return shared::kPhaseIsotropic;
-}
-
 // The density of a medium inside the half-space (altitudes < 0), which the closed form needs
 // constant. The profile is a clamped exponential plus a linear term (DensityProfile), so it is
 // checked at depths spread over 18 decades rather than proved constant; the presets' profiles
@@ -96,20 +85,23 @@ class SimpleSkyView final : public SkyView {
         sun_angular_radius_(model.parameters().sun_angular_radius_rad) {}
 
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
-    ForEachBatch(out, [&](const SimpleModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const SimpleModel::Batch& batch = model_.batches()[b];
       return shared::ComputeSimpleScatteredRadiance(kUp, observer_, view, sun_direction(), batch.extinction,
                                                     InScattering(batch, view));
     });
   }
 
   void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
-    ForEachBatch(out, [&](const SimpleModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const SimpleModel::Batch& batch = model_.batches()[b];
       return shared::GetSimpleViewTransmittance(kUp, observer_, view, batch.extinction);
     });
   }
 
   void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
-    ForEachBatch(out, [&](const SimpleModel::Batch& batch) {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const SimpleModel::Batch& batch = model_.batches()[b];
       return shared::GetSimpleSunDiscRadiance(kUp, observer_, view, sun_direction(), batch.extinction,
                                               sun_angular_radius_);
     });
@@ -139,16 +131,6 @@ class SimpleSkyView final : public SkyView {
       beta += shared::GetSimpleMediumScattering(m.scattering, m.phase, m.phase_g, nu);
     }
     return beta;
-  }
-
-  // Evaluates f(batch) -> vec3 for every batch and scatters it into out.
-  template <typename F>
-  void ForEachBatch(std::span<double> out, const F& f) const {
-    const auto& batches = model_.batches();
-    for (std::size_t b = 0; b < batches.size(); ++b) {
-      const shared::vec3 v = f(batches[b]);
-      for (std::size_t c = 0; c < 3 && 3 * b + c < out.size(); ++c) out[3 * b + c] = v[static_cast<int>(c)];
-    }
   }
 
   const SimpleModel& model_;

@@ -7,17 +7,6 @@
 namespace atmo {
 namespace {
 
-int ToSharedPhase(PhaseFunction phase) {
-  switch (phase) {
-    case PhaseFunction::kIsotropic: return shared::kPhaseIsotropic;
-    case PhaseFunction::kRayleigh: return shared::kPhaseRayleigh;
-    case PhaseFunction::kModifiedRayleigh: return shared::kPhaseModifiedRayleigh;
-    case PhaseFunction::kCornetteShanks: return shared::kPhaseCornetteShanks;
-    case PhaseFunction::kHenyeyGreenstein: return shared::kPhaseHenyeyGreenstein;
-  }
-  return shared::kPhaseIsotropic;
-}
-
 shared::DensityProfileLayer ToSharedLayer(const DensityLayer& layer, double unit) {
   // Altitudes scale with the unit; exp_scale and linear_term are per length.
   return shared::DensityProfileLayer{layer.width_m / unit, layer.exp_term, layer.exp_scale_per_m * unit,
@@ -42,6 +31,17 @@ glm::dvec3 Batch(const std::vector<double>& values, std::size_t first, double sc
 }
 
 }  // namespace
+
+int ToSharedPhase(PhaseFunction phase) {
+  switch (phase) {
+    case PhaseFunction::kIsotropic: return shared::kPhaseIsotropic;
+    case PhaseFunction::kRayleigh: return shared::kPhaseRayleigh;
+    case PhaseFunction::kModifiedRayleigh: return shared::kPhaseModifiedRayleigh;
+    case PhaseFunction::kCornetteShanks: return shared::kPhaseCornetteShanks;
+    case PhaseFunction::kHenyeyGreenstein: return shared::kPhaseHenyeyGreenstein;
+  }
+  return shared::kPhaseIsotropic;
+}
 
 shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, std::size_t batch,
                                                 double unit) {
