@@ -53,13 +53,16 @@ TEST(HillaireTables, MultipleScatteringRowsEqualPerTexelKernel) {
   const shared::AtmosphereParameters a = testing::EarthLike();
   const Texture2D transmittance = TransmittanceTable(a);
   for (int directions : {2, 16, 30}) {  // the seed's pair and two lattices
-    Texture2D table(8, 6);
-    ComputeMultipleScatteringTable(a, transmittance, directions, 12, table);
-    for (int y = 0; y < table.height; ++y) {
-      for (int x = 0; x < table.width; ++x) {
-        ExpectSameTexel(table.at(x, y),
-                        shared::ComputeMultiScatteringTexel(a, transmittance, ivec2(8, 6), vec2(x + 0.5, y + 0.5), directions, 12),
-                        x, y);
+    for (bool media_phase : {false, true}) {
+      Texture2D table(8, 6);
+      ComputeMultipleScatteringTable(a, transmittance, directions, 12, media_phase, table);
+      for (int y = 0; y < table.height; ++y) {
+        for (int x = 0; x < table.width; ++x) {
+          ExpectSameTexel(table.at(x, y),
+                          shared::ComputeMultiScatteringTexel(a, transmittance, ivec2(8, 6), vec2(x + 0.5, y + 0.5),
+                                                              directions, 12, media_phase),
+                          x, y);
+        }
       }
     }
   }
@@ -69,7 +72,7 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
   const shared::AtmosphereParameters a = testing::EarthLike();
   const Texture2D transmittance = TransmittanceTable(a);
   Texture2D multiple_scattering(8, 8);
-  ComputeMultipleScatteringTable(a, transmittance, 16, 10, multiple_scattering);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, multiple_scattering);
   for (double altitude : {0.0, 1500.0, 60e3}) {
     for (double mu_s : {0.9, 0.05, -0.2}) {
       for (int width : {12, 13}) {  // even and odd: the mirrored columns

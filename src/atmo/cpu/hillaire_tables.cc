@@ -218,7 +218,8 @@ struct MultipleScatteringRay {
   vec3 direction;
   double weight;  // how many directions of the set this one stands for (2 for a mirrored pair)
   SunLookupsAlongRay samples;
-  std::vector<vec3> luminance_weight;  // throughput x step integral x scattering x isotropic phase
+  std::vector<vec3> rayleigh_weight;  // throughput x step integral x Rayleigh scattering
+  std::vector<vec3> mie_weight;       // throughput x step integral x Mie scattering
   bool hits_ground;
   double t_max;
   vec3 ground_throughput;
@@ -274,7 +275,7 @@ void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample
 }
 
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
-                                    int direction_count, int sample_count, shared::Texture2D& table) {
+                                    int direction_count, int sample_count, bool media_phase, shared::Texture2D& table) {
   const shared::ivec2 size(table.width, table.height);
   // The directions of shared::GetMultiScatteringDirection; with the sun in the plane y = 0 the
   // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
@@ -297,8 +298,9 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
     vec3 transfer_sum(0.0);
     for (const auto& [direction, weight] : directions) {
       MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, nullptr, r, sample_count),
-                                {}, false, 0.0, vec3(0.0)};
-      ray.luminance_weight.reserve(sample_count);
+                                {}, {}, false, 0.0, vec3(0.0)};
+      ray.rayleigh_weight.reserve(sample_count);
+      ray.mie_weight.reserve(sample_count);
       const double mu = direction.z;
       ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
       ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
@@ -315,7 +317,8 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
         const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
         ray.samples.AddSample(t, r_i);
-        ray.luminance_weight.push_back(step_integral * medium.scattering * shared::IsotropicPhaseFunction());
+        ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
+        ray.mie_weight.push_back(step_integral * medium.mie_scattering);
         transfer += step_integral * medium.scattering;
         throughput *= step_transmittance;
       }
@@ -335,7 +338,12 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         const double nu = glm::dot(ray.direction, sun);
         ray.samples.Evaluate(mu_s, nu, sun_transmittance.data(), nullptr);
         vec3 luminance(0.0);
-        for (std::size_t i = 0; i < ray.samples.size(); ++i) luminance += ray.luminance_weight[i] * sun_transmittance[i];
+        // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
+        const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
+        const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
+        for (std::size_t i = 0; i < ray.samples.size(); ++i) {
+          luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
+        }
         if (ray.hits_ground) {
           const double r_g = a.bottom_radius;
           const double mu_s_g = shared::ClampCosine((r * mu_s + ray.t_max * nu) / r_g);

@@ -44,12 +44,18 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
     else if (key == "ground_irradiance_lut") s.ground_irradiance_lut = ParseIntOption(key, value, 2, 4096);
     else if (key == "ground_irradiance_directions") s.ground_irradiance_directions = ParseIntOption(key, value, 1, 65536);
     else if (key == "ground_irradiance_samples") s.ground_irradiance_samples = ParseIntOption(key, value, 1, 100000);
-    else if (key == "sky_view") {
+    else if (key == "multiple_scattering_phase") {
+      if (value != "media" && value != "isotropic") {
+        throw Error("option multiple_scattering_phase=" + value + ": expected media or isotropic");
+      }
+      s.multiple_scattering_media_phase = value == "media";
+    } else if (key == "sky_view") {
       if (value != "auto" && value != "off") throw Error("option sky_view=" + value + ": expected auto or off");
       s.use_sky_view_lut = value == "auto";
     } else {
       throw Error("unknown option '" + key + "' for model hillaire (known: transmittance_lut, transmittance_samples, "
                   "multiple_scattering_lut, multiple_scattering_directions, multiple_scattering_samples, "
+                  "multiple_scattering_phase, "
                   "sky_view_lut, sky_view_samples, ray_march_samples, sky_view, ground_irradiance_lut, "
                   "ground_irradiance_directions, ground_irradiance_samples)");
     }
@@ -81,7 +87,8 @@ void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
   const glm::ivec2 size = settings_.multiple_scattering_lut;
   batch.multiple_scattering = shared::Texture2D(size.x, size.y);
   cpu::ComputeMultipleScatteringTable(batch.atmosphere, batch.transmittance, settings_.multiple_scattering_directions,
-                                      settings_.multiple_scattering_samples, batch.multiple_scattering);
+                                      settings_.multiple_scattering_samples, settings_.multiple_scattering_media_phase,
+                                      batch.multiple_scattering);
 }
 
 void HillaireModel::Precompute() {

@@ -9,6 +9,8 @@
 //                                     half sphere and its mirror image), or 2 = the seed's up/down
 //                                     variant
 //   multiple_scattering_samples=20    ray-march steps per direction
+//   multiple_scattering_phase=isotropic  the phase of the first scattering in the table: isotropic
+//                                     (Hillaire 2020) or media (Rayleigh and Mie's own)
 //   sky_view_lut=192x108              per observer and sun: 360 degrees of azimuth x latitude with
 //                                     the horizon-following non-linear mapping
 //   sky_view_samples=30               ray-march steps per sky-view texel
@@ -38,6 +40,7 @@ struct HillaireSettings {
   glm::ivec2 multiple_scattering_lut{32, 32};
   int multiple_scattering_directions = 64;
   int multiple_scattering_samples = 20;
+  bool multiple_scattering_media_phase = false;
   glm::ivec2 sky_view_lut{192, 108};
   int sky_view_samples = 30;
   int ray_march_samples = 30;

@@ -54,14 +54,18 @@ vec3 GetMultiScatteringDirection(int k, int count) {
 // Integrates, along the ray from radius r in direction `direction` (z up; the sun is
 // `sun_direction`), the isotropically single-scattered light L (with the ground bounce) and the
 // transfer term f = integral of sigma_s T dt.
+// With `media_phase` the first scattering uses the media's own phase functions (Rayleigh, Mie)
+// instead of Hillaire's isotropic one; the orders after it stay isotropic.
 void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, OUT(vec3) luminance,
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, bool media_phase, OUT(vec3) luminance,
     OUT(vec3) transfer) {
   Number mu = direction.z;
   Number mu_s = sun_direction.z;
   Number nu = dot(direction, sun_direction);
   bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
   Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  Number rayleigh_phase = media_phase ? GetRayleighPhase(atmosphere, nu) : IsotropicPhaseFunction();
+  Number mie_phase = media_phase ? GetMiePhase(atmosphere, nu) : IsotropicPhaseFunction();
   vec3 throughput = vec3(1.0);
   luminance = vec3(0.0);
   transfer = vec3(0.0);
@@ -77,7 +81,8 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
     vec3 step_transmittance = exp(-medium.extinction * dt);
     vec3 step_integral = throughput * IntegrateStep(medium.extinction, step_transmittance, dt);
     vec3 sun_transmittance = GetTransmittanceToSun(atmosphere, transmittance_texture, r_i, mu_s_i);
-    luminance += step_integral * medium.scattering * sun_transmittance * IsotropicPhaseFunction();
+    luminance += step_integral * sun_transmittance *
+        (medium.rayleigh_scattering * rayleigh_phase + medium.mie_scattering * mie_phase);
     transfer += step_integral * medium.scattering;
     throughput *= step_transmittance;
   }
@@ -92,7 +97,7 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
 
 // The per-texel kernel of the multiple-scattering table.
 vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count) {
+    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase) {
   Number r;
   Number mu_s;
   GetRMuSFromMultiScatteringTextureUv(atmosphere, texture_size, frag_coord / vec2(texture_size), r, mu_s);
@@ -103,7 +108,7 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
     vec3 luminance;
     vec3 transfer;
     IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
-        sun_direction, sample_count, luminance, transfer);
+        sun_direction, sample_count, media_phase, luminance, transfer);
     luminance_sum += luminance;
     transfer_sum += transfer;
   }

@@ -35,3 +35,12 @@ Number EvaluatePhaseFunction(int kind, Number g, Number nu) {
   if (kind == kPhaseHenyeyGreenstein) return HenyeyGreensteinPhaseFunction(g, nu);
   return IsotropicPhaseFunction();
 }
+
+// The phase functions of an atmosphere's two scattering media.
+Number GetRayleighPhase(IN(AtmosphereParameters) atmosphere, Number nu) {
+  return EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu);
+}
+
+Number GetMiePhase(IN(AtmosphereParameters) atmosphere, Number nu) {
+  return EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu);
+}

@@ -7,14 +7,6 @@
 // zenith angle), mu_s (cosine of the sun zenith angle) and nu (cosine of the angle between the
 // view and sun directions). Radiance is per unit solar irradiance at the top of the atmosphere.
 
-Number GetRayleighPhase(IN(AtmosphereParameters) atmosphere, Number nu) {
-  return EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu);
-}
-
-Number GetMiePhase(IN(AtmosphereParameters) atmosphere, Number nu) {
-  return EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu);
-}
-
 // Moves an observer outside the atmosphere to where its ray enters it, updating r, mu, mu_s and
 // the remaining distance limit. Returns false when the ray misses the atmosphere.
 bool MoveToAtmosphereEntry(IN(AtmosphereParameters) atmosphere, INOUT(Number) r, INOUT(Number) mu,
