@@ -54,13 +54,14 @@ TEST(HillaireTables, MultipleScatteringRowsEqualPerTexelKernel) {
   const Texture2D transmittance = TransmittanceTable(a);
   for (int directions : {2, 16, 30}) {  // the seed's pair and two lattices
     for (bool media_phase : {false, true}) {
+      const glm::dvec3 ground_transfer = media_phase ? shared::GetGroundTransfer(a, 8, 10) : glm::dvec3(0.0);
       Texture2D table(8, 6);
-      ComputeMultipleScatteringTable(a, transmittance, directions, 12, media_phase, table);
+      ComputeMultipleScatteringTable(a, transmittance, directions, 12, media_phase, ground_transfer, table);
       for (int y = 0; y < table.height; ++y) {
         for (int x = 0; x < table.width; ++x) {
           ExpectSameTexel(table.at(x, y),
                           shared::ComputeMultiScatteringTexel(a, transmittance, ivec2(8, 6), vec2(x + 0.5, y + 0.5),
-                                                              directions, 12, media_phase),
+                                                              directions, 12, media_phase, ground_transfer),
                           x, y);
         }
       }
@@ -72,7 +73,7 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
   const shared::AtmosphereParameters a = testing::EarthLike();
   const Texture2D transmittance = TransmittanceTable(a);
   Texture2D multiple_scattering(8, 8);
-  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, multiple_scattering);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, glm::dvec3(0.0), multiple_scattering);
   for (double altitude : {0.0, 1500.0, 60e3}) {
     for (double mu_s : {0.9, 0.05, -0.2}) {
       for (int width : {12, 13}) {  // even and odd: the mirrored columns

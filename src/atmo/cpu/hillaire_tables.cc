@@ -275,7 +275,8 @@ void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample
 }
 
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
-                                    int direction_count, int sample_count, bool media_phase, shared::Texture2D& table) {
+                                    int direction_count, int sample_count, bool media_phase,
+                                    const glm::dvec3& ground_transfer, shared::Texture2D& table) {
   const shared::ivec2 size(table.width, table.height);
   // The directions of shared::GetMultiScatteringDirection; with the sun in the plane y = 0 the
   // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
@@ -323,6 +324,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         throughput *= step_transmittance;
       }
       ray.ground_throughput = throughput;
+      if (ray.hits_ground) transfer += throughput * a.ground_albedo * ground_transfer;
       transfer_sum += transfer * weight;
       rays.push_back(std::move(ray));
     }

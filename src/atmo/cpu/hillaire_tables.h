@@ -23,7 +23,7 @@ void ComputeTransmittanceTable(const shared::AtmosphereParameters& atmosphere, i
 // Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,
                                     const shared::Texture2D& transmittance, int direction_count, int sample_count,
-                                    bool media_phase, shared::Texture2D& table);
+                                    bool media_phase, const glm::dvec3& ground_transfer, shared::Texture2D& table);
 
 // Fills `table` (already sized) like shared::ComputeSkyViewTexel for an observer at radius
 // r <= top radius and a sun at zenith cosine mu_s, in parallel over rows.

@@ -49,13 +49,16 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
         throw Error("option multiple_scattering_phase=" + value + ": expected media or isotropic");
       }
       s.multiple_scattering_media_phase = value == "media";
+    } else if (key == "multiple_scattering_ground") {
+      if (value != "on" && value != "off") throw Error("option multiple_scattering_ground=" + value + ": expected on or off");
+      s.multiple_scattering_ground = value == "on";
     } else if (key == "sky_view") {
       if (value != "auto" && value != "off") throw Error("option sky_view=" + value + ": expected auto or off");
       s.use_sky_view_lut = value == "auto";
     } else {
       throw Error("unknown option '" + key + "' for model hillaire (known: transmittance_lut, transmittance_samples, "
                   "multiple_scattering_lut, multiple_scattering_directions, multiple_scattering_samples, "
-                  "multiple_scattering_phase, "
+                  "multiple_scattering_phase, multiple_scattering_ground, "
                   "sky_view_lut, sky_view_samples, ray_march_samples, sky_view, ground_irradiance_lut, "
                   "ground_irradiance_directions, ground_irradiance_samples)");
     }
@@ -86,9 +89,14 @@ void HillaireModel::ComputeTransmittanceLut(Batch& batch) const {
 void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
   const glm::ivec2 size = settings_.multiple_scattering_lut;
   batch.multiple_scattering = shared::Texture2D(size.x, size.y);
+  const shared::vec3 ground_transfer =
+      settings_.multiple_scattering_ground
+          ? shared::GetGroundTransfer(batch.atmosphere, settings_.multiple_scattering_directions / 2,
+                                      settings_.multiple_scattering_samples)
+          : shared::vec3(0.0);
   cpu::ComputeMultipleScatteringTable(batch.atmosphere, batch.transmittance, settings_.multiple_scattering_directions,
                                       settings_.multiple_scattering_samples, settings_.multiple_scattering_media_phase,
-                                      batch.multiple_scattering);
+                                      ground_transfer, batch.multiple_scattering);
 }
 
 void HillaireModel::Precompute() {

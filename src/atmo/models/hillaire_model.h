@@ -11,6 +11,9 @@
 //   multiple_scattering_samples=20    ray-march steps per direction
 //   multiple_scattering_phase=isotropic  the phase of the first scattering in the table: isotropic
 //                                     (Hillaire 2020) or media (Rayleigh and Mie's own)
+//   multiple_scattering_ground=on     on: the ground also reflects orders >= 2 in the 1/(1 - f_ms)
+//                                     series (shared::GetGroundTransfer; halves hillaire's blue
+//                                     deficit against the reference); off: Hillaire 2020 as published
 //   sky_view_lut=192x108              per observer and sun: 360 degrees of azimuth x latitude with
 //                                     the horizon-following non-linear mapping
 //   sky_view_samples=30               ray-march steps per sky-view texel
@@ -41,6 +44,7 @@ struct HillaireSettings {
   int multiple_scattering_directions = 64;
   int multiple_scattering_samples = 20;
   bool multiple_scattering_media_phase = false;
+  bool multiple_scattering_ground = true;
   glm::ivec2 sky_view_lut{192, 108};
   int sky_view_samples = 30;
   int ray_march_samples = 30;

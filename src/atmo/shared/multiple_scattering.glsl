@@ -55,10 +55,12 @@ vec3 GetMultiScatteringDirection(int k, int count) {
 // `sun_direction`), the isotropically single-scattered light L (with the ground bounce) and the
 // transfer term f = integral of sigma_s T dt.
 // With `media_phase` the first scattering uses the media's own phase functions (Rayleigh, Mie)
-// instead of Hillaire's isotropic one; the orders after it stay isotropic.
+// instead of Hillaire's isotropic one; the orders after it stay isotropic. `ground_transfer`
+// (GetGroundTransfer, or 0 for Hillaire 2020's series) adds the ground's reflection of the
+// orders >= 2 to f.
 void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, bool media_phase, OUT(vec3) luminance,
-    OUT(vec3) transfer) {
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, bool media_phase,
+    IN(vec3) ground_transfer, OUT(vec3) luminance, OUT(vec3) transfer) {
   Number mu = direction.z;
   Number mu_s = sun_direction.z;
   Number nu = dot(direction, sun_direction);
@@ -92,12 +94,42 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
     Number mu_s_g = ClampCosine((r * mu_s + t_max * nu) / r_g);
     vec3 sun_transmittance = GetTransmittanceToSun(atmosphere, transmittance_texture, r_g, mu_s_g);
     luminance += throughput * sun_transmittance * atmosphere.ground_albedo * (max(mu_s_g, 0.0) / kPi);
+    transfer += throughput * atmosphere.ground_albedo * ground_transfer;
   }
+}
+
+// The ground's share of the series 1/(1 - f_ms). Under the isotropic unit field of one order, a
+// horizontal Lambertian ground receives the irradiance pi F_g with
+//   F_g = 1/pi * integral over the upper hemisphere of (integral_0^d sigma_s T dt) cos(theta) dw,
+// and reflects the radiance albedo F_g (times the field) towards every direction: the same
+// "neighbourhood receives the same light" assumption as Hillaire's f_ms, applied to the ground.
+// Estimated with `direction_count` cosine-distributed zenith angles (z = sqrt(1 - (k + 0.5) / n));
+// the integrand does not depend on the azimuth.
+vec3 GetGroundTransfer(IN(AtmosphereParameters) atmosphere, int direction_count, int sample_count) {
+  Number r = atmosphere.bottom_radius;
+  vec3 sum = vec3(0.0);
+  for (int k = 0; k < direction_count; ++k) {
+    Number mu = sqrt(1.0 - (Number(k) + 0.5) / Number(direction_count));
+    Number t_max = DistanceToTopAtmosphereBoundary(atmosphere, r, mu);
+    vec3 throughput = vec3(1.0);
+    for (int i = 0; i < sample_count; ++i) {
+      Number x_0 = Number(i) / Number(sample_count);
+      Number x_1 = Number(i + 1) / Number(sample_count);
+      Number dt = t_max * (x_1 * x_1 - x_0 * x_0);
+      Number t = 0.5 * t_max * (x_0 * x_0 + x_1 * x_1);
+      MediumSample medium = SampleMedium(atmosphere, sqrt(t * t + 2.0 * r * mu * t + r * r));
+      vec3 step_transmittance = exp(-medium.extinction * dt);
+      sum += throughput * IntegrateStep(medium.extinction, step_transmittance, dt) * medium.scattering;
+      throughput *= step_transmittance;
+    }
+  }
+  return sum / Number(direction_count);
 }
 
 // The per-texel kernel of the multiple-scattering table.
 vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase) {
+    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase,
+    IN(vec3) ground_transfer) {
   Number r;
   Number mu_s;
   GetRMuSFromMultiScatteringTextureUv(atmosphere, texture_size, frag_coord / vec2(texture_size), r, mu_s);
@@ -108,7 +140,7 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
     vec3 luminance;
     vec3 transfer;
     IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
-        sun_direction, sample_count, media_phase, luminance, transfer);
+        sun_direction, sample_count, media_phase, ground_transfer, luminance, transfer);
     luminance_sum += luminance;
     transfer_sum += transfer;
   }
