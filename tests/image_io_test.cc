@@ -185,6 +185,49 @@ TEST(Exr, TwelveChannelsKeepTheirOrder) {
   ExpectBitExact(image.pixels, read.pixels);
 }
 
+TEST(Exr, NamedChannelsRoundTripInReadOrder) {
+  // Extra channels "P.layer" come after R, G, B, grouped by layer in the order of P, whatever
+  // order the image had (EXR itself stores channels sorted by name); the rest follow by name.
+  TempDir dir;
+  Image image = MakeTestImage(5, 4, 7, 8);
+  image.channel_names = {"R", "G", "B", "B.stderr", "R.stderr", "G.stderr", "Z"};
+  image.alpha.assign(5 * 4, 0.5f);
+  WriteExr(dir / "named.exr", image);
+  const Image read = ReadExr(dir / "named.exr");
+  ASSERT_EQ(read.channels, 7);
+  EXPECT_EQ(read.channel_names,
+            (std::vector<std::string>{"R", "G", "B", "R.stderr", "G.stderr", "B.stderr", "Z"}));
+  for (const std::string& name : image.channel_names) {
+    const int from = image.ChannelIndex(name);
+    const int to = read.ChannelIndex(name);
+    ASSERT_GE(to, 0) << name;
+    for (int y = 0; y < 4; ++y) {
+      for (int x = 0; x < 5; ++x) EXPECT_EQ(read.at(x, y, to), image.at(x, y, from)) << name;
+    }
+  }
+  ExpectBitExact(image.alpha, read.alpha);
+  // Default names: ChannelIndex knows them too, and ReadExr reports them.
+  EXPECT_EQ(Image(1, 1, 3).ChannelIndex("B"), 2);
+  EXPECT_EQ(Image(1, 1, 2).ChannelIndex("C1"), 1);
+  EXPECT_EQ(Image(1, 1, 3).ChannelIndex("R.stderr"), -1);
+  WriteExr(dir / "plain.exr", MakeTestImage(2, 2, 3, 9));
+  EXPECT_EQ(ReadExr(dir / "plain.exr").channel_names, (std::vector<std::string>{"R", "G", "B"}));
+}
+
+TEST(Exr, BadChannelNamesThrow) {
+  TempDir dir;
+  Image image(2, 2, 3);
+  image.channel_names = {"R", "G"};
+  EXPECT_THROW(WriteExr(dir / "n.exr", image), Error);
+  image.channel_names = {"R", "G", "G"};
+  EXPECT_THROW(WriteExr(dir / "n.exr", image), Error);
+  image.channel_names = {"R", "G", "A"};
+  EXPECT_THROW(WriteExr(dir / "n.exr", image), Error);
+  image.channel_names = {"R", "", "B"};
+  EXPECT_THROW(WriteExr(dir / "n.exr", image), Error);
+  EXPECT_TRUE(dir.Entries().empty());
+}
+
 TEST(Exr, OverwritesAnExistingFile) {
   TempDir dir;
   WriteBytes(dir / "sky.exr", "old contents");

@@ -15,6 +15,7 @@
 #include "atmo/error.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
+#include "atmo/render.h"
 #include "cpu/path_tracer.h"
 #include "models/reference_model.h"
 #include "shared/shared.h"
@@ -371,6 +372,137 @@ TEST(ReferenceModel, InterfaceQueries) {
     EXPECT_EQ(l[c], 0.0);
     EXPECT_EQ(t[c], 1.0);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The ground term (GroundRadiance, AddPaths with the first ground hit) and progressive rendering.
+
+TEST(ReferenceGround, FirstOrderIsTheSunlitLambertianGround) {
+  // Order 1 of the ground-only estimator is the ground's reflection of direct sunlight:
+  // albedo / pi * mu_s * T_sun * T_view, with both transmittances by quadrature. T_view (ground
+  // point to observer) is T(ground -> top along -view) / T(observer -> top along -view).
+  const AtmosphereParameters p = Preset("earth");
+  const cpu::PathTracer tracer(p);
+  cpu::TraceQuery query;
+  query.origin = tracer.ObserverPosition(1000.0);
+  query.sun = Direction(50.0, 0.0);
+  query.ground_only = true;
+  for (const glm::dvec3& view : {Direction(120.0, 30.0), Direction(95.0, 150.0)}) {
+    query.view = view;
+    const cpu::PathTally tally = tracer.Trace(query, 1, 0, 16384);
+    const double b = glm::dot(query.origin, view);
+    const double c = glm::dot(query.origin, query.origin) - p.ground_radius_m * p.ground_radius_m;
+    const glm::dvec3 x = query.origin + (-b - std::sqrt(b * b - c)) * view;
+    const double mu_s = glm::dot(glm::normalize(x), query.sun);
+    std::vector<double> t_sun(3), t_ground_up(3), t_observer_up(3);
+    tracer.Transmittance(x, query.sun, t_sun);
+    tracer.Transmittance(x, -view, t_ground_up);
+    tracer.Transmittance(query.origin, -view, t_observer_up);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double expected = p.ground_albedo[ch] / kPi * mu_s * t_sun[ch] * t_ground_up[ch] / t_observer_up[ch];
+      const cpu::Estimate first = tally.Get(ch, 1);
+      EXPECT_GT(first.mean, 0.0);
+      EXPECT_TRUE(WithinErrors(first.mean, expected, first.standard_error)) << "channel " << ch;
+      EXPECT_GT(tally.Get(ch, 2).mean, 0.0);  // sky light reflected by the ground
+    }
+  }
+}
+
+TEST(ReferenceGround, GroundRadianceIsThePartOfTheFirstGroundHit) {
+  // Paths that include the view ray's first ground hit estimate Radiance + GroundRadiance; the
+  // three estimates use independent streams, so their errors add in quadrature.
+  constexpr std::uint64_t kPaths = 8192;
+  auto model = MakeReference(Preset("earth"), {{"samples", std::to_string(kPaths)}, {"seed", "3"}});
+  const auto sky = model->View(1000.0, Direction(50.0, 0.0));
+  const ReferenceSkyView& ref = AsReference(*sky);
+  for (const glm::dvec3& view : {Direction(100.0, 0.0), Direction(130.0, 120.0)}) {
+    std::vector<double> air(3), air_se(3), ground(3), ground_se(3);
+    ref.RadianceEstimate(view, air, air_se);
+    ref.GroundRadianceEstimate(view, ground, ground_se);
+    cpu::PathTally both(3);
+    ref.AddPaths(view, /*ground=*/true, 0, kPaths, both);
+    for (std::size_t c = 0; c < 3; ++c) {
+      EXPECT_GT(ground[c], 0.0);
+      const cpu::Estimate e = both.Get(c, 0);
+      EXPECT_TRUE(WithinErrors(e.mean, air[c] + ground[c],
+                               std::sqrt(e.standard_error * e.standard_error + air_se[c] * air_se[c] +
+                                         ground_se[c] * ground_se[c])))
+          << "channel " << c;
+    }
+  }
+  // A ray that misses the ground has no ground term.
+  std::vector<double> up(3);
+  ref.GroundRadiance(Direction(60.0, 0.0), up);
+  for (double v : up) EXPECT_EQ(v, 0.0);
+}
+
+TEST(ReferenceRender, GenericRendererShowsTheGround) {
+  // Render() adds GroundRadiance to Radiance; the air part uses the same paths with or without
+  // the ground, so below the horizon the difference is exactly the (positive) ground term.
+  auto model = MakeReference(Preset("earth"), {{"samples", "64"}, {"seed", "1"}});
+  RenderSettings s;
+  s.camera = {CameraKind::kEquirect, 8, 4};
+  s.sun_elevation_deg = 30.0;
+  s.terms.sun_disc = false;
+  const Image with_ground = Render(*model, s);
+  s.terms.ground = false;
+  const Image without = Render(*model, s);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 8; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        if (y < 2) EXPECT_EQ(with_ground.at(x, y, c), without.at(x, y, c));  // sky
+        else EXPECT_GT(with_ground.at(x, y, c), without.at(x, y, c));        // ground
+      }
+    }
+  }
+}
+
+ProgressiveImage RenderSmallProgressive(const char* seed, int threads, std::vector<std::uint64_t>* passes = nullptr) {
+  oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, threads);
+  auto model = MakeReference(Preset("earth"), {{"seed", seed}});
+  RenderSettings s;
+  s.camera = {CameraKind::kEquirect, 16, 8};
+  s.sun_elevation_deg = 30.0;
+  ProgressiveSettings p;
+  p.samples_per_pixel = 16;
+  if (passes != nullptr) p.on_pass = [&](const ProgressiveImage& pass) { passes->push_back(pass.samples_per_pixel); };
+  return RenderProgressive(*model, s, p);
+}
+
+TEST(ReferenceRender, ProgressivePassesAreTheSameForAnyThreadCount) {
+  std::vector<std::uint64_t> passes;
+  const ProgressiveImage one = RenderSmallProgressive("42", 1, &passes);
+  EXPECT_EQ(passes, (std::vector<std::uint64_t>{4, 8, 16}));
+  EXPECT_EQ(one.samples_per_pixel, 16u);
+  EXPECT_EQ(one.pass, 3);
+  const ProgressiveImage two = RenderSmallProgressive("42", 2);
+  EXPECT_EQ(one.radiance.pixels, two.radiance.pixels);
+  EXPECT_EQ(one.standard_error.pixels, two.standard_error.pixels);
+  const ProgressiveImage other = RenderSmallProgressive("43", 2);
+  EXPECT_NE(one.radiance.pixels, other.radiance.pixels);
+  for (float se : one.standard_error.pixels) EXPECT_TRUE(std::isfinite(se) && se >= 0.0f);
+
+  const Image exr = WithStandardErrorChannels(one);
+  ASSERT_EQ(exr.channels, 6);
+  EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("G")), one.radiance.at(5, 6, 1));
+  EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("B.stderr")), one.standard_error.at(5, 6, 2));
+}
+
+TEST(ReferenceRender, ProgressiveRenderingChecksItsInputs) {
+  RenderSettings s;
+  s.camera = {CameraKind::kEquirect, 4, 2};
+  ProgressiveSettings p;
+  const auto simple = CreateModel("simple", Preset("simple"));
+  EXPECT_FALSE(IsMonteCarlo(*simple));
+  EXPECT_THROW(RenderProgressive(*simple, s, p), Error);
+  auto model = MakeReference(Preset("earth"), {{"samples", "8"}});
+  EXPECT_TRUE(IsMonteCarlo(*model));
+  p.samples_per_pixel = 1;
+  EXPECT_THROW(RenderProgressive(*model, s, p), Error);
+  p.samples_per_pixel = 0;  // the model's samples: 8, in passes of 4 and 8
+  EXPECT_EQ(RenderProgressive(*model, s, p).samples_per_pixel, 8u);
+  p.first_pass_samples = 1;
+  EXPECT_THROW(RenderProgressive(*model, s, p), Error);
 }
 
 }  // namespace

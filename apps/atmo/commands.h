@@ -62,6 +62,8 @@ struct RenderCommand {
   bool no_ground = false;
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG
+  // Monte Carlo paths per pixel (model reference only; default: its `samples` option).
+  std::optional<std::uint64_t> spp;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
 

@@ -169,10 +169,12 @@ int main(int argc, char** argv) {
   render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
   render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")
       ->capture_default_str();
-  std::optional<std::uint64_t> render_spp;
-  render_app->add_option_function<std::uint64_t>(
-      "--spp", [&render_spp](const std::uint64_t& n) { render_spp = n; },
-      "Monte Carlo paths per pixel (model reference; becomes --option samples=N)");
+  render_app
+      ->add_option_function<std::uint64_t>(
+          "--spp", [&render](const std::uint64_t& n) { render.spp = n; },
+          "Monte Carlo paths per pixel, rendered progressively in passes of 4, 8, 16, ... "
+          "(model reference only) [default: its samples option]")
+      ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
 
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
@@ -285,7 +287,6 @@ int main(int argc, char** argv) {
     common.options.push_back(atmo::cli::Format("target_rel_error=%.17g", *target_rel_error));
   }
   if (!table.empty()) common.options.push_back("table=" + table);
-  if (render_app->parsed() && render_spp) common.options.push_back("samples=" + std::to_string(*render_spp));
 
   try {
     std::optional<oneapi::tbb::global_control> thread_limit;

@@ -1,5 +1,10 @@
 // `atmo render`: one frame of a model through a camera, written as EXR (linear, with metadata)
 // and PNG (tone-mapped).
+//
+// A Monte Carlo model (reference) renders progressively (RenderProgressive): --spp paths per
+// pixel in passes of 4, 8, 16, ... paths, with a progress bar on stderr when it is a terminal;
+// the outputs are rewritten (atomically) after every pass, so they always hold the latest pass,
+// and the EXR has the per-pixel standard errors as channels R.stderr, G.stderr, B.stderr.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +13,7 @@
 #include "atmo/image.h"
 #include "atmo/render.h"
 #include "commands.h"
+#include "progress_bar.h"
 
 namespace atmo::cli {
 
@@ -60,40 +66,80 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
   if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
 
+  // --spp is the path count of a Monte Carlo model; deterministic models have nothing to sample.
+  if (command.spp && common.model != "reference") {
+    throw Error("--spp is the number of Monte Carlo paths per pixel of model reference; model '" + common.model +
+                "' is deterministic and takes no --spp");
+  }
   const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
 
   const auto start = std::chrono::steady_clock::now();
-  const Image image = Render(*model, settings);
-  const double render_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const auto elapsed_ms = [&] {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  };
+  ImageMetadata metadata = {
+      {"atmo:version", ATMO_VERSION},
+      {"atmo:model", std::string(model->name())},
+      {"atmo:preset", parameters.name},
+      {"atmo:parameterHash", ParameterHashHex(parameters)},
+      {"atmo:radianceUnit", "sr^-1 per unit solar irradiance, times solar_irradiance (" +
+                                JoinValues(parameters.solar_irradiance) + ")"},
+      {"atmo:renderTimeMs", ""},
+      {"atmo:camera", std::string(ToString(settings.camera.kind))},
+      {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
+      {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
+      {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
+      {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
+      {"atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg)},
+      {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
+      {"atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg)},
+      {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
+      {"atmo:modelOptions", JoinOptions(common.options)},
+  };
+  const auto set_metadata = [&](const std::string& key, const std::string& value) {
+    for (auto& entry : metadata) {
+      if (entry.first == key) {
+        entry.second = value;
+        return;
+      }
+    }
+    metadata.emplace_back(key, value);
+  };
+  // Writes the outputs asked for; `exr_image` may carry more channels than `image` (PNG).
+  const auto write = [&](const Image& image, const Image& exr_image, double render_ms) {
+    std::vector<std::string> written;
+    if (!command.exr_path.empty()) {
+      set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
+      WriteExr(command.exr_path, exr_image, metadata);
+      written.push_back(command.exr_path);
+    }
+    if (!command.png_path.empty()) {
+      WritePng(command.png_path, image, mapping);
+      written.push_back(command.png_path);
+    }
+    return written;
+  };
 
   std::vector<std::string> written;
-  if (!command.exr_path.empty()) {
-    const ImageMetadata metadata = {
-        {"atmo:version", ATMO_VERSION},
-        {"atmo:model", std::string(model->name())},
-        {"atmo:preset", parameters.name},
-        {"atmo:parameterHash", ParameterHashHex(parameters)},
-        {"atmo:radianceUnit", "sr^-1 per unit solar irradiance, times solar_irradiance (" +
-                                  JoinValues(parameters.solar_irradiance) + ")"},
-        {"atmo:renderTimeMs", Format("%.3f", render_ms)},
-        {"atmo:camera", std::string(ToString(settings.camera.kind))},
-        {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
-        {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
-        {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
-        {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
-        {"atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg)},
-        {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
-        {"atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg)},
-        {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
-        {"atmo:modelOptions", JoinOptions(common.options)},
+  Image image;
+  double render_ms = 0.0;
+  if (IsMonteCarlo(*model)) {
+    ProgressiveSettings progressive;
+    progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option
+    set_metadata("atmo:standardErrorChannels", "R.stderr, G.stderr, B.stderr: standard error of R, G, B (same unit)");
+    ProgressBar progress("render");
+    progressive.on_progress = [&](double done, double total) { progress.Update(done, total); };
+    progressive.on_pass = [&](const ProgressiveImage& pass) {
+      set_metadata("atmo:samplesPerPixel", std::to_string(pass.samples_per_pixel));
+      render_ms = elapsed_ms();
+      written = write(pass.radiance, WithStandardErrorChannels(pass), render_ms);
     };
-    WriteExr(command.exr_path, image, metadata);
-    written.push_back(command.exr_path);
-  }
-  if (!command.png_path.empty()) {
-    WritePng(command.png_path, image, mapping);
-    written.push_back(command.png_path);
+    image = RenderProgressive(*model, settings, progressive).radiance;
+    progress.Finish();
+  } else {
+    image = Render(*model, settings);
+    render_ms = elapsed_ms();
+    written = write(image, image, render_ms);
   }
 
   std::string files;

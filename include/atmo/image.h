@@ -27,12 +27,17 @@ struct Image {
   std::vector<float> pixels;  // interleaved, pixel (x, y) channel c at (x + y * width) * channels + c
   // Optional per-pixel coverage in [0, 1] (0 outside a fisheye's circle); empty means all 1.
   std::vector<float> alpha;
+  // Optional EXR channel names, one per channel; empty means the defaults: R, G, B for 3 channels,
+  // else C0..Cn-1. Monte Carlo renders name their 6 channels R, G, B, R.stderr, G.stderr, B.stderr.
+  std::vector<std::string> channel_names;
 
   Image() = default;
   Image(int w, int h, int c)
       : width(w), height(h), channels(c), pixels(static_cast<std::size_t>(w) * h * c, 0.0f) {}
   float& at(int x, int y, int c) { return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c]; }
   float at(int x, int y, int c) const { return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c]; }
+  // Index of the channel called `name` (channel_names, or the defaults when it is empty); -1 if none.
+  int ChannelIndex(const std::string& name) const;
 };
 
 // Ordered (name, value) string attributes stored in the EXR header.
@@ -55,10 +60,15 @@ float ToneMapValue(float linear, const ToneMapping& mapping);
 // Parses "exp" / "exponential", "aces", "none"; throws atmo::Error otherwise.
 ToneMapper ParseToneMapper(const std::string& name);
 
-// EXR: 32-bit float channels R, G, B (an image with other than 3 channels writes C0..Cn-1), plus A
-// when the image has alpha; ZIP compression; each metadata entry as a string attribute.
+// EXR: 32-bit float channels named by image.channel_names, or by default R, G, B (an image with
+// other than 3 channels writes C0..Cn-1), plus A when the image has alpha; ZIP compression; each
+// metadata entry as a string attribute. channel_names must be empty or one unique, non-empty name
+// per channel other than "A".
 void WriteExr(const std::filesystem::path& path, const Image& image, const ImageMetadata& metadata = {});
-// Reads an EXR written by WriteExr (float channels R, G, B [A], or C0..); throws atmo::Error.
+// Reads an EXR written by WriteExr; throws atmo::Error. Channels: R, G, B (or C0, C1, ... when the
+// file has no R, G, B) first, then every other channel but A: those named "P.layer" for one of
+// the first channels P grouped by layer, in the order of P (R.stderr, G.stderr, B.stderr), then
+// the rest by name. channel_names is filled with the names read.
 Image ReadExr(const std::filesystem::path& path, ImageMetadata* metadata = nullptr);
 // PNG: 8-bit RGB (RGBA with alpha), tone-mapped; needs an image with 3 channels.
 void WritePng(const std::filesystem::path& path, const Image& image, const ToneMapping& mapping);

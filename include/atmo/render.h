@@ -7,6 +7,8 @@
 //   atmo::Image img = atmo::Render(*model, s);   // linear; radiance x solar_irradiance per channel
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -53,6 +55,47 @@ Image Render(const Model& model, const RenderSettings& settings);
 // errors as Render for the camera; the view must have 3 channels.
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance);
+
+// Progressive rendering of a Monte Carlo model (model `reference`): every pixel gets
+// `samples_per_pixel` paths (per channel) in passes, the first of `first_pass_samples` paths and
+// each later one doubling the total (4, 8, 16, ... up to the total). With terms.ground each path
+// also scores the light reflected at the view ray's first ground hit, so pixels on the ground show
+// it; the sun disc is deterministic (standard error 0). Pixel (x, y) depends only on the model's
+// seed, its view direction and the path count: the image is the same for any thread count, and
+// its pass k is a prefix of the final estimate.
+//
+// To use it:
+//   atmo::ProgressiveSettings p;
+//   p.samples_per_pixel = 256;
+//   p.on_pass = [](const atmo::ProgressiveImage& pass) { /* write or show pass.radiance */ };
+//   atmo::ProgressiveImage img = atmo::RenderProgressive(*model, settings, p);
+//   atmo::WriteExr("sky.exr", atmo::WithStandardErrorChannels(img));
+struct ProgressiveImage {
+  Image radiance;        // as Render: radiance x solar_irradiance, 3 channels (+ alpha for fisheye)
+  Image standard_error;  // the standard error of each pixel's radiance, same unit, 3 channels
+  std::uint64_t samples_per_pixel = 0;  // paths per pixel (per channel) so far
+  int pass = 0;                         // 1 for the first pass
+};
+
+struct ProgressiveSettings {
+  std::uint64_t samples_per_pixel = 0;  // the total; 0: the model's `samples` setting
+  std::uint64_t first_pass_samples = 4;
+  // After each pass, on the calling thread, with the image so far.
+  std::function<void(const ProgressiveImage&)> on_pass;
+  // Now and then during a pass: paths done and paths in all (pixels x samples_per_pixel); calls
+  // never overlap, but may come from any thread.
+  std::function<void(double done, double total)> on_progress;
+};
+
+// Whether `model` estimates radiance by Monte Carlo, so that RenderProgressive applies to it.
+bool IsMonteCarlo(const Model& model);
+// Throws atmo::Error for a model that is not Monte Carlo, a samples_per_pixel of 1 or a
+// first_pass_samples below 2 (a standard error needs two paths), and what Render rejects.
+ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& settings,
+                                   const ProgressiveSettings& progressive);
+// The EXR form of a progressive image: channels R, G, B, R.stderr, G.stderr, B.stderr (the
+// standard errors), the alpha of the radiance.
+Image WithStandardErrorChannels(const ProgressiveImage& image);
 
 // Unit direction towards the sun in the local frame from its elevation and compass azimuth.
 glm::dvec3 SunDirection(double elevation_deg, double azimuth_deg);

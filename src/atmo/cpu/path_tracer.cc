@@ -38,7 +38,7 @@ std::uint64_t HashDoubles(std::uint64_t h, std::initializer_list<double> values)
 }
 
 std::uint64_t QueryKey(const TraceQuery& q) {
-  return HashDoubles(q.include_first_ground_hit ? 0x5EEDull : 0x0ull,
+  return HashDoubles(q.ground_only ? 0x6A0Dull : q.include_first_ground_hit ? 0x5EEDull : 0x0ull,
                      {q.origin.x, q.origin.y, q.origin.z, q.sun.x, q.sun.y, q.sun.z, q.view.x, q.view.y, q.view.z});
 }
 
@@ -228,14 +228,19 @@ double PathTracer::SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, 
   Segment(p, sun, length, ground);
   if (ground || length == kInfinity) return 0.0;
   if (half_space_) return std::exp(-c.majorant * length);
-  const double majorant = Majorant(c, p, sun, length);
+  return RatioTracking(p, sun, length, c, rng);
+}
+
+double PathTracer::RatioTracking(const glm::dvec3& p, const glm::dvec3& d, double length, const Channel& c,
+                                 Rng& rng) const {
+  const double majorant = Majorant(c, p, d, length);
   if (majorant <= 0.0) return 1.0;
   double transmittance = 1.0;
   double t = 0.0;
   while (true) {
     t -= std::log1p(-rng.Uniform()) / majorant;
     if (!(t < length)) return transmittance;
-    transmittance *= 1.0 - OpticalDepth(c, Densities(p + t * sun)) / majorant;
+    transmittance *= 1.0 - OpticalDepth(c, Densities(p + t * d)) / majorant;
   }
 }
 
@@ -251,13 +256,20 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     double length;
     bool ground;
     Segment(p, d, length, ground);
-    const bool end_scores = ground && c.albedo > 0.0 && (order > 0 || query.include_first_ground_hit);
+    const bool end_scores = ground && c.albedo > 0.0 &&
+                            (order > 0 || query.include_first_ground_hit || query.ground_only);
+    // Ground term only: cross the view segment to the ground, weighted by its transmittance.
+    const bool cross_to_ground = query.ground_only && order == 0;
+    if (cross_to_ground) {
+      if (!end_scores) return;
+      weight *= RatioTracking(p, d, length, c, rng);
+    }
 
     // Delta tracking against the segment's majorant, the first tentative collision forced into
     // the segment where allowed.
     bool collided = false;
     glm::dvec3 densities(0.0);
-    const double majorant = Majorant(c, p, d, length);
+    const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
     if (majorant > 0.0) {
       const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
       double t = 0.0;

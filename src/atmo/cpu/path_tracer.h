@@ -25,7 +25,8 @@
 //   - the medium that scatters is Rayleigh or Mie with probability proportional to its scattering
 //     coefficient at the point; the new direction is sampled exactly from its phase function;
 //   - a Lambertian ground: next-event estimation albedo/pi * cos * T_sun and a cosine-weighted
-//     bounce with weight albedo (not at the view ray's own first hit, unless asked for);
+//     bounce with weight albedo (not at the view ray's own first hit, unless asked for;
+//     TraceQuery::ground_only scores that hit alone);
 //   - unlimited orders; Russian roulette from order 3 on with survival min(weight, 0.95).
 // Direction convention (DESIGN.md §2): paths run from the observer outwards; at a vertex reached
 // along direction d, light that arrives from direction d' (travelling along -d') and leaves along
@@ -87,6 +88,11 @@ struct TraceQuery {
   // Whether the view ray's own first hit on the ground reflects light (the flux estimator needs
   // it; radiance queries of DESIGN.md §4 leave it out).
   bool include_first_ground_hit = false;
+  // Whether to score only the light that the ground reflects at the view ray's first hit (the
+  // ground term of images, SkyView::GroundRadiance): the view segment is not scattered in but
+  // crossed with the weight of a ratio-tracking estimate of its transmittance, and paths whose
+  // view ray misses the ground score 0. Implies include_first_ground_hit.
+  bool ground_only = false;
 };
 
 class PathTracer {
@@ -158,6 +164,8 @@ class PathTracer {
   // Moves an observer above the atmosphere to where `d` enters it; false when the ray misses it.
   bool EnterAtmosphere(glm::dvec3& p, const glm::dvec3& d) const;
   double SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, const Channel& c, Rng& rng) const;
+  // Ratio-tracking estimate of the transmittance of the segment [p, p + length d] (finite length).
+  double RatioTracking(const glm::dvec3& p, const glm::dvec3& d, double length, const Channel& c, Rng& rng) const;
   // One path of one channel; adds its contributions per order bin to `orders`.
   void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].

@@ -23,6 +23,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -81,6 +82,17 @@ std::optional<std::string> ImageProblem(const Image& image) {
   if (!image.alpha.empty() && image.alpha.size() != pixel_count) {
     return "alpha has " + std::to_string(image.alpha.size()) + " values, expected " + std::to_string(pixel_count);
   }
+  if (!image.channel_names.empty()) {
+    if (image.channel_names.size() != static_cast<std::size_t>(image.channels)) {
+      return std::to_string(image.channel_names.size()) + " channel names for " + std::to_string(image.channels) +
+             " channels";
+    }
+    std::set<std::string> seen;
+    for (const std::string& name : image.channel_names) {
+      if (name.empty() || name == "A") return "invalid channel name '" + name + "'";
+      if (!seen.insert(name).second) return "duplicate channel name '" + name + "'";
+    }
+  }
   return std::nullopt;
 }
 
@@ -101,7 +113,30 @@ png_byte ToByte(float display_value) {
   return static_cast<png_byte>(std::lround(255.0 * static_cast<double>(display_value)));
 }
 
+// The channels after the first ones (R, G, B or C0..), in ReadExr's order: names "P.layer" for a
+// first channel P grouped by layer and in the order of P, then the others by name.
+std::vector<std::string> OrderExtraChannels(std::vector<std::string> extras, const std::vector<std::string>& first) {
+  const auto key = [&](const std::string& name) {
+    const std::size_t dot = name.rfind('.');
+    if (dot != std::string::npos) {
+      const auto p = std::find(first.begin(), first.end(), name.substr(0, dot));
+      if (p != first.end()) return std::make_tuple(0, name.substr(dot + 1), p - first.begin(), name);
+    }
+    return std::make_tuple(1, std::string(), std::ptrdiff_t{0}, name);
+  };
+  std::sort(extras.begin(), extras.end(), [&](const std::string& a, const std::string& b) { return key(a) < key(b); });
+  return extras;
+}
+
 }  // namespace
+
+int Image::ChannelIndex(const std::string& name) const {
+  for (int c = 0; c < channels; ++c) {
+    const std::string own = channel_names.empty() ? ExrChannelName(c, channels) : channel_names[c];
+    if (own == name) return c;
+  }
+  return -1;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Tone mapping.
@@ -199,7 +234,9 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   std::vector<std::string> names;
-  for (int c = 0; c < image.channels; ++c) names.push_back(ExrChannelName(c, image.channels));
+  for (int c = 0; c < image.channels; ++c) {
+    names.push_back(image.channel_names.empty() ? ExrChannelName(c, image.channels) : image.channel_names[c]);
+  }
   for (const std::string& name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
   if (!image.alpha.empty()) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
   std::set<std::string> seen;
@@ -264,6 +301,12 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
       }
     }
     if (names.empty()) throw Error(ReadError(path, "no R, G, B or C0.. channels"));
+    std::vector<std::string> extras;
+    for (auto it = list.begin(); it != list.end(); ++it) {
+      const std::string name = it.name();
+      if (name != "A" && std::find(names.begin(), names.end(), name) == names.end()) extras.push_back(name);
+    }
+    for (std::string& name : OrderExtraChannels(std::move(extras), names)) names.push_back(std::move(name));
     for (const std::string& name : names) {
       const Imf::Channel* channel = list.findChannel(name);
       if (channel->xSampling != 1 || channel->ySampling != 1) {
@@ -292,6 +335,7 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     }
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
+    image.channel_names = names;
 
     if (metadata != nullptr) {
       metadata->clear();

@@ -154,6 +154,30 @@ void ReferenceSkyView::Radiance(const glm::dvec3& view, std::span<double> out) c
   RadianceEstimate(view, out, standard_error);
 }
 
+void ReferenceSkyView::GroundRadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                                              std::span<double> standard_error) const {
+  cpu::TraceQuery query = Query(view);
+  query.ground_only = true;
+  const cpu::PathTally tally = model_.tracer().Trace(query, model_.settings().seed, 0, model_.settings().samples);
+  for (std::size_t c = 0; c < channel_count(); ++c) {
+    const cpu::Estimate e = tally.Get(c, 0);
+    radiance[c] = e.mean;
+    standard_error[c] = e.standard_error;
+  }
+}
+
+void ReferenceSkyView::GroundRadiance(const glm::dvec3& view, std::span<double> out) const {
+  std::vector<double> standard_error(channel_count());
+  GroundRadianceEstimate(view, out, standard_error);
+}
+
+void ReferenceSkyView::AddPaths(const glm::dvec3& view, bool ground, std::uint64_t first, std::uint64_t count,
+                                cpu::PathTally& tally) const {
+  cpu::TraceQuery query = Query(view);
+  query.include_first_ground_hit = ground;
+  model_.tracer().TraceSerial(query, model_.settings().seed, first, count, tally);
+}
+
 void ReferenceSkyView::Transmittance(const glm::dvec3& view, std::span<double> out) const {
   const cpu::TraceQuery query = Query(view);
   model_.tracer().Transmittance(query.origin, query.view, out);

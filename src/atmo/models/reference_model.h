@@ -14,6 +14,10 @@
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
 // is computed by quadrature; the sun disc radiance is the transmittance over the disc's solid angle.
+// GroundRadiance is a Monte Carlo estimate too (`samples` paths that start with the view ray's
+// first ground hit: the Lambertian ground lit by the attenuated sun and by the sky, all orders),
+// so images through the generic renderer show the ground; RenderProgressive (atmo/render.h) traces
+// radiance and ground in one path per sample instead (AddPaths).
 #pragma once
 
 #include <array>
@@ -80,6 +84,18 @@ class ReferenceSkyView final : public SkyView {
                         std::span<double> standard_error) const override;
   void Transmittance(const glm::dvec3& view, std::span<double> out) const override;
   void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override;
+  // The light the ground reflects towards the observer at the view ray's first hit, attenuated
+  // (0 for rays that miss the ground), from `samples` paths: mean and standard error per channel.
+  void GroundRadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
+                              std::span<double> standard_error) const;
+  void GroundRadiance(const glm::dvec3& view, std::span<double> out) const override;
+
+  // For progressive rendering: adds paths [first, first + count) along `view` to `tally` (channel
+  // count of the model), traced on the calling thread in path order. With `ground` each path also
+  // scores the light reflected at the view ray's first ground hit, so its mean is Radiance +
+  // GroundRadiance. A path's value depends only on (seed, view, ground, path index).
+  void AddPaths(const glm::dvec3& view, bool ground, std::uint64_t first, std::uint64_t count,
+                cpu::PathTally& tally) const;
 
  private:
   cpu::TraceQuery Query(const glm::dvec3& view) const;

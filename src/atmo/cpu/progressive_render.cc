@@ -1,0 +1,171 @@
+// Progressive Monte Carlo rendering (atmo/render.h): per-pixel sums of path values and of their
+// squares, refined in passes that double the path count; rows in parallel with oneTBB.
+//
+// Determinism: pixel (x, y) traces paths [n_k, n_{k+1}) of its own query in pass k on one thread
+// (ReferenceSkyView::AddPaths: the path streams depend on the seed, the view direction and the
+// path index only) and adds them to its sums in pass order, so neither the thread count nor the
+// scheduling changes a bit of the result.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "atmo/render.h"
+#include "cpu/camera.h"
+#include "cpu/path_tracer.h"
+#include "models/reference_model.h"
+
+namespace atmo {
+namespace {
+
+// The view direction of every pixel, row by row (0 outside a fisheye's circle), and the coverage.
+std::vector<glm::dvec3> PixelDirections(const Camera& camera_settings, std::vector<float>& alpha) {
+  const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const int width = camera_settings.width;
+  const std::size_t pixel_count = static_cast<std::size_t>(width) * camera_settings.height;
+  std::vector<glm::dvec3> views(pixel_count, glm::dvec3(0.0));
+  if (camera_settings.kind == CameraKind::kFisheye) alpha.assign(pixel_count, 0.0f);
+  for (int y = 0; y < camera_settings.height; ++y) {
+    const std::span<glm::dvec3> row(&views[static_cast<std::size_t>(y) * width], static_cast<std::size_t>(width));
+    if (camera.kind == shared::kCameraPerspective) {
+      PerspectiveRowDirections(camera, y, row);
+      continue;
+    }
+    for (int x = 0; x < width; ++x) {
+      shared::vec3 direction;
+      const bool seen = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), direction);
+      row[x] = seen ? direction : glm::dvec3(0.0);
+      if (!alpha.empty()) alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
+    }
+  }
+  return views;
+}
+
+bool IsZero(const glm::dvec3& v) { return v.x == 0.0 && v.y == 0.0 && v.z == 0.0; }
+
+}  // namespace
+
+bool IsMonteCarlo(const Model& model) { return dynamic_cast<const ReferenceModel*>(&model) != nullptr; }
+
+ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& settings,
+                                   const ProgressiveSettings& progressive) {
+  const auto* reference = dynamic_cast<const ReferenceModel*>(&model);
+  if (reference == nullptr) {
+    throw Error("model " + std::string(model.name()) + " is deterministic: progressive rendering needs a Monte "
+                "Carlo model (reference)");
+  }
+  ValidateCamera(settings.camera);
+  for (double value : {settings.altitude_m, settings.sun_elevation_deg, settings.sun_azimuth_deg}) {
+    if (!std::isfinite(value)) throw Error("altitude and sun angles must be finite");
+  }
+  if (model.channel_count() != 3) {
+    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
+                std::to_string(model.channel_count()));
+  }
+  const std::uint64_t total =
+      progressive.samples_per_pixel == 0 ? reference->settings().samples : progressive.samples_per_pixel;
+  if (total < 2 || progressive.first_pass_samples < 2) {
+    throw Error("progressive rendering needs at least 2 samples per pixel and per pass (a standard error needs two "
+                "paths)");
+  }
+
+  const std::unique_ptr<SkyView> view =
+      model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
+  const auto& sky = static_cast<const ReferenceSkyView&>(*view);
+  const int width = settings.camera.width;
+  const int height = settings.camera.height;
+  std::vector<float> alpha;
+  const std::vector<glm::dvec3> views = PixelDirections(settings.camera, alpha);
+  const std::size_t pixel_count = views.size();
+  const std::vector<double>& irradiance = model.parameters().solar_irradiance;
+
+  // The sun disc is deterministic: once per pixel.
+  std::vector<double> disc(pixel_count * 3, 0.0);
+  if (settings.terms.sun_disc) {
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, pixel_count),
+                              [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                                for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                                  if (!IsZero(views[i])) sky.SunDiscRadiance(views[i], std::span(&disc[3 * i], 3));
+                                }
+                              });
+  }
+
+  std::vector<double> sum(pixel_count * 3, 0.0);
+  std::vector<double> sum_sq(pixel_count * 3, 0.0);
+  const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count);
+  std::atomic<std::uint64_t> rows_done{0};  // rows of all passes, times their path count
+  std::mutex progress_mutex;
+
+  ProgressiveImage result;
+  std::uint64_t done = 0;
+  std::uint64_t next = std::min(total, progressive.first_pass_samples);
+  while (done < total) {
+    const std::uint64_t count = next - done;
+    const auto trace_rows = [&](const oneapi::tbb::blocked_range<int>& rows) {
+      cpu::PathTally tally(3);
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        for (int x = 0; x < width; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * width + x;
+          if (IsZero(views[i])) continue;
+          std::fill(tally.sum.begin(), tally.sum.end(), 0.0);
+          std::fill(tally.sum_sq.begin(), tally.sum_sq.end(), 0.0);
+          tally.paths = 0;
+          sky.AddPaths(views[i], settings.terms.ground, done, count, tally);
+          for (std::size_t c = 0; c < 3; ++c) {
+            sum[3 * i + c] += tally.sum[c * cpu::kTallySlots];
+            sum_sq[3 * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+          }
+        }
+        const std::uint64_t paths_done = rows_done.fetch_add(count) + count;
+        if (progressive.on_progress && progress_mutex.try_lock()) {
+          progressive.on_progress(static_cast<double>(paths_done) * width, paths_in_all);
+          progress_mutex.unlock();
+        }
+      }
+    };
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, height), trace_rows);
+    done = next;
+    next = std::min(total, 2 * next);
+
+    // The estimate so far: mean and standard error of the mean (sample variance / n).
+    result.radiance = Image(width, height, 3);
+    result.radiance.alpha = alpha;
+    result.standard_error = Image(width, height, 3);
+    result.samples_per_pixel = done;
+    ++result.pass;
+    const double n = static_cast<double>(done);
+    for (std::size_t i = 0; i < pixel_count; ++i) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        const double mean = sum[3 * i + c] / n;
+        const double variance = std::max(0.0, (sum_sq[3 * i + c] - n * mean * mean) / (n - 1.0));
+        result.radiance.pixels[3 * i + c] = static_cast<float>((mean + disc[3 * i + c]) * irradiance[c]);
+        result.standard_error.pixels[3 * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
+      }
+    }
+    if (progressive.on_pass) progressive.on_pass(result);
+  }
+  return result;
+}
+
+Image WithStandardErrorChannels(const ProgressiveImage& image) {
+  const Image& radiance = image.radiance;
+  Image out(radiance.width, radiance.height, 6);
+  out.channel_names = {"R", "G", "B", "R.stderr", "G.stderr", "B.stderr"};
+  out.alpha = radiance.alpha;
+  const std::size_t pixel_count = static_cast<std::size_t>(radiance.width) * radiance.height;
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      out.pixels[6 * i + c] = radiance.pixels[3 * i + c];
+      out.pixels[6 * i + 3 + c] = image.standard_error.pixels[3 * i + c];
+    }
+  }
+  return out;
+}
+
+}  // namespace atmo
