@@ -17,78 +17,22 @@
 #include <gtest/gtest.h>
 
 #include "atmo/image.h"
+#include "cli_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << file.rdbuf();
-  return buffer.str();
-}
-
-void WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream file(path, std::ios::binary);
-  file << text;
-}
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream stream(text);
-  for (std::string line; std::getline(stream, line);) lines.push_back(line);
-  return lines;
-}
-
-std::vector<std::string> Split(const std::string& line, char separator) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  for (std::string field; std::getline(stream, field, separator);) fields.push_back(field);
-  return fields;
-}
+using atmo::testing::Lines;
+using atmo::testing::ReadFile;
+using atmo::testing::RunResult;
+using atmo::testing::Split;
+using atmo::testing::WriteFile;
 
 constexpr const char* kOutputHeader =
     "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,transmittance,stderr";
 constexpr const char* kGridHeader = "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg";
 
-class CliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->test_suite_name()) + "_" + info->name();
-    for (char& c : name) {
-      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-    }
-    dir_ = fs::temp_directory_path() / ("atmo_cli_test_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-
-  // Runs `atmo <args>` (a shell-quoted string) in the test's folder.
-  RunResult Run(const std::string& args) const {
-    const std::string command =
-        "cd '" + dir_.string() + "' && '" ATMO_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
-    const int status = std::system(command.c_str());
-    RunResult result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = ReadFile(dir_ / "stdout.txt");
-    result.err = ReadFile(dir_ / "stderr.txt");
-    return result;
-  }
-
-  fs::path dir_;
-};
+class CliTest : public atmo::testing::CliFixture {};
 
 // The rows of a sample CSV, header checked, each split into 8 fields.
 std::vector<std::vector<std::string>> SampleRows(const std::string& csv) {

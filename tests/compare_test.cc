@@ -16,9 +16,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cli_fixture.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+using atmo::testing::Lines;
+using atmo::testing::ReadFile;
+using atmo::testing::RunResult;
+using atmo::testing::Split;
 
 constexpr const char* kCsvHeader =
     "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,stderr,reference_radiance,"
@@ -42,32 +48,9 @@ std::string SmallGrid() {
 constexpr std::size_t kSmallGridConfigurations = 24;
 constexpr std::size_t kChannels = 3;  // preset earth
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << file.rdbuf();
-  return buffer.str();
-}
 
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream stream(text);
-  for (std::string line; std::getline(stream, line);) lines.push_back(line);
-  return lines;
-}
 
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  for (std::string field; std::getline(stream, field, ',');) fields.push_back(field);
-  return fields;
-}
 
 // One CSV row of `atmo compare --csv`.
 struct CompareRow {
@@ -92,34 +75,11 @@ std::vector<CompareRow> ReadCompareCsv(const fs::path& path) {
   return rows;
 }
 
-class CompareTest : public ::testing::Test {
+class CompareTest : public atmo::testing::CliFixture {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->name());
-    for (char& c : name) {
-      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-    }
-    dir_ = fs::temp_directory_path() / ("atmo_compare_test_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    CliFixture::SetUp();
     std::ofstream(dir_ / "grid.csv") << SmallGrid();
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-
-  // Runs `atmo <args>` (a shell-quoted string) in the test's folder.
-  RunResult Run(const std::string& args) const {
-    const std::string command =
-        "cd '" + dir_.string() + "' && '" ATMO_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
-    const int status = std::system(command.c_str());
-    RunResult result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = ReadFile(dir_ / "stdout.txt");
-    result.err = ReadFile(dir_ / "stderr.txt");
-    return result;
   }
 
   // Expects a failure reported as exactly one `atmo: error:` line.
@@ -130,8 +90,6 @@ class CompareTest : public ::testing::Test {
     EXPECT_EQ(lines[0].rfind("atmo: error: ", 0), 0u) << lines[0];
     EXPECT_NE(lines[0].find(mentions), std::string::npos) << lines[0];
   }
-
-  fs::path dir_;
 };
 
 TEST_F(CompareTest, HasHelp) {
