@@ -61,7 +61,7 @@ TEST_F(CliTest, NoSubcommandPrintsHelpAndFails) {
 }
 
 TEST_F(CliTest, EverySubcommandHasHelp) {
-  for (const char* subcommand : {"render", "sample", "presets", "bench"}) {
+  for (const char* subcommand : {"render", "sample", "presets", "bench", "compare", "precompute"}) {
     const RunResult r = Run(std::string(subcommand) + " --help");
     EXPECT_EQ(r.exit_code, 0) << subcommand;
     EXPECT_NE(r.out.find("--model"), std::string::npos) << subcommand;
