@@ -230,41 +230,29 @@ struct MultipleScatteringRay {
 void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample_count, shared::Texture2D& table) {
   const shared::ivec2 size(table.width, table.height);
   ForEachRow(size.y, [&](int y) {
-    // The sample points and weights of shared::ComputeOpticalDepthOfSegment (one segment, or two
-    // split at the lowest point of the ray), as altitudes and weights per unit length.
-    std::vector<double> altitude(2 * sample_count + 2);
-    std::vector<double> weight(2 * sample_count + 2);
-    std::vector<double> lower(2 * sample_count + 2);
-    std::vector<double> upper(2 * sample_count + 2);
+    std::vector<double> altitude(sample_count + 1);
+    std::vector<double> weight(sample_count + 1);
+    std::vector<double> lower(sample_count + 1);
+    std::vector<double> upper(sample_count + 1);
     for (int x = 0; x < size.x; ++x) {
       double r, mu;
       shared::GetRMuFromTransmittanceTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), r, mu);
       const double d = shared::DistanceToTopAtmosphereBoundary(a, r, mu);
-      int n = 0;
-      auto add_segment = [&](double t_dense, double t_far, int intervals) {
-        const double length = t_far - t_dense;
-        const double scale = 2.0 * std::abs(length) / intervals;
-        double* h = altitude.data() + n;
-        double* w = weight.data() + n;
+      // The sample points and weights of shared::ComputeOpticalDepthToTopAtmosphereBoundary.
+      const double t_low = std::clamp(-r * mu, 0.0, d);
+      const double x_0 = -std::sqrt(t_low);
+      const double dx = (std::sqrt(d - t_low) - x_0) / sample_count;
+      const int n = sample_count + 1;
 #pragma omp simd
-        for (int i = 1; i <= intervals; ++i) {
-          const double u = double(i) / intervals;
-          const double t = t_dense + length * u * u;
-          const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
-          h[i - 1] = std::max(r_i - a.bottom_radius, 0.0);
-          w[i - 1] = scale * u;
-        }
-        w[intervals - 1] *= 0.5;  // the trapezoid's end point
-        n += intervals;
-      };
-      if (mu >= 0.0 || sample_count < 2) {
-        add_segment(0.0, d, sample_count);
-      } else {
-        const double t_lowest = std::min(-r * mu, d);
-        const int n_before = std::max(sample_count / 2, 1);
-        add_segment(t_lowest, 0.0, n_before);
-        add_segment(t_lowest, d, std::max(sample_count - n_before, 1));
+      for (int i = 0; i < n; ++i) {
+        const double x = x_0 + i * dx;
+        const double t = t_low + x * std::abs(x);
+        const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+        altitude[i] = std::max(r_i - a.bottom_radius, 0.0);
+        weight[i] = 2.0 * std::abs(x) * dx;
       }
+      weight[0] *= 0.5;
+      weight[sample_count] *= 0.5;
       auto integrate = [&](const shared::DensityProfile& profile) {
         return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
       };
