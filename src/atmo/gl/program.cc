@@ -1,0 +1,109 @@
+#include "gl/program.h"
+
+#include <string>
+
+#include <epoxy/gl.h>
+
+#include "atmo/error.h"
+
+namespace atmo::gl {
+namespace {
+
+std::string InfoLog(GLuint object, bool is_program) {
+  GLint length = 0;
+  if (is_program) {
+    glGetProgramiv(object, GL_INFO_LOG_LENGTH, &length);
+  } else {
+    glGetShaderiv(object, GL_INFO_LOG_LENGTH, &length);
+  }
+  std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
+  if (is_program) {
+    glGetProgramInfoLog(object, length, nullptr, log.data());
+  } else {
+    glGetShaderInfoLog(object, length, nullptr, log.data());
+  }
+  log.resize(log.find('\0') == std::string::npos ? log.size() : log.find('\0'));
+  return log;
+}
+
+}  // namespace
+
+ComputeProgram::ComputeProgram(const std::string& source, std::string_view name, std::string_view source_strings) {
+  const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
+  const char* text = source.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    const std::string log = InfoLog(shader, false);
+    glDeleteShader(shader);
+    throw Error("GL " + std::string(name) + " shader does not compile (" + std::string(source_strings) + "): " + log);
+  }
+  program_ = glCreateProgram();
+  glAttachShader(program_, shader);
+  glLinkProgram(program_);
+  glDeleteShader(shader);  // deleted with the program
+  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    const std::string log = InfoLog(program_, true);
+    glDeleteProgram(program_);
+    throw Error("GL " + std::string(name) + " program does not link: " + log);
+  }
+}
+
+ComputeProgram::~ComputeProgram() { glDeleteProgram(program_); }
+
+void ComputeProgram::Use() const { glUseProgram(program_); }
+
+void ComputeProgram::SetInt(const std::string& name, int value) const {
+  glProgramUniform1i(program_, glGetUniformLocation(program_, name.c_str()), value);
+}
+
+void ComputeProgram::SetFloat(const std::string& name, double value) const {
+  glProgramUniform1f(program_, glGetUniformLocation(program_, name.c_str()), static_cast<float>(value));
+}
+
+void ComputeProgram::SetVec3(const std::string& name, const shared::vec3& value) const {
+  glProgramUniform3f(program_, glGetUniformLocation(program_, name.c_str()), static_cast<float>(value.x),
+                     static_cast<float>(value.y), static_cast<float>(value.z));
+}
+
+namespace {
+
+void SetDensityProfile(const ComputeProgram& program, const std::string& name, const shared::DensityProfile& profile) {
+  for (int i = 0; i < 2; ++i) {
+    const std::string layer = name + ".layers[" + std::to_string(i) + "].";
+    const shared::DensityProfileLayer& l = profile.layers[i];
+    program.SetFloat(layer + "width", l.width);
+    program.SetFloat(layer + "exp_term", l.exp_term);
+    program.SetFloat(layer + "exp_scale", l.exp_scale);
+    program.SetFloat(layer + "linear_term", l.linear_term);
+    program.SetFloat(layer + "constant_term", l.constant_term);
+  }
+}
+
+}  // namespace
+
+// Every member of the struct in definitions.glsl, in its order.
+void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& name,
+                           const shared::AtmosphereParameters& a) {
+  const std::string p = name + ".";
+  program.SetFloat(p + "bottom_radius", a.bottom_radius);
+  program.SetFloat(p + "top_radius", a.top_radius);
+  SetDensityProfile(program, p + "rayleigh_density", a.rayleigh_density);
+  program.SetVec3(p + "rayleigh_scattering", a.rayleigh_scattering);
+  program.SetVec3(p + "rayleigh_extinction", a.rayleigh_extinction);
+  program.SetInt(p + "rayleigh_phase", a.rayleigh_phase);
+  SetDensityProfile(program, p + "mie_density", a.mie_density);
+  program.SetVec3(p + "mie_scattering", a.mie_scattering);
+  program.SetVec3(p + "mie_extinction", a.mie_extinction);
+  program.SetInt(p + "mie_phase", a.mie_phase);
+  program.SetFloat(p + "mie_g", a.mie_g);
+  SetDensityProfile(program, p + "absorption_density", a.absorption_density);
+  program.SetVec3(p + "absorption_extinction", a.absorption_extinction);
+  program.SetVec3(p + "ground_albedo", a.ground_albedo);
+  program.SetFloat(p + "sun_angular_radius", a.sun_angular_radius);
+}
+
+}  // namespace atmo::gl
