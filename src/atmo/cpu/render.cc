@@ -35,13 +35,16 @@ void PerspectiveRowDirections(const shared::CameraParameters& camera, int row, s
   const double y = (1.0 - 2.0 * (row + 0.5) / h) * camera.tan_half_fov * h / w;
   const glm::dvec3 base = camera.forward + y * camera.up;
   const glm::dvec3 right = camera.right;
-  const double scale = 2.0 * camera.tan_half_fov / w;
+  const double tan_half_fov = camera.tan_half_fov;
+  const double scale = 2.0 * tan_half_fov / w;
+  const int width = camera.width;
   double* out = &views[0].x;
-  // Plain arithmetic on the three components so that the loop vectorises (with -fno-math-errno,
-  // see src/atmo/CMakeLists.txt, sqrt is one instruction).
+  // Plain arithmetic on the three components, with everything the loop reads in locals (the
+  // stores through `out` could otherwise alias them), so that it vectorises (with
+  // -fno-math-errno, see src/atmo/CMakeLists.txt, sqrt is one instruction).
 #pragma omp simd
-  for (int x = 0; x < camera.width; ++x) {
-    const double u = (x + 0.5) * scale - camera.tan_half_fov;
+  for (int x = 0; x < width; ++x) {
+    const double u = (x + 0.5) * scale - tan_half_fov;
     const double dx = base.x + u * right.x;
     const double dy = base.y + u * right.y;
     const double dz = base.z + u * right.z;
