@@ -319,7 +319,13 @@ const FailureCase kFailureCases[] = {
     {"CsvRowWithThreeNumbers", "sample --grid three_numbers.csv --out out.csv",
      "three_numbers.csv:3: expected 4 comma-separated numbers"},
     {"PresetAndConfigTogether", "sample --preset earth --config earth.json" ATMO_SAMPLE_ONE, "--config"},
+#ifdef ATMO_HAVE_GL
+    {"GlBackendOtherModel", "render --backend gl --model simple --preset simple" ATMO_TINY_RENDER,
+     "the gl backend renders model hillaire only"},
+    {"GlBackendOtherCommand", "sample --backend gl" ATMO_SAMPLE_ONE, "the gl backend runs `atmo render`"},
+#else
     {"GlBackend", "render --backend gl" ATMO_TINY_RENDER, "the gl backend is not available in this build"},
+#endif
     {"ViewZenithOutOfRange",
      "sample --altitude 0 --sun-zenith 30 --view-zenith 190 --azimuth 0 --out out.csv", "--view-zenith"},
     {"GridWithSingleConfiguration", "sample --grid three_numbers.csv --altitude 0 --out out.csv", "--grid"},

@@ -11,10 +11,14 @@
 
 #include "atmo/error.h"
 #include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "cli_fixture.h"
 #include "cpu/hillaire_tables.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "gl/render_gl.h"
 #include "gl/shader_sources.h"
+#include "models/hillaire_model.h"
 #include "physics/shared_parameters.h"
 #include "shared/shared.h"
 #include "test_atmospheres.h"
@@ -54,18 +58,25 @@ SharedContext& GetSharedContext() {
 struct Difference {
   double max_abs = 0.0;
   double max_rel = 0.0;  // relative to the CPU value, over texels where it is > 1e-3
+  std::size_t worst_texel = 0;  // index of the largest relative difference
 };
 
-// The largest differences of `gl` from `cpu`, texel by texel.
-Difference Compare(const Texture2D& gl, const Texture2D& cpu) {
+// The largest differences of `gl` from `cpu`, texel by texel, leaving out the rows in
+// [skip_first_row, skip_end_row).
+Difference Compare(const Texture2D& gl, const Texture2D& cpu, int skip_first_row = 0, int skip_end_row = 0) {
   Difference d;
   for (std::size_t i = 0; i < cpu.texels.size(); ++i) {
+    const int row = static_cast<int>(i / static_cast<std::size_t>(cpu.width));
+    if (row >= skip_first_row && row < skip_end_row) continue;
     const glm::vec3& reference = cpu.texels[i];
     for (int c = 0; c < 3; ++c) {
       const double a = gl.texels[i][c];
       const double b = reference[c];
       d.max_abs = std::max(d.max_abs, std::abs(a - b));
-      if (b > 1e-3) d.max_rel = std::max(d.max_rel, std::abs(a - b) / b);
+      if (b > 1e-3 && std::abs(a - b) / b > d.max_rel) {
+        d.max_rel = std::abs(a - b) / b;
+        d.worst_texel = i;
+      }
     }
   }
   return d;
@@ -143,6 +154,207 @@ TEST(GlHillaire, MultipleScatteringTableMatchesCpu) {
     // Measured on llvmpipe: max rel 6.8e-5 (values 1e-3 and above), max abs 7.8e-7.
     EXPECT_LT(d.max_rel, 2e-4);
     EXPECT_LT(d.max_abs, 3e-6);
+  }
+}
+
+// The sky-view table of an observer and sun, from the same (CPU) transmittance and
+// multiple-scattering tables on both sides, so that this compares the sky-view kernels alone.
+TEST(GlHillaire, SkyViewTableMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  const shared::AtmosphereParameters metres = ToSharedParameters(earth, 0, 1.0);
+  const shared::AtmosphereParameters km = ToSharedParameters(earth, 0, 1000.0);
+  Texture2D transmittance(256, 64);
+  cpu::ComputeTransmittanceTable(metres, 40, transmittance);
+  Texture2D multiple_scattering(32, 32);
+  cpu::ComputeMultipleScatteringTable(metres, transmittance, 64, 20, false, shared::GetGroundTransfer(metres, 32, 20),
+                                      multiple_scattering);
+  const ivec2 size(192, 108);
+  const int samples = 30;
+  // Tolerance, per case: float32 in km on the GPU against double in metres on the CPU. Each step
+  // carries the altitude error of the transmittance table (the radii's float ulp, ~0.5 m, up to
+  // ~4e-4 of the Mie scale height) and float acos/cos/sqrt (~1e-7 relative); these average along
+  // a ray: ~1e-4 relative (measured 7.6e-5 from the ground). Grazing rays near the horizon are
+  // ill-conditioned in float: the distance to the ground, -r mu - sqrt(r^2 (mu^2 - 1) + R^2),
+  // takes the square root of a small difference of ~4e7 km^2 terms whose float rounding is
+  // ~2 km^2; measured 9.6e-4 at 5 km (the second ground row). At 20 km with the sun 3 degrees
+  // below the horizon the sunlit air is a thin band at the terminator, where the same grazing
+  // geometry decides the transmittance to the sun: measured 2.9% (red, value 4.6e-3 sr^-1).
+  struct Case {
+    double altitude_m;
+    double sun_elevation_deg;
+    double max_rel;
+  };
+  for (const Case c : {Case{0.0, 10.0, 2e-4}, Case{5000.0, 45.0, 2e-3}, Case{20000.0, -3.0, 5e-2}}) {
+    const double r_m = metres.bottom_radius + c.altitude_m;
+    const double mu_s = std::sin(glm::radians(c.sun_elevation_deg));
+    GlPassTiming timing;
+    const Texture2D gl = ComputeSkyViewTableGl(context, km, transmittance, multiple_scattering, size, r_m / 1000.0,
+                                               mu_s, samples, &timing);
+    EXPECT_TRUE(gl.repeat_u);
+    Texture2D cpu(size.x, size.y, true);
+    cpu::ComputeSkyViewTable(metres, transmittance, multiple_scattering, r_m, mu_s, samples, cpu);
+    // The two rows at the split are the horizontal ray itself (y = 1 of each half), where the
+    // radiance jumps from the ground's (a ray of length 0, seen from the ground) to the whole
+    // atmosphere's: whether float or double calls it a ground ray is the rounding of
+    // r^2 (mu^2 - 1) + R^2 around 0. Measured on llvmpipe: up to 100% there (altitude 0: GL 0, CPU
+    // the full horizon sky), which the frame blends in within half a texel of the horizon; see the
+    // report of issue 6. They are left out here and checked to be finite.
+    const int half = size.y / 2;
+    for (int x = 0; x < size.x; ++x) {
+      EXPECT_TRUE(std::isfinite(gl.at(x, half - 1).x) && std::isfinite(gl.at(x, half).x));
+    }
+    const Difference d = Compare(gl, cpu, half - 1, half + 1);
+    std::printf("worst texel (%zu, %zu): GL %g %g %g CPU %g %g %g\n", d.worst_texel % size.x, d.worst_texel / size.x,
+                gl.texels[d.worst_texel].x, gl.texels[d.worst_texel].y, gl.texels[d.worst_texel].z,
+                cpu.texels[d.worst_texel].x, cpu.texels[d.worst_texel].y, cpu.texels[d.worst_texel].z);
+    std::printf("sky view %dx%d, %d samples, altitude %.0f m, sun %.0f deg: GL vs CPU max abs %.3g, max rel (L > "
+                "1e-3) %.3g; GL compile %.1f ms, dispatch %.2f ms (GPU %.2f ms)\n",
+                size.x, size.y, samples, c.altitude_m, c.sun_elevation_deg, d.max_abs, d.max_rel, timing.compile_ms,
+                timing.dispatch_ms, timing.gpu_ms);
+    EXPECT_LT(d.max_rel, c.max_rel);
+  }
+}
+
+// The ground-view addition: the CPU sky-view table plus the lit ground, GL against
+// HillaireModel::AddGroundView, from the same CPU tables.
+TEST(GlHillaire, GroundViewMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  HillaireModel model(earth, HillaireSettings{});
+  model.Precompute();
+  const HillaireModel::Batch& batch = model.batches().front();
+  const shared::AtmosphereParameters km = ToSharedParameters(earth, 0, 1000.0);
+  const double r_m = batch.atmosphere.bottom_radius + 1000.0;
+  const double mu_s = std::sin(glm::radians(20.0));
+  const Texture2D sky = model.ComputeSkyViewLut(batch, r_m, mu_s);
+  Texture2D cpu = sky;
+  model.AddGroundView(batch, r_m, mu_s, cpu);
+  const Texture2D gl = AddGroundViewGl(context, km, batch.transmittance, batch.ground_irradiance, sky, r_m / 1000.0, mu_s);
+  const Difference d = Compare(gl, cpu, cpu.height / 2 - 1, cpu.height / 2 + 1);  // horizon rows: as above
+  std::printf("sky + ground view %dx%d: GL vs CPU max abs %.3g, max rel %.3g\n", cpu.width, cpu.height, d.max_abs,
+              d.max_rel);
+  // Tolerance: as the sky-view table at low altitude; the ground term adds one transmittance
+  // lookup and one ground-irradiance lookup per texel (GL_LINEAR in float against double).
+  // Measured on llvmpipe: max rel 1.3e-4, max abs 5.8e-6.
+  EXPECT_LT(d.max_rel, 5e-4);
+  EXPECT_LT(d.max_abs, 2e-5);
+
+  // Its ground irradiance table, GL from the same tables.
+  const Texture2D ground_gl = ComputeGroundIrradianceTableGl(context, km, batch.transmittance, batch.multiple_scattering,
+                                                             batch.ground_irradiance.width, 64, 16);
+  const Difference g = Compare(ground_gl, batch.ground_irradiance);
+  std::printf("ground irradiance %d: GL vs CPU max abs %.3g, max rel %.3g\n", batch.ground_irradiance.width, g.max_abs,
+              g.max_rel);
+  EXPECT_LT(g.max_rel, 1e-3);
+}
+
+struct FrameDifference {
+  double max_rel = 0.0;   // over pixels whose CPU value is above the floor (CompareFrames)
+  double mean_rel = 0.0;  // same pixels
+  double max_abs_alpha = 0.0;
+};
+
+// Over the sky and ground pixels: the sun disc pixel `skip_pixel` (if any) is checked apart, and
+// values below 1e-2 of the median (the black outside a fisheye) are left out.
+FrameDifference CompareFrames(const Image& gl, const Image& cpu, std::size_t skip_pixel) {
+  FrameDifference d;
+  std::vector<float> sorted = cpu.pixels;
+  std::sort(sorted.begin(), sorted.end());
+  const float floor = 1e-2f * sorted[sorted.size() / 2];
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < cpu.pixels.size(); ++i) {
+    if (cpu.pixels[i] <= floor || i / 3 == skip_pixel) continue;
+    const double rel = std::abs(double(gl.pixels[i]) - cpu.pixels[i]) / cpu.pixels[i];
+    d.max_rel = std::max(d.max_rel, rel);
+    sum += rel;
+    ++count;
+  }
+  d.mean_rel = count > 0 ? sum / count : 0.0;
+  for (std::size_t i = 0; i < cpu.alpha.size(); ++i) {
+    d.max_abs_alpha = std::max(d.max_abs_alpha, double(std::abs(gl.alpha[i] - cpu.alpha[i])));
+  }
+  return d;
+}
+
+// The whole GL frame (every table and the frame pass on the GPU, gl_f32_rgb) against the CPU
+// frame (cpu tables in double, the float vectorised sky-view lookup), for each camera kind.
+TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  const HillaireSettings settings;
+  HillaireModel model(earth, settings);
+  model.Precompute();
+  for (const CameraKind kind : {CameraKind::kPerspective, CameraKind::kFisheye, CameraKind::kEquirect}) {
+    RenderSettings render;
+    // 65 x 33: the perspective camera's centre pixel looks exactly at the sun (pitch = sun
+    // elevation, yaw = sun azimuth), so the sun disc term is compared too.
+    render.camera = {kind, 65, 33, 90.0, 180.0, 10.0};
+    render.altitude_m = 500.0;
+    render.sun_elevation_deg = 10.0;
+    render.sun_azimuth_deg = 180.0;
+    render.terms = RadianceTerms{true, true};
+    PassTimings timings;
+    const Image gl = RenderHillaireGl(context, earth, settings, render, &timings);
+    const std::unique_ptr<SkyView> view =
+        model.View(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
+    const Image cpu = RenderView(*view, render.camera, render.terms, earth.solar_irradiance);
+    ASSERT_EQ(gl.pixels.size(), cpu.pixels.size());
+    ASSERT_EQ(gl.alpha.size(), cpu.alpha.size());
+    const std::size_t sun_pixel = 16 * 65 + 32;
+    const FrameDifference d =
+        CompareFrames(gl, cpu, kind == CameraKind::kPerspective ? sun_pixel : cpu.pixels.size());
+    std::printf("frame %s 65x33: GL vs CPU max rel %.3g, mean rel %.3g, alpha max diff %.3g; GPU ms:",
+                std::string(ToString(kind)).c_str(), d.max_rel, d.mean_rel, d.max_abs_alpha);
+    for (const PassTiming& pass : timings.entries()) std::printf(" %s %.2f", pass.name.c_str(), pass.last_ms);
+    std::printf("\n");
+    if (kind == CameraKind::kPerspective) {
+      const std::size_t centre = sun_pixel * 3;
+      EXPECT_GT(cpu.pixels[centre], 100.0f * cpu.pixels[0]) << "the centre pixel should see the sun disc";
+      std::printf("sun disc pixel: GL / CPU = %.6f\n", gl.pixels[centre] / cpu.pixels[centre]);
+      // Tolerance: GetSunDiscRadiance divides by 2 pi (1 - cos alpha) with alpha = 4.65 mrad; in
+      // float, 1 - cos alpha = 1.08e-5 loses all but ~2 digits to cancellation (float ulp at 1 is
+      // 6e-8, 0.5% of it). Measured on llvmpipe: +0.185%.
+      EXPECT_NEAR(gl.pixels[centre] / cpu.pixels[centre], 1.0, 5e-3);
+    }
+    // Tolerance: the tables differ by float-vs-double (above: ~1e-4 relative), and the frame
+    // adds float camera rays and uv (the CPU lookup is float too) and the GPU's bilinear
+    // filtering; where the sky-view table changes steeply (across the horizon rows) a uv
+    // difference of ~1e-7 moves the result by up to ~1e-4 relative.
+    // Measured on llvmpipe: max rel 1.0e-3, mean rel 2.2e-4 (perspective), 1.7e-4 (fisheye),
+    // 6.7e-5 (equirect).
+    EXPECT_LT(d.max_rel, 2e-3);
+    EXPECT_LT(d.mean_rel, 5e-4);
+    EXPECT_EQ(d.max_abs_alpha, 0.0);
+  }
+}
+
+TEST(GlHillaire, RejectsWhatItCannotRender) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  RenderSettings render;
+  render.camera = {CameraKind::kPerspective, 8, 4};
+  render.altitude_m = 200e3;  // above the top of the atmosphere: per-pixel ray march, CPU only
+  EXPECT_THROW(RenderHillaireGl(context, Preset("earth"), HillaireSettings{}, render), Error);
+}
+
+using GlCliTest = atmo::testing::CliFixture;
+
+TEST_F(GlCliTest, RenderWritesBothFiles) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  const atmo::testing::RunResult r = Run("render --backend gl --width 64 --height 32 --exr sky.exr --png sky.png");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "sky.exr"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "sky.png"));
+  EXPECT_NE(r.out.find("wrote sky.exr, sky.png (64x32 perspective, hillaire, earth)"), std::string::npos) << r.out;
+}
+
+TEST_F(GlCliTest, BenchReportsTheGlPasses) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  const atmo::testing::RunResult r = Run("bench --backend gl --quick --width 64 --height 32");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const char* pass : {"transmittance_lut", "multiple_scattering_lut", "sky_view_lut", "all_luts", "frame_64x32"}) {
+    EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
   }
 }
 

@@ -1,4 +1,5 @@
-// `atmo bench`: times the model's precomputation passes and one CPU frame, repeated.
+// `atmo bench`: times the model's precomputation passes and one frame, repeated, on the CPU or (model
+// hillaire, --backend gl) on the GL backend, where every pass is the GPU time of its dispatch.
 //
 // Each repeat runs model->Precompute(), builds the view for a sun at 30 degrees elevation, and
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
@@ -48,7 +49,7 @@ bool EndsWith(const std::string& text, const std::string& suffix) {
 }  // namespace
 
 int RunBench(const CommonOptions& common, const BenchCommand& command) {
-  CheckBackend(common);
+  CheckBackend(common, /*command_has_gl=*/true);
   const AtmosphereParameters parameters = LoadParameters(common);
   const int repeat = command.quick ? 3 : command.repeat;
 
@@ -63,38 +64,57 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
   settings.sun_elevation_deg = 30.0;
   settings.sun_azimuth_deg = 180.0;
 
-  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
   const std::string frame_name = Format("frame_%dx%d", command.width, command.height);
   PassSamples samples;
-  for (int r = 0; r < repeat; ++r) {
-    // Passes run during this repeat are those whose call count grows.
-    std::map<std::string, int> calls_before;
-    for (const PassTiming& pass : model->timings().entries()) calls_before[pass.name] = pass.calls;
-
-    model->Precompute();
-    const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(30.0, 180.0));
-    const auto start = std::chrono::steady_clock::now();
-    const Image image = RenderView(*sky, settings.camera, settings.terms, parameters.solar_irradiance);
-    const double frame_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-
-    double all_luts_ms = 0.0;
-    for (const PassTiming& pass : model->timings().entries()) {
-      const auto before = calls_before.find(pass.name);
-      if (before != calls_before.end() && pass.calls == before->second) continue;
-      samples.Add(pass.name, pass.last_ms);
-      if (EndsWith(pass.name, "_lut")) all_luts_ms += pass.last_ms;
+  std::string model_name = common.model;
+  if (common.backend == "gl") {
+#ifdef ATMO_HAVE_GL
+    // Each repeat runs every GL pass (a fresh context each time: compile and JIT are not in the
+    // pass times, which are the GPU's GL_TIME_ELAPSED of each dispatch).
+    for (int r = 0; r < repeat; ++r) {
+      PassTimings timings;
+      RenderOnGl(common, parameters, settings, &timings);
+      double all_luts_ms = 0.0;
+      for (const PassTiming& pass : timings.entries()) {
+        samples.Add(pass.name, pass.last_ms);
+        if (EndsWith(pass.name, "_lut")) all_luts_ms += pass.last_ms;
+      }
+      samples.Add("all_luts", all_luts_ms);
     }
-    samples.Add("all_luts", all_luts_ms);
-    samples.Add(frame_name, frame_ms);
+#endif
+  } else {
+    const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+    model_name = std::string(model->name());
+    for (int r = 0; r < repeat; ++r) {
+      // Passes run during this repeat are those whose call count grows.
+      std::map<std::string, int> calls_before;
+      for (const PassTiming& pass : model->timings().entries()) calls_before[pass.name] = pass.calls;
+
+      model->Precompute();
+      const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(30.0, 180.0));
+      const auto start = std::chrono::steady_clock::now();
+      const Image image = RenderView(*sky, settings.camera, settings.terms, parameters.solar_irradiance);
+      const double frame_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+      double all_luts_ms = 0.0;
+      for (const PassTiming& pass : model->timings().entries()) {
+        const auto before = calls_before.find(pass.name);
+        if (before != calls_before.end() && pass.calls == before->second) continue;
+        samples.Add(pass.name, pass.last_ms);
+        if (EndsWith(pass.name, "_lut")) all_luts_ms += pass.last_ms;
+      }
+      samples.Add("all_luts", all_luts_ms);
+      samples.Add(frame_name, frame_ms);
+    }
   }
 
   // The parallelism oneTBB uses: the --threads limit, at most the arena's concurrency.
   const std::size_t threads = std::min<std::size_t>(
       oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism),
       static_cast<std::size_t>(oneapi::tbb::this_task_arena::max_concurrency()));
-  std::printf("atmo bench: model %s, preset %s, threads %zu, repeats %d, frame %dx%d\n",
-              std::string(model->name()).c_str(), parameters.name.c_str(), threads, repeat, command.width,
+  std::printf("atmo bench: model %s, backend %s, preset %s, threads %zu, repeats %d, frame %dx%d\n",
+              model_name.c_str(), common.backend.c_str(), parameters.name.c_str(), threads, repeat, command.width,
               command.height);
   std::size_t width = 4;
   for (const auto& [name, values] : samples.passes()) width = std::max(width, name.size());

@@ -12,8 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/timing.h"
 
 namespace atmo::cli {
 
@@ -35,8 +38,16 @@ struct CommonOptions {
 AtmosphereParameters LoadParameters(const CommonOptions& common);
 // Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
 ModelOptions ParseModelOptions(const std::vector<std::string>& options);
-// Throws atmo::Error for a backend this build does not have.
-void CheckBackend(const CommonOptions& common);
+// Throws atmo::Error for a backend this build does not have, or gl for a command without a gl path
+// (`command_has_gl` false) or a model other than hillaire.
+void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
+#ifdef ATMO_HAVE_GL
+// Renders model hillaire on the gl backend (a fresh headless context; --option settings as for the
+// CPU model), each pass's GPU time into `timings`. Throws atmo::Error, e.g. when no GL context can
+// be made.
+Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
+                 PassTimings* timings = nullptr);
+#endif
 // Creates (and so precomputes) the model named by --model with the --option settings.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not

@@ -7,6 +7,10 @@
 
 #include "atmo/error.h"
 #include "commands.h"
+#ifdef ATMO_HAVE_GL
+#include "gl/context.h"
+#include "gl/render_gl.h"
+#endif
 
 namespace atmo::cli {
 
@@ -32,10 +36,31 @@ ModelOptions ParseModelOptions(const std::vector<std::string>& options) {
   return parsed;
 }
 
-void CheckBackend(const CommonOptions& common) {
-  if (common.backend == "gl") throw Error("the gl backend is not available in this build");
+void CheckBackend(const CommonOptions& common, bool command_has_gl) {
+  if (common.backend == "gl") {
+#ifdef ATMO_HAVE_GL
+    if (!command_has_gl) throw Error("the gl backend runs `atmo render` and `atmo bench` only; use --backend cpu");
+    if (common.model != "hillaire") {
+      throw Error("the gl backend renders model hillaire only (got model '" + common.model + "'); use --backend cpu");
+    }
+    return;
+#else
+    throw Error("the gl backend is not available in this build");
+#endif
+  }
   if (common.backend != "cpu") throw Error("unknown backend '" + common.backend + "' (known: cpu, gl)");
 }
+
+#ifdef ATMO_HAVE_GL
+Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
+                 PassTimings* timings) {
+  ModelOptions options = ParseModelOptions(common.options);
+  options.erase("seed");  // deterministic, as on the CPU
+  const HillaireSettings hillaire = HillaireSettings::FromOptions(options);
+  const gl::Context context;
+  return gl::RenderHillaireGl(context, parameters, hillaire, settings, timings);
+}
+#endif
 
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {
   // --seed travels as the "seed" option that every model accepts (deterministic ones ignore it).

@@ -38,7 +38,8 @@ std::string JoinOptions(const std::vector<std::string>& options) {
 }  // namespace
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
-  CheckBackend(common);
+  CheckBackend(common, /*command_has_gl=*/true);
+  const bool on_gl = common.backend == "gl";
   const AtmosphereParameters parameters = LoadParameters(common);
 
   RenderSettings settings;
@@ -71,7 +72,9 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     throw Error("--spp is the number of Monte Carlo paths per pixel of model reference; model '" + common.model +
                 "' is deterministic and takes no --spp");
   }
-  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+  // On the gl backend the GL passes compute the tables (RenderOnGl); no CPU model is made.
+  const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, parameters);
+  const std::string model_name = model != nullptr ? std::string(model->name()) : common.model;
 
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed_ms = [&] {
@@ -79,7 +82,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   };
   ImageMetadata metadata = {
       {"atmo:version", ATMO_VERSION},
-      {"atmo:model", std::string(model->name())},
+      {"atmo:model", model_name},
+      {"atmo:backend", common.backend},
       {"atmo:preset", parameters.name},
       {"atmo:parameterHash", ParameterHashHex(parameters)},
       {"atmo:radianceUnit", "sr^-1 per unit solar irradiance, times solar_irradiance (" +
@@ -123,7 +127,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   std::vector<std::string> written;
   Image image;
   double render_ms = 0.0;
-  if (IsMonteCarlo(*model)) {
+  if (model != nullptr && IsMonteCarlo(*model)) {
     ProgressiveSettings progressive;
     progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option
     set_metadata("atmo:standardErrorChannels", "R.stderr, G.stderr, B.stderr: standard error of R, G, B (same unit)");
@@ -137,7 +141,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     image = RenderProgressive(*model, settings, progressive).radiance;
     progress.Finish();
   } else {
+#ifdef ATMO_HAVE_GL
+    image = on_gl ? RenderOnGl(common, parameters, settings) : Render(*model, settings);
+#else
     image = Render(*model, settings);
+#endif
     render_ms = elapsed_ms();
     written = write(image, image, render_ms);
   }
@@ -146,7 +154,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
   std::printf("%s %s (%dx%d %s, %s, %s) in %.1f ms\n", written.empty() ? "rendered" : "wrote",
               written.empty() ? "without writing a file" : files.c_str(), image.width, image.height,
-              std::string(ToString(settings.camera.kind)).c_str(), std::string(model->name()).c_str(),
+              std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(),
               parameters.name.c_str(), render_ms);
   return 0;
 }
