@@ -194,17 +194,16 @@ TEST(GlHillaire, SkyViewTableMatchesCpu) {
     EXPECT_TRUE(gl.repeat_u);
     Texture2D cpu(size.x, size.y, true);
     cpu::ComputeSkyViewTable(metres, transmittance, multiple_scattering, r_m, mu_s, samples, cpu);
-    // The two rows at the split are the horizontal ray itself (y = 1 of each half), where the
-    // radiance jumps from the ground's (a ray of length 0, seen from the ground) to the whole
-    // atmosphere's: whether float or double calls it a ground ray is the rounding of
-    // r^2 (mu^2 - 1) + R^2 around 0. Measured on llvmpipe: up to 100% there (altitude 0: GL 0, CPU
-    // the full horizon sky), which the frame blends in within half a texel of the horizon; see the
-    // report of issue 6. They are left out here and checked to be finite.
+    // The rows at the split hold the horizon ray. Each half says whether its rays meet the ground
+    // (shared ComputeSkyViewTexel), so from the ground (a horizontal ray) float and double agree
+    // there too. Above the ground the horizon ray is tangent to the planet, and its ground
+    // distance hangs on the discriminant r^2 mu^2 - (r^2 - R^2) ~ 0, ill-conditioned in float: up to
+    // 6 % on llvmpipe at 20 km. Those two rows are then left out and checked to be finite.
     const int half = size.y / 2;
     for (int x = 0; x < size.x; ++x) {
       EXPECT_TRUE(std::isfinite(gl.at(x, half - 1).x) && std::isfinite(gl.at(x, half).x));
     }
-    const Difference d = Compare(gl, cpu, half - 1, half + 1);
+    const Difference d = c.altitude_m > 0.0 ? Compare(gl, cpu, half - 1, half + 1) : Compare(gl, cpu);
     std::printf("worst texel (%zu, %zu): GL %g %g %g CPU %g %g %g\n", d.worst_texel % size.x, d.worst_texel / size.x,
                 gl.texels[d.worst_texel].x, gl.texels[d.worst_texel].y, gl.texels[d.worst_texel].z,
                 cpu.texels[d.worst_texel].x, cpu.texels[d.worst_texel].y, cpu.texels[d.worst_texel].z);
@@ -231,7 +230,8 @@ TEST(GlHillaire, GroundViewMatchesCpu) {
   Texture2D cpu = sky;
   model.AddGroundView(batch, r_m, mu_s, cpu);
   const Texture2D gl = AddGroundViewGl(context, km, batch.transmittance, batch.ground_irradiance, sky, r_m / 1000.0, mu_s);
-  const Difference d = Compare(gl, cpu, cpu.height / 2 - 1, cpu.height / 2 + 1);  // horizon rows: as above
+  // The two rows at the split: the tangent horizon ray from 1 km, ill-conditioned in float (as above).
+  const Difference d = Compare(gl, cpu, cpu.height / 2 - 1, cpu.height / 2 + 1);
   std::printf("sky + ground view %dx%d: GL vs CPU max abs %.3g, max rel %.3g\n", cpu.width, cpu.height, d.max_abs,
               d.max_rel);
   // Tolerance: as the sky-view table at low altitude; the ground term adds one transmittance

@@ -77,13 +77,13 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
   for (double altitude : {0.0, 1500.0, 60e3}) {
     for (double mu_s : {0.9, 0.05, -0.2}) {
       for (int width : {12, 13}) {  // even and odd: the mirrored columns
-        Texture2D table(width, 9, true);
+        Texture2D table(width, 10, true);  // the height must be even (sky and ground halves)
         const double r = a.bottom_radius + altitude;
         ComputeSkyViewTable(a, transmittance, multiple_scattering, r, mu_s, 16, table);
         for (int y = 0; y < table.height; ++y) {
           for (int x = 0; x < table.width; ++x) {
             ExpectSameTexel(table.at(x, y),
-                            shared::ComputeSkyViewTexel(a, transmittance, multiple_scattering, ivec2(width, 9),
+                            shared::ComputeSkyViewTexel(a, transmittance, multiple_scattering, ivec2(width, 10),
                                                         vec2(x + 0.5, y + 0.5), r, mu_s, 16),
                             x, y);
           }

@@ -358,7 +358,8 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     // The view zenith of the row; the columns only change the azimuth from the sun.
     double mu, unused_azimuth;
     shared::GetViewAnglesFromSkyViewTextureUv(a, size, r, vec2(0.5, y + 0.5) / vec2(size), mu, unused_azimuth);
-    const bool hits_ground = shared::RayIntersectsGround(a, r, mu);
+    // The ground half of the rows holds the rays that meet the ground (as in shared::ComputeSkyViewTexel).
+    const bool hits_ground = 2 * y >= size.y;
     const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, hits_ground);
     // Steps as in shared::IntegrateScatteredRadiance.
     std::vector<double> t(sample_count), r_i(sample_count);

@@ -30,14 +30,14 @@ bool MoveToAtmosphereEntry(IN(AtmosphereParameters) atmosphere, INOUT(Number) r,
 // or t_limit, whichever comes first, with `sample_count` steps (quadratic in distance), each integrated
 // analytically for the transmittance across it (Hillaire 2020, eq. 11 of the 2015 course notes).
 // `transmittance` receives the transmittance over the marched segment.
-vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    IN(MultiScatteringTexture) multiple_scattering_texture, Number r, Number mu, Number mu_s, Number nu,
-    Number t_limit, int sample_count, OUT(vec3) transmittance) {
+// For an observer inside the atmosphere, with whether the ray meets the ground given: a table
+// whose rows are split into sky and ground halves decides it by the half, not by the sign of a
+// rounded mu at the horizon (in float the last sky row's mu can round below the horizon).
+vec3 IntegrateScatteredRadianceInside(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, IN(MultiScatteringTexture) multiple_scattering_texture, Number r,
+    Number mu, Number mu_s, Number nu, bool ray_r_mu_intersects_ground, Number t_limit, int sample_count,
+    OUT(vec3) transmittance) {
   transmittance = vec3(1.0);
-  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
-    return vec3(0.0);
-  }
-  bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
   Number t_max = min(DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground), t_limit);
   Number rayleigh_phase = GetRayleighPhase(atmosphere, nu);
   Number mie_phase = GetMiePhase(atmosphere, nu);
@@ -63,6 +63,17 @@ vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(Transmit
     transmittance *= step_transmittance;
   }
   return radiance;
+}
+
+vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, Number r, Number mu, Number mu_s, Number nu,
+    Number t_limit, int sample_count, OUT(vec3) transmittance) {
+  transmittance = vec3(1.0);
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
+    return vec3(0.0);
+  }
+  return IntegrateScatteredRadianceInside(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu, mu_s,
+      nu, RayIntersectsGround(atmosphere, r, mu), t_limit, sample_count, transmittance);
 }
 
 // Transmittance along the view ray to the top of the atmosphere, 0 where the ray meets the
@@ -93,7 +104,9 @@ vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTex
   if (nu < cos_alpha) {
     return vec3(0.0);
   }
-  return GetViewTransmittance(atmosphere, transmittance_texture, r, mu) / (2.0 * kPi * (1.0 - cos_alpha));
+  // 1 - cos(alpha) = 2 sin^2(alpha / 2): without the cancellation that costs float 0.2 % here.
+  Number sin_half_alpha = sin(0.5 * atmosphere.sun_angular_radius);
+  return GetViewTransmittance(atmosphere, transmittance_texture, r, mu) / (4.0 * kPi * sin_half_alpha * sin_half_alpha);
 }
 
 // The sky-view table (Hillaire 2020, section 5.3) for one observer radius: x is the azimuth from
@@ -163,8 +176,8 @@ vec3 ComputeSkyViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTe
   GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
   Number nu = SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s;
   vec3 transmittance;
-  return IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu, mu_s, nu,
-      1e30, sample_count, transmittance);
+  return IntegrateScatteredRadianceInside(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu, mu_s,
+      nu, frag_coord.y >= 0.5 * Number(texture_size.y), 1e30, sample_count, transmittance);
 }
 
 vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTexture) sky_view_texture, Number r,
@@ -214,12 +227,9 @@ vec3 GetGroundIrradianceFromSky(IN(TransmittanceTexture) ground_irradiance_textu
 
 // Radiance that the ground reflects towards an observer at radius r looking along mu (0 where the
 // ray misses the ground), attenuated by the atmosphere in between.
-vec3 GetGroundRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+// For an observer inside the atmosphere whose ray meets the ground (given, as above).
+vec3 GetGroundRadianceInside(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(TransmittanceTexture) ground_irradiance_texture, Number r, Number mu, Number mu_s, Number nu) {
-  Number t_limit = 1e30;
-  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit) || !RayIntersectsGround(atmosphere, r, mu)) {
-    return vec3(0.0);
-  }
   Number d = DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
   vec3 transmittance = GetTransmittance(atmosphere, transmittance_texture, r, mu, d, true);
   Number mu_s_ground = ClampCosine((r * mu_s + d * nu) / atmosphere.bottom_radius);
@@ -227,6 +237,17 @@ vec3 GetGroundRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceText
       max(mu_s_ground, 0.0);
   vec3 sky_irradiance = GetGroundIrradianceFromSky(ground_irradiance_texture, mu_s_ground);
   return transmittance * atmosphere.ground_albedo * (1.0 / kPi) * (sun_irradiance + sky_irradiance);
+}
+
+// Radiance that the ground reflects towards an observer at radius r looking along mu (0 where the
+// ray misses the ground), attenuated by the atmosphere in between.
+vec3 GetGroundRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(TransmittanceTexture) ground_irradiance_texture, Number r, Number mu, Number mu_s, Number nu) {
+  Number t_limit = 1e30;
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit) || !RayIntersectsGround(atmosphere, r, mu)) {
+    return vec3(0.0);
+  }
+  return GetGroundRadianceInside(atmosphere, transmittance_texture, ground_irradiance_texture, r, mu, mu_s, nu);
 }
 
 // The per-texel kernel of the ground part of the sky-view table: the ground radiance of the
@@ -238,5 +259,8 @@ vec3 ComputeGroundViewTexel(IN(AtmosphereParameters) atmosphere, IN(Transmittanc
   Number azimuth;
   GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
   Number nu = SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s;
-  return GetGroundRadiance(atmosphere, transmittance_texture, ground_irradiance_texture, r, mu, mu_s, nu);
+  if (frag_coord.y < 0.5 * Number(texture_size.y)) {
+    return vec3(0.0);  // the sky half
+  }
+  return GetGroundRadianceInside(atmosphere, transmittance_texture, ground_irradiance_texture, r, mu, mu_s, nu);
 }
