@@ -137,8 +137,8 @@ TEST(GlHillaire, MultipleScatteringTableMatchesCpu) {
   Texture2D transmittance(256, 64);
   cpu::ComputeTransmittanceTable(metres, 40, transmittance);
   const ivec2 size(32, 32);
+  const shared::vec3 ground_transfer = shared::GetGroundTransfer(metres, 32, 20);  // unitless
   for (bool media_phase : {false, true}) {
-    const shared::vec3 ground_transfer = shared::GetGroundTransfer(metres, 32, 20);  // unitless
     GlPassTiming timing;
     const Texture2D gl =
         ComputeMultipleScatteringTableGl(context, km, transmittance, size, 64, 20, media_phase, ground_transfer, &timing);

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -119,6 +120,39 @@ class SampledTable {
   GLuint texture_ = 0;
 };
 
+// The tables a pass samples: table i is uploaded, bound to texture unit i and given to the
+// sampler uniform named with it, so that names and units cannot disagree. Deleted with it.
+class SampledTables {
+ public:
+  SampledTables(const ComputeProgram& program,
+                std::initializer_list<std::pair<const char*, const shared::Texture2D*>> tables) {
+    GLuint unit = 0;
+    for (const auto& [sampler, table] : tables) {
+      program.SetInt(sampler, static_cast<int>(unit));
+      tables_.push_back(std::make_unique<SampledTable>(*table));
+      tables_.back()->Bind(unit++);
+    }
+  }
+
+ private:
+  std::vector<std::unique_ptr<SampledTable>> tables_;
+};
+
+// Compiles and links a pass from the shared files and its main(), timing the build in
+// timing->compile_ms.
+ComputeProgram MakeProgram(std::initializer_list<std::string_view> files, const std::string& main_source,
+                           const char* name, GlPassTiming* timing) {
+  // Sets timing->compile_ms when the program is built (the return below is elided, not moved).
+  struct CompileTimer {
+    GlPassTiming* timing;
+    Clock::time_point start = Clock::now();
+    ~CompileTimer() {
+      if (timing != nullptr) timing->compile_ms = MillisecondsSince(start);
+    }
+  } timer{timing};
+  return ComputeProgram(BuildComputeShaderSource(files, main_source), name, DescribeSourceStrings(files));
+}
+
 }  // namespace
 
 shared::Texture2D ComputeTransmittanceTableGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
@@ -138,10 +172,7 @@ void main() {
   imageStore(output_table, texel, vec4(transmittance, 1.0));
 }
 )glsl";
-  const auto start = Clock::now();
-  const ComputeProgram program(BuildComputeShaderSource(files, main_source), "transmittance table",
-                               DescribeSourceStrings(files));
-  if (timing != nullptr) timing->compile_ms = MillisecondsSince(start);
+  const ComputeProgram program = MakeProgram(files, main_source, "transmittance table", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
   program.SetInt("sample_count", sample_count);
   return RunTablePass(program, size, "transmittance table", timing);
@@ -172,18 +203,13 @@ void main() {
   imageStore(output_table, texel, vec4(psi_ms, 1.0));
 }
 )glsl";
-  const auto start = Clock::now();
-  const ComputeProgram program(BuildComputeShaderSource(files, main_source), "multiple-scattering table",
-                               DescribeSourceStrings(files));
-  if (timing != nullptr) timing->compile_ms = MillisecondsSince(start);
+  const ComputeProgram program = MakeProgram(files, main_source, "multiple-scattering table", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("transmittance_texture", 0);
   program.SetInt("direction_count", direction_count);
   program.SetInt("sample_count", sample_count);
   program.SetInt("media_phase", media_phase ? 1 : 0);
   program.SetVec3("ground_transfer", ground_transfer);
-  const SampledTable transmittance_table(transmittance);
-  transmittance_table.Bind(0);
+  const SampledTables tables(program, {{"transmittance_texture", &transmittance}});
   return RunTablePass(program, size, "multiple-scattering table", timing);
 }
 
@@ -195,17 +221,9 @@ constexpr std::string_view kSkyFiles[] = {"definitions.glsl", "geometry.glsl",  
                                           "sky.glsl",         "camera.glsl"};
 
 ComputeProgram MakeSkyProgram(const std::string& main_source, const char* name, GlPassTiming* timing) {
-  const auto files = {kSkyFiles[0], kSkyFiles[1], kSkyFiles[2], kSkyFiles[3],
-                      kSkyFiles[4], kSkyFiles[5], kSkyFiles[6], kSkyFiles[7]};
-  // Sets timing->compile_ms when the program is built (the return below is elided, not moved).
-  struct CompileTimer {
-    GlPassTiming* timing;
-    Clock::time_point start = Clock::now();
-    ~CompileTimer() {
-      if (timing != nullptr) timing->compile_ms = MillisecondsSince(start);
-    }
-  } timer{timing};
-  return ComputeProgram(BuildComputeShaderSource(files, main_source), name, DescribeSourceStrings(files));
+  return MakeProgram({kSkyFiles[0], kSkyFiles[1], kSkyFiles[2], kSkyFiles[3], kSkyFiles[4], kSkyFiles[5],
+                      kSkyFiles[6], kSkyFiles[7]},
+                     main_source, name, timing);
 }
 
 void SetCameraUniforms(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
@@ -247,14 +265,10 @@ void main() {
 )glsl";
   const ComputeProgram program = MakeSkyProgram(main_source, "ground-irradiance table", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("transmittance_texture", 0);
-  program.SetInt("multiple_scattering_texture", 1);
   program.SetInt("direction_count", direction_count);
   program.SetInt("sample_count", sample_count);
-  const SampledTable transmittance_table(transmittance);
-  const SampledTable multiple_scattering_table(multiple_scattering);
-  transmittance_table.Bind(0);
-  multiple_scattering_table.Bind(1);
+  const SampledTables tables(
+      program, {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   return RunTablePass(program, {width, 1}, "ground-irradiance table", timing);
 }
 
@@ -282,15 +296,11 @@ void main() {
 )glsl";
   const ComputeProgram program = MakeSkyProgram(main_source, "sky-view table", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("transmittance_texture", 0);
-  program.SetInt("multiple_scattering_texture", 1);
   program.SetFloat("r", r_km);
   program.SetFloat("mu_s", mu_s);
   program.SetInt("sample_count", sample_count);
-  const SampledTable transmittance_table(transmittance);
-  const SampledTable multiple_scattering_table(multiple_scattering);
-  transmittance_table.Bind(0);
-  multiple_scattering_table.Bind(1);
+  const SampledTables tables(
+      program, {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   shared::Texture2D table = RunTablePass(program, size, "sky-view table", timing);
   table.repeat_u = true;
   return table;
@@ -318,17 +328,11 @@ void main() {
 )glsl";
   const ComputeProgram program = MakeSkyProgram(main_source, "ground-view table", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("transmittance_texture", 0);
-  program.SetInt("ground_irradiance_texture", 1);
-  program.SetInt("sky_view_texture", 2);
   program.SetFloat("r", r_km);
   program.SetFloat("mu_s", mu_s);
-  const SampledTable transmittance_table(transmittance);
-  const SampledTable ground_irradiance_table(ground_irradiance);
-  const SampledTable sky_view_table(sky_view);
-  transmittance_table.Bind(0);
-  ground_irradiance_table.Bind(1);
-  sky_view_table.Bind(2);
+  const SampledTables tables(program, {{"transmittance_texture", &transmittance},
+                                       {"ground_irradiance_texture", &ground_irradiance},
+                                       {"sky_view_texture", &sky_view}});
   shared::Texture2D table = RunTablePass(program, {sky_view.width, sky_view.height}, "ground-view table", timing);
   table.repeat_u = true;
   return table;
@@ -373,18 +377,13 @@ void main() {
 )glsl";
   const ComputeProgram program = MakeSkyProgram(main_source, "frame", timing);
   SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("transmittance_texture", 0);
-  program.SetInt("sky_view_texture", 1);
   SetCameraUniforms(program, "camera", camera);
   program.SetFloat("r", r_km);
   program.SetFloat("horizon_nadir_angle", horizon_nadir_angle);
   program.SetVec3("sun_direction", sun_direction);
   program.SetInt("sun_disc", sun_disc ? 1 : 0);
   program.SetVec3("solar_irradiance", solar_irradiance);
-  const SampledTable transmittance_table(transmittance);
-  const SampledTable sky_view_table(sky_view);
-  transmittance_table.Bind(0);
-  sky_view_table.Bind(1);
+  const SampledTables tables(program, {{"transmittance_texture", &transmittance}, {"sky_view_texture", &sky_view}});
   const std::vector<float> rgba = DispatchImagePass(program, {camera.width, camera.height}, "frame", timing);
   const auto start = Clock::now();
   Image image(camera.width, camera.height, 3);
