@@ -40,7 +40,7 @@ constexpr int kChunk = 128;
 constexpr double kPi = 3.14159265358979323846;
 
 // acos(a) ~ sqrt(1 - a) p(a) for a in [0, 1] with |error| <= 2e-8 rad (Abramowitz & Stegun
-// 4.4.46, as shared::FastAcos), p of degree 7; coefficients lowest degree first.
+// 4.4.46), p of degree 7; coefficients lowest degree first.
 constexpr float kAcosPolynomial[8] = {1.5707963050f, -0.2145988016f, 0.0889789874f,  -0.0501743046f,
                                       0.0308918810f, -0.0170881256f, 0.0066700901f, -0.0012624911f};
 

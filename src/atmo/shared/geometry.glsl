@@ -7,36 +7,6 @@
 // and the root that suffers cancellation is obtained from the product of the roots
 // (r^2 - R^2) instead of by subtraction. This keeps grazing rays accurate, also in float.
 
-// acos with |error| <= 2e-8 rad over [-1, 1] (Abramowitz & Stegun 4.4.46, a degree-7 polynomial
-// times sqrt(1 - |x|)), for per-pixel lookups.
-Number FastAcos(Number x) {
-  Number a = min(abs(x), 1.0);
-  Number p = -0.0012624911;
-  p = p * a + 0.0066700901;
-  p = p * a - 0.0170881256;
-  p = p * a + 0.0308918810;
-  p = p * a - 0.0501743046;
-  p = p * a + 0.0889789874;
-  p = p * a - 0.2145988016;
-  p = p * a + 1.5707963050;
-  Number result = sqrt(1.0 - a) * p;
-  return x >= 0.0 ? result : kPi - result;
-}
-
-// atan2 with |error| <= 1e-5 rad: an odd minimax polynomial for atan on [0, 1] after reduction
-// to the first octant, for per-pixel lookups.
-Number FastAtan2(Number y, Number x) {
-  Number ax = abs(x);
-  Number ay = abs(y);
-  Number largest = max(ax, ay);
-  Number a = largest > 0.0 ? min(ax, ay) / largest : 0.0;
-  Number s = a * a;
-  Number result = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a;
-  if (ay > ax) result = 0.5 * kPi - result;
-  if (x < 0.0) result = kPi - result;
-  return y < 0.0 ? -result : result;
-}
-
 Number ClampCosine(Number mu) {
   return clamp(mu, -1.0, 1.0);
 }

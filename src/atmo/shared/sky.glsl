@@ -1,7 +1,8 @@
 // Sky radiance after Hillaire 2020: ray marching of single scattering (true phase functions,
 // transmittance to the sun from the table, hard planet shadow) plus the isotropic
 // multiple-scattering term from its table; the sky-view table that caches this march for one
-// observer and sun; the sun disc; and the aerial-perspective volume.
+// observer and sun; the sun disc; and the lit ground for images. (The aerial-perspective
+// volume marches segments with IntegrateScatteredRadiance.)
 //
 // A view is given by r (observer's distance from the planet centre), mu (cosine of the view
 // zenith angle), mu_s (cosine of the sun zenith angle) and nu (cosine of the angle between the
@@ -186,12 +187,6 @@ vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTe
   return vec3(texture(sky_view_texture, uv));
 }
 
-// Aerial perspective (Hillaire 2020, section 5.4): a froxel volume over the camera frustum; slice
-// z of `depth` holds the in-scattered radiance and transmittance between the camera and the
-// distance (z + 1) / depth * max_distance along the texel's ray.
-Number GetAerialPerspectiveSliceDistance(Number slice_coordinate, int depth, Number max_distance) {
-  return slice_coordinate / Number(depth) * max_distance;
-}
 
 // Ground lighting, for images (DESIGN.md's radiance excludes it; renderers add it). The ground is
 // Lambertian with the atmosphere's albedo, lit by the attenuated sun and by the sky.
