@@ -321,8 +321,8 @@ const FailureCase kFailureCases[] = {
     {"PresetAndConfigTogether", "sample --preset earth --config earth.json" ATMO_SAMPLE_ONE, "--config"},
 #ifdef ATMO_HAVE_GL
     {"GlBackendOtherModel", "render --backend gl --model simple --preset simple" ATMO_TINY_RENDER,
-     "the gl backend renders model hillaire only"},
-    {"GlBackendOtherCommand", "sample --backend gl" ATMO_SAMPLE_ONE, "the gl backend runs `atmo render`"},
+     "the gl backend runs models hillaire and elek"},
+    {"GlBackendOtherCommand", "compare --backend gl", "the gl backend runs `atmo render`, `sample`"},
 #else
     {"GlBackend", "render --backend gl" ATMO_TINY_RENDER, "the gl backend is not available in this build"},
 #endif

@@ -16,7 +16,6 @@
 #include "cpu/hillaire_tables.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
-#include "gl/render_gl.h"
 #include "gl/shader_sources.h"
 #include "models/hillaire_model.h"
 #include "physics/shared_parameters.h"
@@ -54,6 +53,21 @@ SharedContext& GetSharedContext() {
     GTEST_SKIP() << GetSharedContext().error;                       \
   }                                                                 \
   const Context& context = *GetSharedContext().context
+
+// Runs `pass` (writing the GpuTexture it is given) into a fresh table of `size` and reads it
+// back; `gpu_ms` receives the pass's GPU time (GpuPassTimer).
+template <typename Pass>
+Texture2D RunTablePass(ivec2 size, bool repeat_u, Pass pass, double* gpu_ms = nullptr) {
+  const GpuTexture out = GpuTexture::Make2D(size, repeat_u);
+  PassTimings timings;
+  {
+    GpuPassTimer timer(&timings);
+    pass(out);
+    timer.Stop("pass");
+  }
+  if (gpu_ms != nullptr) *gpu_ms = timings.LastMs("pass");
+  return out.Download2D();
+}
 
 struct Difference {
   double max_abs = 0.0;
@@ -107,17 +121,16 @@ TEST(GlHillaire, TransmittanceTableMatchesCpu) {
   const shared::AtmosphereParameters km = ToSharedParameters(earth, 0, 1000.0);
   const ivec2 size(256, 64);
   const int samples = 40;
-  GlPassTiming timing;
-  const Texture2D gl = ComputeTransmittanceTableGl(context, km, size, samples, &timing);
+  const Texture2D gl = RunTablePass(size, false, [&](const GpuTexture& out) {
+    RunTransmittancePass(context, km, samples, out);
+  });
   Texture2D cpu(size.x, size.y);
   cpu::ComputeTransmittanceTable(metres, samples, cpu);
   // (The quadrature is one grid over the whole ray, continuous in mu: the horizontal ray from the
   // ground, where float and double round mu to opposite sides of 0, needs no special case.)
   const Difference d = Compare(gl, cpu);
-  std::printf("transmittance %dx%d, %d samples: GL vs CPU max abs %.3g, max rel (T > 1e-3) %.3g; "
-              "GL compile %.1f ms, dispatch %.2f ms, readback %.2f ms\n",
-              size.x, size.y, samples, d.max_abs, d.max_rel, timing.compile_ms, timing.dispatch_ms,
-              timing.readback_ms);
+  std::printf("transmittance %dx%d, %d samples: GL vs CPU max abs %.3g, max rel (T > 1e-3) %.3g\n", size.x,
+              size.y, samples, d.max_abs, d.max_rel);
   // Tolerance: float32 on the GPU against double on the CPU, in km. The radii (~6400 km) carry a
   // float ulp of ~0.5 m, so every sample's altitude (r_i - bottom_radius, r_i from a law of
   // cosines in r^2 ~ 4e7 km^2) is off by up to ~0.5 m, i.e. up to 4e-4 of the Mie scale height
@@ -139,15 +152,17 @@ TEST(GlHillaire, MultipleScatteringTableMatchesCpu) {
   const ivec2 size(32, 32);
   const shared::vec3 ground_transfer = shared::GetGroundTransfer(metres, 32, 20);  // unitless
   for (bool media_phase : {false, true}) {
-    GlPassTiming timing;
-    const Texture2D gl =
-        ComputeMultipleScatteringTableGl(context, km, transmittance, size, 64, 20, media_phase, ground_transfer, &timing);
+    const GpuTexture transmittance_gpu = GpuTexture::Upload(transmittance);
+    double gpu_ms = 0.0;
+    const Texture2D gl = RunTablePass(size, false, [&](const GpuTexture& out) {
+      RunMultipleScatteringPass(context, km, transmittance_gpu, 64, 20, media_phase, ground_transfer, out);
+    }, &gpu_ms);
     Texture2D cpu(size.x, size.y);
     cpu::ComputeMultipleScatteringTable(metres, transmittance, 64, 20, media_phase, ground_transfer, cpu);
     const Difference d = Compare(gl, cpu);
     std::printf("multiple scattering %dx%d, 64 directions x 20 samples, media_phase %d: GL vs CPU max abs %.3g, "
-                "max rel %.3g; GL compile %.1f ms, dispatch %.2f ms\n",
-                size.x, size.y, media_phase, d.max_abs, d.max_rel, timing.compile_ms, timing.dispatch_ms);
+                "max rel %.3g; GPU %.2f ms\n",
+                size.x, size.y, media_phase, d.max_abs, d.max_rel, gpu_ms);
     // Tolerance: the same float-vs-double altitude errors as the transmittance table (relative
     // ~1e-4 per sample, averaging over 64 x 20 samples), plus llvmpipe's GL_LINEAR taps of the
     // transmittance table, which it blends in float as shared::Texture2D does in double.
@@ -188,9 +203,12 @@ TEST(GlHillaire, SkyViewTableMatchesCpu) {
   for (const Case c : {Case{0.0, 10.0, 2e-4}, Case{5000.0, 45.0, 2e-3}, Case{20000.0, -3.0, 5e-2}}) {
     const double r_m = metres.bottom_radius + c.altitude_m;
     const double mu_s = std::sin(glm::radians(c.sun_elevation_deg));
-    GlPassTiming timing;
-    const Texture2D gl = ComputeSkyViewTableGl(context, km, transmittance, multiple_scattering, size, r_m / 1000.0,
-                                               mu_s, samples, &timing);
+    const GpuTexture transmittance_gpu = GpuTexture::Upload(transmittance);
+    const GpuTexture multiple_scattering_gpu = GpuTexture::Upload(multiple_scattering);
+    double gpu_ms = 0.0;
+    const Texture2D gl = RunTablePass(size, true, [&](const GpuTexture& out) {
+      RunSkyViewPass(context, km, transmittance_gpu, multiple_scattering_gpu, r_m / 1000.0, mu_s, samples, out);
+    }, &gpu_ms);
     EXPECT_TRUE(gl.repeat_u);
     Texture2D cpu(size.x, size.y, true);
     cpu::ComputeSkyViewTable(metres, transmittance, multiple_scattering, r_m, mu_s, samples, cpu);
@@ -208,9 +226,8 @@ TEST(GlHillaire, SkyViewTableMatchesCpu) {
                 gl.texels[d.worst_texel].x, gl.texels[d.worst_texel].y, gl.texels[d.worst_texel].z,
                 cpu.texels[d.worst_texel].x, cpu.texels[d.worst_texel].y, cpu.texels[d.worst_texel].z);
     std::printf("sky view %dx%d, %d samples, altitude %.0f m, sun %.0f deg: GL vs CPU max abs %.3g, max rel (L > "
-                "1e-3) %.3g; GL compile %.1f ms, dispatch %.2f ms (GPU %.2f ms)\n",
-                size.x, size.y, samples, c.altitude_m, c.sun_elevation_deg, d.max_abs, d.max_rel, timing.compile_ms,
-                timing.dispatch_ms, timing.gpu_ms);
+                "1e-3) %.3g; GPU %.2f ms\n",
+                size.x, size.y, samples, c.altitude_m, c.sun_elevation_deg, d.max_abs, d.max_rel, gpu_ms);
     EXPECT_LT(d.max_rel, c.max_rel);
   }
 }
@@ -229,7 +246,12 @@ TEST(GlHillaire, GroundViewMatchesCpu) {
   const Texture2D sky = model.ComputeSkyViewLut(batch, r_m, mu_s);
   Texture2D cpu = sky;
   model.AddGroundView(batch, r_m, mu_s, cpu);
-  const Texture2D gl = AddGroundViewGl(context, km, batch.transmittance, batch.ground_irradiance, sky, r_m / 1000.0, mu_s);
+  const GpuTexture transmittance_gpu = GpuTexture::Upload(batch.transmittance);
+  const GpuTexture ground_irradiance_gpu = GpuTexture::Upload(batch.ground_irradiance);
+  const GpuTexture sky_gpu = GpuTexture::Upload(sky);
+  const Texture2D gl = RunTablePass({sky.width, sky.height}, true, [&](const GpuTexture& out) {
+    RunGroundViewPass(context, km, transmittance_gpu, ground_irradiance_gpu, sky_gpu, r_m / 1000.0, mu_s, out);
+  });
   // The two rows at the split: the tangent horizon ray from 1 km, ill-conditioned in float (as above).
   const Difference d = Compare(gl, cpu, cpu.height / 2 - 1, cpu.height / 2 + 1);
   std::printf("sky + ground view %dx%d: GL vs CPU max abs %.3g, max rel %.3g\n", cpu.width, cpu.height, d.max_abs,
@@ -241,8 +263,11 @@ TEST(GlHillaire, GroundViewMatchesCpu) {
   EXPECT_LT(d.max_abs, 2e-5);
 
   // Its ground irradiance table, GL from the same tables.
-  const Texture2D ground_gl = ComputeGroundIrradianceTableGl(context, km, batch.transmittance, batch.multiple_scattering,
-                                                             batch.ground_irradiance.width, 64, 16);
+  const GpuTexture multiple_scattering_gpu = GpuTexture::Upload(batch.multiple_scattering);
+  const Texture2D ground_gl =
+      RunTablePass({batch.ground_irradiance.width, 1}, false, [&](const GpuTexture& out) {
+        RunGroundIrradiancePass(context, km, transmittance_gpu, multiple_scattering_gpu, 64, 16, out);
+      });
   const Difference g = Compare(ground_gl, batch.ground_irradiance);
   std::printf("ground irradiance %d: GL vs CPU max abs %.3g, max rel %.3g\n", batch.ground_irradiance.width, g.max_abs,
               g.max_rel);
@@ -330,12 +355,105 @@ TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
   }
 }
 
+// Above the atmosphere, and with sky_view=off, every pixel is ray marched (with the lit ground
+// per pixel): the GL frame against the CPU's per-pixel ray march.
+TEST(GlHillaire, RayMarchedFrameMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  struct Case {
+    double altitude_m;
+    bool sky_view;
+    CameraKind kind;
+    double pitch_deg;
+  };
+  for (const Case c : {Case{400e3, true, CameraKind::kPerspective, -60.0}, Case{400e3, true, CameraKind::kEquirect, 0.0},
+                       Case{1000.0, false, CameraKind::kPerspective, 10.0}}) {
+    HillaireSettings settings;
+    settings.use_sky_view_lut = c.sky_view;
+    HillaireModel model(earth, settings);
+    model.Precompute();
+    RenderSettings render;
+    render.camera = {c.kind, 48, 24, 90.0, 180.0, c.pitch_deg};
+    render.altitude_m = c.altitude_m;
+    render.sun_elevation_deg = 20.0;
+    render.sun_azimuth_deg = 150.0;
+    render.terms = RadianceTerms{true, true};
+    PassTimings timings;
+    const Image gl = RenderHillaireGl(context, earth, settings, render, &timings);
+    EXPECT_LT(timings.LastMs("sky_view_lut"), 0.0) << "the frame should be ray marched, not looked up";
+    const std::unique_ptr<SkyView> view =
+        model.View(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
+    const Image cpu = RenderView(*view, render.camera, render.terms, earth.solar_irradiance);
+    ASSERT_EQ(gl.pixels.size(), cpu.pixels.size());
+    const FrameDifference d = CompareFrames(gl, cpu, cpu.pixels.size());
+    std::printf("ray-marched frame %s at %.0f m (sky_view %s): GL vs CPU max rel %.3g, mean rel %.3g\n",
+                std::string(ToString(c.kind)).c_str(), c.altitude_m, c.sky_view ? "auto" : "off", d.max_rel,
+                d.mean_rel);
+    // Tolerance: the same float-vs-double per-step errors as the sky-view table (~1e-4 relative
+    // on average), now per pixel and without a table's bilinear taps. Measured on llvmpipe: max
+    // rel 1.9e-5 / 3.9e-5 (400 km, perspective / equirect, limb included), 1.3e-4 (1 km);
+    // mean rel <= 1.1e-5. The bounds leave room for grazing rays at the limb, where distances
+    // are square roots of small differences of ~4e7 km^2 terms in float.
+    EXPECT_LT(d.max_rel, 1e-3);
+    EXPECT_LT(d.mean_rel, 1e-4);
+    EXPECT_EQ(d.max_abs_alpha, 0.0);
+  }
+}
+
+// `atmo sample` on GL: the radiance and transmittance of single directions against the CPU view,
+// through the sky-view table (ground) and by ray march (above the atmosphere).
+TEST(GlHillaire, SampleMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  HillaireModel model(earth, HillaireSettings{});
+  model.Precompute();
+  HillaireGl sky(context, earth, HillaireSettings{});
+  sky.Precompute();
+  std::vector<glm::dvec3> views;
+  for (double zenith_deg = 2.0; zenith_deg < 180.0; zenith_deg += 11.0) {
+    for (double azimuth_deg = 0.0; azimuth_deg < 360.0; azimuth_deg += 45.0) {
+      const double theta = glm::radians(zenith_deg);
+      const double phi = glm::radians(azimuth_deg);
+      views.emplace_back(std::sin(theta) * std::sin(phi), std::sin(theta) * std::cos(phi), std::cos(theta));
+    }
+  }
+  for (const double altitude_m : {0.0, 8000.0, 300e3}) {
+    const glm::dvec3 sun = SunDirection(25.0, 0.0);
+    sky.SetView(altitude_m, sun, false);
+    EXPECT_EQ(sky.uses_sky_view(), altitude_m < 100e3);
+    std::vector<glm::dvec3> radiance, transmittance;
+    sky.Sample(views, radiance, transmittance);
+    const std::unique_ptr<SkyView> view = model.View(altitude_m, sun);
+    double max_rel = 0.0;
+    double max_abs_t = 0.0;
+    std::vector<double> l(3), t(3);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      view->Radiance(views[i], l);
+      view->Transmittance(views[i], t);
+      for (int c = 0; c < 3; ++c) {
+        if (l[c] > 1e-4) max_rel = std::max(max_rel, std::abs(radiance[i][c] - l[c]) / l[c]);
+        max_abs_t = std::max(max_abs_t, std::abs(transmittance[i][c] - t[c]));
+      }
+    }
+    std::printf("sample at %.0f m, %zu directions: GL vs CPU radiance max rel %.3g, transmittance max abs %.3g\n",
+                altitude_m, views.size(), max_rel, max_abs_t);
+    // Tolerance: as the sky-view table and the ray-marched frame (float against double, ~1e-4
+    // relative per table, the GPU's bilinear taps); the transmittance is one lookup of the
+    // transmittance table (max abs 1.5e-5 between the backends' tables).
+    EXPECT_LT(max_rel, 2e-3);
+    EXPECT_LT(max_abs_t, 5e-5);
+  }
+}
+
 TEST(GlHillaire, RejectsWhatItCannotRender) {
   ATMO_REQUIRE_GL_CONTEXT(context);
+  EXPECT_THROW(HillaireGl(context, Preset("simple"), HillaireSettings{}), Error);
   RenderSettings render;
   render.camera = {CameraKind::kPerspective, 8, 4};
-  render.altitude_m = 200e3;  // above the top of the atmosphere: per-pixel ray march, CPU only
+  render.altitude_m = -1.0;
   EXPECT_THROW(RenderHillaireGl(context, Preset("earth"), HillaireSettings{}, render), Error);
+  HillaireGl sky(context, Preset("earth"), HillaireSettings{});
+  EXPECT_THROW(sky.SetView(0.0, {0.0, 0.0, 1.0}, false), Error) << "SetView before Precompute";
 }
 
 using GlCliTest = atmo::testing::CliFixture;

@@ -17,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/timing.h"
+#include "models/hillaire_model.h"
 
 namespace atmo::cli {
 
@@ -39,9 +40,11 @@ AtmosphereParameters LoadParameters(const CommonOptions& common);
 // Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
 ModelOptions ParseModelOptions(const std::vector<std::string>& options);
 // Throws atmo::Error for a backend this build does not have, or gl for a command without a gl path
-// (`command_has_gl` false) or a model other than hillaire.
+// (`command_has_gl` false) or a model other than hillaire and elek.
 void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 #ifdef ATMO_HAVE_GL
+// The --option settings of model hillaire (the "seed" option dropped, as on the CPU).
+HillaireSettings GlHillaireSettings(const CommonOptions& common);
 // Renders model hillaire on the gl backend (a fresh headless context; --option settings as for the
 // CPU model), each pass's GPU time into `timings`. Throws atmo::Error, e.g. when no GL context can
 // be made.

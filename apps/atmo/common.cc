@@ -9,7 +9,7 @@
 #include "commands.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
-#include "gl/render_gl.h"
+#include "gl/hillaire_gl.h"
 #endif
 
 namespace atmo::cli {
@@ -39,9 +39,11 @@ ModelOptions ParseModelOptions(const std::vector<std::string>& options) {
 void CheckBackend(const CommonOptions& common, bool command_has_gl) {
   if (common.backend == "gl") {
 #ifdef ATMO_HAVE_GL
-    if (!command_has_gl) throw Error("the gl backend runs `atmo render` and `atmo bench` only; use --backend cpu");
-    if (common.model != "hillaire") {
-      throw Error("the gl backend renders model hillaire only (got model '" + common.model + "'); use --backend cpu");
+    if (!command_has_gl) {
+      throw Error("the gl backend runs `atmo render`, `sample`, `precompute` and `bench`; use --backend cpu");
+    }
+    if (common.model != "hillaire" && common.model != "elek") {
+      throw Error("the gl backend runs models hillaire and elek (got model '" + common.model + "'); use --backend cpu");
     }
     return;
 #else
@@ -52,13 +54,16 @@ void CheckBackend(const CommonOptions& common, bool command_has_gl) {
 }
 
 #ifdef ATMO_HAVE_GL
-Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
-                 PassTimings* timings) {
+HillaireSettings GlHillaireSettings(const CommonOptions& common) {
   ModelOptions options = ParseModelOptions(common.options);
   options.erase("seed");  // deterministic, as on the CPU
-  const HillaireSettings hillaire = HillaireSettings::FromOptions(options);
+  return HillaireSettings::FromOptions(options);
+}
+
+Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
+                 PassTimings* timings) {
   const gl::Context context;
-  return gl::RenderHillaireGl(context, parameters, hillaire, settings, timings);
+  return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
 #endif
 

@@ -7,9 +7,14 @@
 // One output row per input row and channel, channels in the order of parameters.wavelengths_nm.
 // Angles are in degrees; the sun lies at compass azimuth 0 and the view at `azimuth_deg`, so the
 // azimuth is the one between the horizontal projections of the view and sun directions.
+//
+// Points that share an altitude and a sun share one view. With --backend gl, model hillaire
+// computes its tables and every point of a view on the GPU (one pass over the view's directions);
+// model elek computes its table on the GPU and answers from it.
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <string_view>
 #include <utility>
@@ -21,6 +26,10 @@
 #include "commands.h"
 #include "grid.h"
 #include "progress_bar.h"
+#ifdef ATMO_HAVE_GL
+#include "gl/context.h"
+#include "gl/hillaire_gl.h"
+#endif
 
 namespace atmo::cli {
 
@@ -37,53 +46,97 @@ struct SampleResult {
   std::vector<double> standard_error;
 };
 
-SampleResult Query(const SkyView& sky, const glm::dvec3& view) {
-  const std::size_t channels = sky.channel_count();
-  SampleResult result{std::vector<double>(channels), std::vector<double>(channels),
-                      std::vector<double>(channels, 0.0)};
-  sky.RadianceEstimate(view, result.radiance, result.standard_error);
-  sky.Transmittance(view, result.transmittance);
-  return result;
+// The points that share an observer altitude and a sun (one view), in order of first appearance.
+struct PointGroup {
+  double altitude_m = 0.0;
+  double sun_zenith_deg = 0.0;
+  std::vector<std::size_t> indices;  // into the points
+  std::vector<glm::dvec3> views;     // the points' view directions (unit, local frame)
+};
+
+std::vector<PointGroup> GroupPoints(const std::vector<SamplePoint>& points) {
+  std::vector<PointGroup> groups;
+  std::map<std::pair<double, double>, std::size_t> group_of;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::pair<double, double> key(points[i].altitude_m, points[i].sun_zenith_deg);
+    const auto [found, inserted] = group_of.emplace(key, groups.size());
+    if (inserted) groups.push_back({key.first, key.second, {}, {}});
+    groups[found->second].indices.push_back(i);
+    groups[found->second].views.push_back(
+        DirectionFromZenithAzimuth(glm::radians(points[i].view_zenith_deg), glm::radians(points[i].azimuth_deg)));
+  }
+  return groups;
 }
 
-// Evaluates every point, building one SkyView per distinct (altitude, sun zenith) pair, and
-// returns the whole CSV text.
-std::string EvaluatePoints(const Model& model, const std::vector<SamplePoint>& points) {
-  const std::vector<double>& wavelengths_nm = model.parameters().wavelengths_nm;
-  std::map<std::pair<double, double>, std::unique_ptr<SkyView>> views;
-  std::string csv = std::string(kOutputHeader) + "\n";
+glm::dvec3 SunOf(const PointGroup& group) { return DirectionFromZenithAzimuth(glm::radians(group.sun_zenith_deg), 0.0); }
+
+// Evaluates one group's points into `results` (indexed like the points); throws atmo::Error.
+using GroupEvaluator = std::function<void(const PointGroup& group, std::vector<SampleResult>& results)>;
+
+// Every point through `evaluate`, group by group, and the whole CSV text in the input order.
+std::string EvaluatePoints(const std::vector<double>& wavelengths_nm, const std::vector<SamplePoint>& points,
+                           const GroupEvaluator& evaluate) {
+  std::vector<SampleResult> results(points.size());
   ProgressBar progress("sample");
-  for (const SamplePoint& point : points) {
-    progress.Update(static_cast<double>(&point - points.data()), static_cast<double>(points.size()));
-    const std::string where = point.location.empty() ? "" : point.location + ": ";
-    const std::pair<double, double> key(point.altitude_m, point.sun_zenith_deg);
-    auto found = views.find(key);
-    if (found == views.end()) {
-      const glm::dvec3 sun = DirectionFromZenithAzimuth(glm::radians(point.sun_zenith_deg), 0.0);
-      try {
-        found = views.emplace(key, model.View(point.altitude_m, sun)).first;
-      } catch (const Error& error) {
-        throw Error(where + error.what());
-      }
+  std::size_t done = 0;
+  for (const PointGroup& group : GroupPoints(points)) {
+    progress.Update(static_cast<double>(done), static_cast<double>(points.size()));
+    try {
+      evaluate(group, results);
+    } catch (const Error& error) {
+      const std::string& where = points[group.indices.front()].location;
+      throw Error((where.empty() ? "" : where + ": ") + error.what());
     }
-    const glm::dvec3 view =
-        DirectionFromZenithAzimuth(glm::radians(point.view_zenith_deg), glm::radians(point.azimuth_deg));
-    const SampleResult result = Query(*found->second, view);
+    done += group.indices.size();
+  }
+  std::string csv = std::string(kOutputHeader) + "\n";
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const SamplePoint& point = points[i];
     const std::string inputs = Format("%.10g,%.10g,%.10g,%.10g,", point.altitude_m, point.sun_zenith_deg,
                                       point.view_zenith_deg, point.azimuth_deg);
     for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
       csv += inputs;
-      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], result.radiance[c], result.transmittance[c],
-                    result.standard_error[c]);
+      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], results[i].radiance[c], results[i].transmittance[c],
+                    results[i].standard_error[c]);
     }
   }
   return csv;
 }
 
+// A model's views (the CPU, or tables the gl backend computed), one query per point.
+GroupEvaluator ModelEvaluator(const Model& model) {
+  return [&model](const PointGroup& group, std::vector<SampleResult>& results) {
+    const std::unique_ptr<SkyView> sky = model.View(group.altitude_m, SunOf(group));
+    const std::size_t channels = sky->channel_count();
+    for (std::size_t k = 0; k < group.indices.size(); ++k) {
+      SampleResult& result = results[group.indices[k]];
+      result = {std::vector<double>(channels), std::vector<double>(channels), std::vector<double>(channels, 0.0)};
+      sky->RadianceEstimate(group.views[k], result.radiance, result.standard_error);
+      sky->Transmittance(group.views[k], result.transmittance);
+    }
+  };
+}
+
+#ifdef ATMO_HAVE_GL
+// Model hillaire on the gl backend: per group the view's tables and one GPU pass over its directions.
+GroupEvaluator HillaireGlEvaluator(gl::HillaireGl& sky) {
+  return [&sky](const PointGroup& group, std::vector<SampleResult>& results) {
+    sky.SetView(group.altitude_m, SunOf(group), /*ground=*/false);
+    std::vector<glm::dvec3> radiance, transmittance;
+    sky.Sample(group.views, radiance, transmittance);
+    for (std::size_t k = 0; k < group.indices.size(); ++k) {
+      const glm::dvec3& l = radiance[k];
+      const glm::dvec3& t = transmittance[k];
+      results[group.indices[k]] = {{l.x, l.y, l.z}, {t.x, t.y, t.z}, {0.0, 0.0, 0.0}};
+    }
+  };
+}
+#endif
+
 }  // namespace
 
 int RunSample(const CommonOptions& common, const SampleCommand& command) {
-  CheckBackend(common);
+  CheckBackend(common, /*command_has_gl=*/true);
   const AtmosphereParameters parameters = LoadParameters(common);
 
   std::vector<SamplePoint> points;
@@ -100,8 +153,19 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
   }
   if (!command.out_path.empty()) CheckOutputWritable(command.out_path);
 
-  const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
-  const std::string csv = EvaluatePoints(*model, points);
+  std::string csv;
+#ifdef ATMO_HAVE_GL
+  if (common.backend == "gl" && common.model == "hillaire") {
+    const gl::Context context;
+    gl::HillaireGl sky(context, parameters, GlHillaireSettings(common));
+    sky.Precompute();
+    csv = EvaluatePoints(parameters.wavelengths_nm, points, HillaireGlEvaluator(sky));
+  }
+#endif
+  if (csv.empty()) {
+    const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
+    csv = EvaluatePoints(parameters.wavelengths_nm, points, ModelEvaluator(*model));
+  }
 
   if (command.out_path.empty()) {
     if (std::fwrite(csv.data(), 1, csv.size(), stdout) != csv.size() || std::fflush(stdout) != 0) {

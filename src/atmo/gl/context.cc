@@ -6,6 +6,7 @@
 //  - EGL_KHR_surfaceless_context lets the context be current with EGL_NO_SURFACE.
 #include "gl/context.h"
 
+#include <chrono>
 #include <cstdio>
 #include <mutex>
 #include <string>
@@ -14,6 +15,8 @@
 #include <epoxy/gl.h>
 
 #include "atmo/error.h"
+#include "gl/program.h"
+#include "gl/shader_sources.h"
 
 namespace atmo::gl {
 namespace {
@@ -80,8 +83,10 @@ Context::Context() {
 }
 
 Context::~Context() {
-  const std::lock_guard<std::mutex> lock(g_display_mutex);
   auto display = static_cast<EGLDisplay>(display_);
+  eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, static_cast<EGLContext>(context_));
+  programs_.clear();  // while the context is current
+  const std::lock_guard<std::mutex> lock(g_display_mutex);
   eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(display, static_cast<EGLContext>(context_));
   --g_live_contexts;
@@ -93,6 +98,26 @@ void Context::MakeCurrent() const {
                       static_cast<EGLContext>(context_))) {
     throw Error("OpenGL context: eglMakeCurrent failed (" + EglErrorText() + ")");
   }
+}
+
+}  // namespace atmo::gl
+
+namespace atmo::gl {
+
+const ComputeProgram& Context::Program(std::initializer_list<std::string_view> shared_files,
+                                       std::string_view main_source, std::string_view name,
+                                       double* compile_ms) const {
+  const auto start = std::chrono::steady_clock::now();
+  std::string source = BuildComputeShaderSource(shared_files, main_source);
+  auto found = programs_.find(source);
+  if (found == programs_.end()) {
+    auto program = std::make_unique<ComputeProgram>(source, name, DescribeSourceStrings(shared_files));
+    found = programs_.emplace(std::move(source), std::move(program)).first;
+  }
+  if (compile_ms != nullptr) {
+    *compile_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  return *found->second;
 }
 
 }  // namespace atmo::gl

@@ -1,166 +1,69 @@
 #include "gl/hillaire_gl.h"
 
-#include <chrono>
+#include <cmath>
 #include <cstddef>
-#include <memory>
 #include <string>
 #include <string_view>
-#include <vector>
 
 #include <epoxy/gl.h>
 
 #include "atmo/error.h"
+#include "cpu/camera.h"
 #include "gl/program.h"
-#include "gl/shader_sources.h"
+#include "physics/shared_parameters.h"
 
 namespace atmo::gl {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+// The shared files of the table passes, and of the passes that read the sky, in shared.h's order.
+#define ATMO_TRANSMITTANCE_FILES "definitions.glsl", "geometry.glsl", "medium.glsl", "transmittance.glsl"
+#define ATMO_MULTIPLE_SCATTERING_FILES \
+  "definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl", "multiple_scattering.glsl"
+#define ATMO_SKY_FILES                                                                                         \
+  "definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl", "multiple_scattering.glsl", \
+      "sky.glsl", "camera.glsl"
 
-double MillisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// 8 x 8 invocations per work group: a multiple of the SIMD width everywhere, 64 <= the minimum
-// of GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS (1024).
-constexpr int kGroupSize = 8;
-
-// The declarations every table pass shares: one rgba32f output image, the atmosphere.
-constexpr const char* kTablePassHeader = R"glsl(
+// The declarations every table pass shares: one rgba32f output image (unit 0), the atmosphere.
+constexpr std::string_view kTablePassHeader = R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
 uniform AtmosphereParameters atmosphere;
 )glsl";
 
-void CheckGlError(const char* what) {
-  const GLenum error = glGetError();
-  if (error != GL_NO_ERROR) {
-    throw Error(std::string("GL ") + what + " failed: GL error " + std::to_string(static_cast<unsigned>(error)));
+std::string TablePass(std::string_view body) { return std::string(kTablePassHeader) + std::string(body); }
+
+// The sky seen along a direction, for the frame and the sample passes: the sky-view table or the
+// per-direction ray march (HillaireSkyView::Radiance on the CPU), and the lit ground of a ray march.
+constexpr std::string_view kSkyRadianceSource = R"glsl(
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform sampler2D multiple_scattering_texture;
+uniform sampler2D ground_irradiance_texture;
+uniform sampler2D sky_view_texture;
+uniform bool use_sky_view;
+uniform float r;                    // km
+uniform float mu_s;
+uniform vec3 sun_direction;         // unit, local frame (x east, y north, z up)
+uniform float horizon_nadir_angle;  // GetHorizonNadirAngle(atmosphere, r), radians
+uniform int ray_march_samples;
+
+vec3 GetSkyRadianceAlong(vec3 direction) {
+  if (use_sky_view) {
+    float azimuth = GetAzimuthFromSun(direction, sun_direction);
+    vec2 uv = GetSkyViewTextureUvFromBeta(textureSize(sky_view_texture, 0), horizon_nadir_angle, direction.z, azimuth);
+    return texture(sky_view_texture, uv).rgb;
   }
+  vec3 transmittance;
+  return IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture, r, direction.z,
+      mu_s, dot(direction, sun_direction), 1e30, ray_march_samples, transmittance);
 }
-
-// Dispatches `program` (already configured) over an rgba32f image of `size` (bound to image unit 0)
-// and reads it back, rgba per texel, row 0 first. The dispatch is timed by the wall clock up to
-// glFinish and on the GPU by a GL_TIME_ELAPSED query.
-std::vector<float> DispatchImagePass(const ComputeProgram& program, shared::ivec2 size, const char* name,
-                                     GlPassTiming* timing) {
-  if (size.x < 1 || size.y < 1) throw Error(std::string("GL ") + name + ": the image must have at least one texel");
-  auto start = Clock::now();
-  GLuint texture = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &texture);
-  glTextureStorage2D(texture, 1, GL_RGBA32F, size.x, size.y);
-  GLuint query = 0;
-  glGenQueries(1, &query);
-  program.Use();
-  glBindImageTexture(0, texture, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-  glBeginQuery(GL_TIME_ELAPSED, query);
-  glDispatchCompute(static_cast<GLuint>((size.x + kGroupSize - 1) / kGroupSize),
-                    static_cast<GLuint>((size.y + kGroupSize - 1) / kGroupSize), 1);
-  glEndQuery(GL_TIME_ELAPSED);
-  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-  glFinish();
-  if (timing != nullptr) timing->dispatch_ms = MillisecondsSince(start);
-  GLuint64 gpu_ns = 0;
-  glGetQueryObjectui64v(query, GL_QUERY_RESULT, &gpu_ns);
-  glDeleteQueries(1, &query);
-  // llvmpipe runs a compute dispatch on the CPU inside glDispatchCompute and its timer query does
-  // not measure it (it reports ~0); there the wall-clock dispatch time is the "GPU" time.
-  const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const bool software = renderer != nullptr && std::string_view(renderer).find("llvmpipe") != std::string_view::npos;
-  if (timing != nullptr) timing->gpu_ms = software ? timing->dispatch_ms : static_cast<double>(gpu_ns) * 1e-6;
-  start = Clock::now();
-  std::vector<float> rgba(static_cast<std::size_t>(size.x) * size.y * 4);
-  glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(rgba.size() * sizeof(float)), rgba.data());
-  glDeleteTextures(1, &texture);
-  CheckGlError(name);
-  if (timing != nullptr) timing->readback_ms = MillisecondsSince(start);
-  return rgba;
-}
-
-// DispatchImagePass, read back into a table (rgb).
-shared::Texture2D RunTablePass(const ComputeProgram& program, shared::ivec2 size, const char* name,
-                               GlPassTiming* timing) {
-  const std::vector<float> rgba = DispatchImagePass(program, size, name, timing);
-  const auto start = Clock::now();
-  shared::Texture2D table(size.x, size.y);
-  for (std::size_t i = 0; i < table.texels.size(); ++i) {
-    table.texels[i] = glm::vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
-  }
-  if (timing != nullptr) timing->readback_ms += MillisecondsSince(start);
-  return table;
-}
-
-// A sampled GL_LINEAR, clamp-to-edge (or repeat on s) rgba32f copy of a table, deleted with it.
-class SampledTable {
- public:
-  explicit SampledTable(const shared::Texture2D& table) {
-    std::vector<float> rgba(table.texels.size() * 4);
-    for (std::size_t i = 0; i < table.texels.size(); ++i) {
-      rgba[4 * i] = table.texels[i].x;
-      rgba[4 * i + 1] = table.texels[i].y;
-      rgba[4 * i + 2] = table.texels[i].z;
-      rgba[4 * i + 3] = 1.0f;
-    }
-    glCreateTextures(GL_TEXTURE_2D, 1, &texture_);
-    glTextureStorage2D(texture_, 1, GL_RGBA32F, table.width, table.height);
-    glTextureSubImage2D(texture_, 0, 0, 0, table.width, table.height, GL_RGBA, GL_FLOAT, rgba.data());
-    glTextureParameteri(texture_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(texture_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(texture_, GL_TEXTURE_WRAP_S, table.repeat_u ? GL_REPEAT : GL_CLAMP_TO_EDGE);
-    glTextureParameteri(texture_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  }
-  ~SampledTable() { glDeleteTextures(1, &texture_); }
-  SampledTable(const SampledTable&) = delete;
-  SampledTable& operator=(const SampledTable&) = delete;
-
-  void Bind(GLuint unit) const { glBindTextureUnit(unit, texture_); }
-
- private:
-  GLuint texture_ = 0;
-};
-
-// The tables a pass samples: table i is uploaded, bound to texture unit i and given to the
-// sampler uniform named with it, so that names and units cannot disagree. Deleted with it.
-class SampledTables {
- public:
-  SampledTables(const ComputeProgram& program,
-                std::initializer_list<std::pair<const char*, const shared::Texture2D*>> tables) {
-    GLuint unit = 0;
-    for (const auto& [sampler, table] : tables) {
-      program.SetInt(sampler, static_cast<int>(unit));
-      tables_.push_back(std::make_unique<SampledTable>(*table));
-      tables_.back()->Bind(unit++);
-    }
-  }
-
- private:
-  std::vector<std::unique_ptr<SampledTable>> tables_;
-};
-
-// Compiles and links a pass from the shared files and its main(), timing the build in
-// timing->compile_ms.
-ComputeProgram MakeProgram(std::initializer_list<std::string_view> files, const std::string& main_source,
-                           const char* name, GlPassTiming* timing) {
-  // Sets timing->compile_ms when the program is built (the return below is elided, not moved).
-  struct CompileTimer {
-    GlPassTiming* timing;
-    Clock::time_point start = Clock::now();
-    ~CompileTimer() {
-      if (timing != nullptr) timing->compile_ms = MillisecondsSince(start);
-    }
-  } timer{timing};
-  return ComputeProgram(BuildComputeShaderSource(files, main_source), name, DescribeSourceStrings(files));
-}
+)glsl";
 
 }  // namespace
 
-shared::Texture2D ComputeTransmittanceTableGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                              shared::ivec2 size, int sample_count, GlPassTiming* timing) {
-  context.MakeCurrent();
-  const auto files = {std::string_view("definitions.glsl"), std::string_view("geometry.glsl"),
-                      std::string_view("medium.glsl"), std::string_view("transmittance.glsl")};
-  const std::string main_source = std::string(kTablePassHeader) + R"glsl(
+void RunTransmittancePass(const Context& context, const shared::AtmosphereParameters& km, int sample_count,
+                          const GpuTexture& out) {
+  const ComputeProgram& program = context.Program({ATMO_TRANSMITTANCE_FILES}, TablePass(R"glsl(
 uniform int sample_count;
 
 void main() {
@@ -171,23 +74,17 @@ void main() {
       ComputeTransmittanceToTopAtmosphereBoundaryTexel(atmosphere, size, vec2(texel) + vec2(0.5), sample_count);
   imageStore(output_table, texel, vec4(transmittance, 1.0));
 }
-)glsl";
-  const ComputeProgram program = MakeProgram(files, main_source, "transmittance table", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
+)glsl"), "transmittance table");
+  SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetInt("sample_count", sample_count);
-  return RunTablePass(program, size, "transmittance table", timing);
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
 }
 
-shared::Texture2D ComputeMultipleScatteringTableGl(const Context& context,
-                                                   const shared::AtmosphereParameters& km_atmosphere,
-                                                   const shared::Texture2D& transmittance, shared::ivec2 size,
-                                                   int direction_count, int sample_count, bool media_phase,
-                                                   const shared::vec3& ground_transfer, GlPassTiming* timing) {
-  context.MakeCurrent();
-  const auto files = {std::string_view("definitions.glsl"), std::string_view("geometry.glsl"),
-                      std::string_view("medium.glsl"),      std::string_view("phase.glsl"),
-                      std::string_view("transmittance.glsl"), std::string_view("multiple_scattering.glsl")};
-  const std::string main_source = std::string(kTablePassHeader) + R"glsl(
+void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereParameters& km,
+                               const GpuTexture& transmittance, int direction_count, int sample_count,
+                               bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out) {
+  const ComputeProgram& program = context.Program({ATMO_MULTIPLE_SCATTERING_FILES}, TablePass(R"glsl(
 uniform sampler2D transmittance_texture;
 uniform int direction_count;
 uniform int sample_count;
@@ -202,29 +99,195 @@ void main() {
       direction_count, sample_count, media_phase, ground_transfer);
   imageStore(output_table, texel, vec4(psi_ms, 1.0));
 }
-)glsl";
-  const ComputeProgram program = MakeProgram(files, main_source, "multiple-scattering table", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
+)glsl"), "multiple-scattering table");
+  SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetInt("direction_count", direction_count);
   program.SetInt("sample_count", sample_count);
   program.SetInt("media_phase", media_phase ? 1 : 0);
   program.SetVec3("ground_transfer", ground_transfer);
-  const SampledTables tables(program, {{"transmittance_texture", &transmittance}});
-  return RunTablePass(program, size, "multiple-scattering table", timing);
+  BindSamplers(program, {{"transmittance_texture", &transmittance}});
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
+}
+
+void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
+                             const GpuTexture& transmittance, const GpuTexture& multiple_scattering,
+                             int direction_count, int sample_count, const GpuTexture& out) {
+  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+uniform sampler2D transmittance_texture;
+uniform sampler2D multiple_scattering_texture;
+uniform int direction_count;
+uniform int sample_count;
+
+void main() {
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  vec3 irradiance = ComputeGroundIrradianceTexel(atmosphere, transmittance_texture, multiple_scattering_texture,
+      size.x, float(texel.x) + 0.5, direction_count, sample_count);
+  imageStore(output_table, texel, vec4(irradiance, 1.0));
+}
+)glsl"), "ground-irradiance table");
+  SetAtmosphereUniforms(program, "atmosphere", km);
+  program.SetInt("direction_count", direction_count);
+  program.SetInt("sample_count", sample_count);
+  BindSamplers(program,
+               {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
+}
+
+void RunSkyViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
+                    const GpuTexture& multiple_scattering, double r_km, double mu_s, int sample_count,
+                    const GpuTexture& out) {
+  if (out.size().y < 4 || out.size().y % 2 != 0) throw Error("GL sky-view table: the height must be even and >= 4");
+  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+uniform sampler2D transmittance_texture;
+uniform sampler2D multiple_scattering_texture;
+uniform float r;     // km
+uniform float mu_s;
+uniform int sample_count;
+
+void main() {
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  vec3 radiance = ComputeSkyViewTexel(atmosphere, transmittance_texture, multiple_scattering_texture, size,
+      vec2(texel) + vec2(0.5), r, mu_s, sample_count);
+  imageStore(output_table, texel, vec4(radiance, 1.0));
+}
+)glsl"), "sky-view table");
+  SetAtmosphereUniforms(program, "atmosphere", km);
+  program.SetFloat("r", r_km);
+  program.SetFloat("mu_s", mu_s);
+  program.SetInt("sample_count", sample_count);
+  BindSamplers(program,
+               {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
+}
+
+void RunGroundViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
+                       const GpuTexture& ground_irradiance, const GpuTexture& sky_view, double r_km, double mu_s,
+                       const GpuTexture& out) {
+  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+uniform sampler2D transmittance_texture;
+uniform sampler2D ground_irradiance_texture;
+uniform sampler2D sky_view_texture;
+uniform float r;     // km
+uniform float mu_s;
+
+void main() {
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  vec3 radiance = texelFetch(sky_view_texture, texel, 0).rgb + ComputeGroundViewTexel(atmosphere,
+      transmittance_texture, ground_irradiance_texture, size, vec2(texel) + vec2(0.5), r, mu_s);
+  imageStore(output_table, texel, vec4(radiance, 1.0));
+}
+)glsl"), "ground-view table");
+  SetAtmosphereUniforms(program, "atmosphere", km);
+  program.SetFloat("r", r_km);
+  program.SetFloat("mu_s", mu_s);
+  BindSamplers(program, {{"transmittance_texture", &transmittance},
+                         {"ground_irradiance_texture", &ground_irradiance},
+                         {"sky_view_texture", &sky_view}});
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
+}
+
+HillaireGl::HillaireGl(const Context& context, const AtmosphereParameters& parameters,
+                       const HillaireSettings& settings)
+    : context_(context), settings_(settings) {
+  Validate(parameters);
+  if (parameters.geometry != Geometry::kSpherical) {
+    throw Error("model hillaire needs a spherical atmosphere; the half-space of preset '" + parameters.name +
+                "' is the geometry of the simple model");
+  }
+  if (parameters.channel_count() != 3) {
+    throw Error("the gl backend computes 3 channels (red, green, blue); these parameters have " +
+                std::to_string(parameters.channel_count()));
+  }
+  metres_ = ToSharedParameters(parameters, 0);
+  km_ = ToSharedParameters(parameters, 0, 1000.0);
+  solar_irradiance_ = shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
+                                   parameters.solar_irradiance[2]);
+}
+
+void HillaireGl::Precompute(PassTimings* timings) {
+  context_.MakeCurrent();
+  const HillaireSettings& s = settings_;
+  if (transmittance_.empty()) {
+    transmittance_ = GpuTexture::Make2D(s.transmittance_lut);
+    multiple_scattering_ = GpuTexture::Make2D(s.multiple_scattering_lut);
+    ground_irradiance_ = GpuTexture::Make2D({s.ground_irradiance_lut, 1});
+  }
+  // The ground's share of orders >= 2 is a small hemisphere sum, computed on the host as the CPU does.
+  const shared::vec3 ground_transfer =
+      s.multiple_scattering_ground
+          ? shared::GetGroundTransfer(metres_, s.multiple_scattering_directions / 2, s.multiple_scattering_samples)
+          : shared::vec3(0.0);
+  GpuPassTimer timer(timings);
+  RunTransmittancePass(context_, km_, s.transmittance_samples, transmittance_);
+  timer.Stop("transmittance_lut");
+  RunMultipleScatteringPass(context_, km_, transmittance_, s.multiple_scattering_directions,
+                            s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer,
+                            multiple_scattering_);
+  timer.Stop("multiple_scattering_lut");
+  RunGroundIrradiancePass(context_, km_, transmittance_, multiple_scattering_, s.ground_irradiance_directions,
+                          s.ground_irradiance_samples, ground_irradiance_);
+  timer.Stop("ground_irradiance_lut");
+  CheckGlError("hillaire tables");
+  precomputed_ = true;
+}
+
+void HillaireGl::SetView(double altitude_m, const glm::dvec3& sun_direction, bool ground, PassTimings* timings) {
+  if (!precomputed_) throw Error("GL hillaire: SetView before Precompute");
+  if (!std::isfinite(altitude_m) || altitude_m < 0.0) {
+    throw Error("altitude_m must be finite and >= 0 for model hillaire (got " + std::to_string(altitude_m) + ")");
+  }
+  if (!std::isfinite(glm::length(sun_direction)) || glm::length(sun_direction) == 0.0) {
+    throw Error("the sun direction must be a finite, non-zero vector");
+  }
+  context_.MakeCurrent();
+  sun_ = glm::normalize(sun_direction);
+  mu_s_ = shared::ClampCosine(sun_.z);
+  // Double-precision metres for what the host decides, km for the GPU.
+  const double r_m = metres_.bottom_radius + altitude_m;
+  r_km_ = r_m / 1000.0;
+  horizon_nadir_angle_ = shared::GetHorizonNadirAngle(metres_, r_m);
+  uses_sky_view_ = settings_.use_sky_view_lut && r_m <= metres_.top_radius;
+  has_ground_view_ = false;
+  view_set_ = true;
+  if (!uses_sky_view_) return;
+  if (sky_view_.empty()) {
+    sky_view_ = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
+    sky_and_ground_view_ = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
+  }
+  GpuPassTimer timer(timings);
+  RunSkyViewPass(context_, km_, transmittance_, multiple_scattering_, r_km_, mu_s_, settings_.sky_view_samples,
+                 sky_view_);
+  timer.Stop("sky_view_lut");
+  if (ground) {
+    RunGroundViewPass(context_, km_, transmittance_, ground_irradiance_, sky_view_, r_km_, mu_s_,
+                      sky_and_ground_view_);
+    timer.Stop("ground_view_lut");
+    has_ground_view_ = true;
+  }
+  CheckGlError("hillaire sky view");
+}
+
+void HillaireGl::SetSkyUniforms(const ComputeProgram& program) const {
+  SetAtmosphereUniforms(program, "atmosphere", km_);
+  program.SetInt("use_sky_view", uses_sky_view_ ? 1 : 0);
+  program.SetFloat("r", r_km_);
+  program.SetFloat("mu_s", mu_s_);
+  program.SetVec3("sun_direction", sun_);
+  program.SetFloat("horizon_nadir_angle", horizon_nadir_angle_);
+  program.SetInt("ray_march_samples", settings_.ray_march_samples);
 }
 
 namespace {
-
-// The shared files of the passes that read the sky (sky.glsl and camera.glsl), in shared.h's order.
-constexpr std::string_view kSkyFiles[] = {"definitions.glsl", "geometry.glsl",      "medium.glsl",
-                                          "phase.glsl",       "transmittance.glsl", "multiple_scattering.glsl",
-                                          "sky.glsl",         "camera.glsl"};
-
-ComputeProgram MakeSkyProgram(const std::string& main_source, const char* name, GlPassTiming* timing) {
-  return MakeProgram({kSkyFiles[0], kSkyFiles[1], kSkyFiles[2], kSkyFiles[3], kSkyFiles[4], kSkyFiles[5],
-                      kSkyFiles[6], kSkyFiles[7]},
-                     main_source, name, timing);
-}
 
 void SetCameraUniforms(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
   const std::string p = name + ".";
@@ -242,119 +305,20 @@ void SetCameraUniforms(const ComputeProgram& program, const std::string& name, c
 
 }  // namespace
 
-shared::Texture2D ComputeGroundIrradianceTableGl(const Context& context,
-                                                 const shared::AtmosphereParameters& km_atmosphere,
-                                                 const shared::Texture2D& transmittance,
-                                                 const shared::Texture2D& multiple_scattering, int width,
-                                                 int direction_count, int sample_count, GlPassTiming* timing) {
-  context.MakeCurrent();
-  const std::string main_source = std::string(kTablePassHeader) + R"glsl(
-uniform sampler2D transmittance_texture;
-uniform sampler2D multiple_scattering_texture;
-uniform int direction_count;
-uniform int sample_count;
-
-void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 irradiance = ComputeGroundIrradianceTexel(atmosphere, transmittance_texture, multiple_scattering_texture,
-      size.x, float(texel.x) + 0.5, direction_count, sample_count);
-  imageStore(output_table, texel, vec4(irradiance, 1.0));
-}
-)glsl";
-  const ComputeProgram program = MakeSkyProgram(main_source, "ground-irradiance table", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetInt("direction_count", direction_count);
-  program.SetInt("sample_count", sample_count);
-  const SampledTables tables(
-      program, {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
-  return RunTablePass(program, {width, 1}, "ground-irradiance table", timing);
-}
-
-shared::Texture2D ComputeSkyViewTableGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                        const shared::Texture2D& transmittance,
-                                        const shared::Texture2D& multiple_scattering, shared::ivec2 size, double r_km,
-                                        double mu_s, int sample_count, GlPassTiming* timing) {
-  context.MakeCurrent();
-  if (size.y < 4 || size.y % 2 != 0) throw Error("GL sky-view table: the height must be even and >= 4");
-  const std::string main_source = std::string(kTablePassHeader) + R"glsl(
-uniform sampler2D transmittance_texture;
-uniform sampler2D multiple_scattering_texture;
-uniform float r;     // km
-uniform float mu_s;
-uniform int sample_count;
-
-void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 radiance = ComputeSkyViewTexel(atmosphere, transmittance_texture, multiple_scattering_texture, size,
-      vec2(texel) + vec2(0.5), r, mu_s, sample_count);
-  imageStore(output_table, texel, vec4(radiance, 1.0));
-}
-)glsl";
-  const ComputeProgram program = MakeSkyProgram(main_source, "sky-view table", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetFloat("r", r_km);
-  program.SetFloat("mu_s", mu_s);
-  program.SetInt("sample_count", sample_count);
-  const SampledTables tables(
-      program, {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
-  shared::Texture2D table = RunTablePass(program, size, "sky-view table", timing);
-  table.repeat_u = true;
-  return table;
-}
-
-shared::Texture2D AddGroundViewGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                  const shared::Texture2D& transmittance, const shared::Texture2D& ground_irradiance,
-                                  const shared::Texture2D& sky_view, double r_km, double mu_s, GlPassTiming* timing) {
-  context.MakeCurrent();
-  const std::string main_source = std::string(kTablePassHeader) + R"glsl(
-uniform sampler2D transmittance_texture;
-uniform sampler2D ground_irradiance_texture;
-uniform sampler2D sky_view_texture;
-uniform float r;     // km
-uniform float mu_s;
-
-void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 radiance = texelFetch(sky_view_texture, texel, 0).rgb + ComputeGroundViewTexel(atmosphere,
-      transmittance_texture, ground_irradiance_texture, size, vec2(texel) + vec2(0.5), r, mu_s);
-  imageStore(output_table, texel, vec4(radiance, 1.0));
-}
-)glsl";
-  const ComputeProgram program = MakeSkyProgram(main_source, "ground-view table", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  program.SetFloat("r", r_km);
-  program.SetFloat("mu_s", mu_s);
-  const SampledTables tables(program, {{"transmittance_texture", &transmittance},
-                                       {"ground_irradiance_texture", &ground_irradiance},
-                                       {"sky_view_texture", &sky_view}});
-  shared::Texture2D table = RunTablePass(program, {sky_view.width, sky_view.height}, "ground-view table", timing);
-  table.repeat_u = true;
-  return table;
-}
-
-Image RenderSkyViewFrameGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                           const shared::Texture2D& transmittance, const shared::Texture2D& sky_view,
-                           const shared::CameraParameters& camera, double r_km, double horizon_nadir_angle,
-                           const shared::vec3& sun_direction, bool sun_disc, const shared::vec3& solar_irradiance,
-                           GlPassTiming* timing) {
-  context.MakeCurrent();
-  const std::string main_source = R"glsl(
+void HillaireGl::RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
+                             PassTimings* timings) {
+  if (!view_set_) throw Error("GL hillaire: RenderFrame before SetView");
+  if (terms.ground && uses_sky_view_ && !has_ground_view_) {
+    throw Error("GL hillaire: a frame with the ground term needs SetView(..., ground = true)");
+  }
+  context_.MakeCurrent();
+  const ComputeProgram& program = context_.Program({ATMO_SKY_FILES}, R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
-uniform AtmosphereParameters atmosphere;
-uniform sampler2D transmittance_texture;
-uniform sampler2D sky_view_texture;
+)glsl" + std::string(kSkyRadianceSource) + R"glsl(
 uniform CameraParameters camera;
-uniform float r;                    // km
-uniform float horizon_nadir_angle;  // GetHorizonNadirAngle(atmosphere, r), radians
-uniform vec3 sun_direction;         // unit, local frame (x east, y north, z up)
 uniform bool sun_disc;
+uniform bool ground;  // per pixel where the ray is marched; the sky-view table has it otherwise
 uniform vec3 solar_irradiance;
 
 void main() {
@@ -365,36 +329,124 @@ void main() {
   bool seen = GetCameraRayDirection(camera, vec2(pixel) + vec2(0.5), direction);
   vec3 radiance = vec3(0.0);
   if (seen) {
-    float azimuth = GetAzimuthFromSun(direction, sun_direction);
-    vec2 uv = GetSkyViewTextureUvFromBeta(textureSize(sky_view_texture, 0), horizon_nadir_angle, direction.z, azimuth);
-    radiance = texture(sky_view_texture, uv).rgb;
+    radiance = GetSkyRadianceAlong(direction);
+    float nu = dot(direction, sun_direction);
     if (sun_disc) {
-      radiance += GetSunDiscRadiance(atmosphere, transmittance_texture, r, direction.z, dot(direction, sun_direction));
+      radiance += GetSunDiscRadiance(atmosphere, transmittance_texture, r, direction.z, nu);
+    }
+    if (ground && !use_sky_view) {
+      radiance += GetGroundRadiance(atmosphere, transmittance_texture, ground_irradiance_texture, r, direction.z,
+          mu_s, nu);
     }
   }
   imageStore(output_image, pixel, vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0));
 }
-)glsl";
-  const ComputeProgram program = MakeSkyProgram(main_source, "frame", timing);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
-  SetCameraUniforms(program, "camera", camera);
-  program.SetFloat("r", r_km);
-  program.SetFloat("horizon_nadir_angle", horizon_nadir_angle);
-  program.SetVec3("sun_direction", sun_direction);
-  program.SetInt("sun_disc", sun_disc ? 1 : 0);
-  program.SetVec3("solar_irradiance", solar_irradiance);
-  const SampledTables tables(program, {{"transmittance_texture", &transmittance}, {"sky_view_texture", &sky_view}});
-  const std::vector<float> rgba = DispatchImagePass(program, {camera.width, camera.height}, "frame", timing);
-  const auto start = Clock::now();
-  Image image(camera.width, camera.height, 3);
-  const bool has_alpha = camera.kind == shared::kCameraFisheye;
-  if (has_alpha) image.alpha.assign(static_cast<std::size_t>(camera.width) * camera.height, 0.0f);
-  for (std::size_t i = 0; i < static_cast<std::size_t>(camera.width) * camera.height; ++i) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
-    if (has_alpha) image.alpha[i] = rgba[4 * i + 3];
+)glsl", "frame");
+  if (frame_.empty() || frame_.size2() != shared::ivec2(camera.width, camera.height)) {
+    frame_ = GpuTexture::Make2D({camera.width, camera.height});
   }
-  if (timing != nullptr) timing->readback_ms += MillisecondsSince(start);
+  frame_has_alpha_ = camera.kind == shared::kCameraFisheye;
+  SetSkyUniforms(program);
+  SetCameraUniforms(program, "camera", camera);
+  program.SetInt("sun_disc", terms.sun_disc ? 1 : 0);
+  program.SetInt("ground", terms.ground ? 1 : 0);
+  program.SetVec3("solar_irradiance", solar_irradiance_);
+  const GpuTexture& sky_view = terms.ground ? sky_and_ground_view_ : sky_view_;
+  BindSamplers(program, {{"transmittance_texture", &transmittance_},
+                         {"multiple_scattering_texture", &multiple_scattering_},
+                         {"ground_irradiance_texture", &ground_irradiance_},
+                         {"sky_view_texture", &sky_view}});
+  frame_.BindImage(0);
+  GpuPassTimer timer(timings);
+  DispatchCompute2D(program, frame_.size2());
+  timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  CheckGlError("frame");
+}
+
+Image HillaireGl::ReadFrame() const {
+  if (frame_.empty()) throw Error("GL hillaire: ReadFrame before RenderFrame");
+  context_.MakeCurrent();
+  const std::vector<float> rgba = frame_.DownloadRgba();
+  const shared::ivec2 size = frame_.size2();
+  Image image(size.x, size.y, 3);
+  const std::size_t n = static_cast<std::size_t>(size.x) * size.y;
+  if (frame_has_alpha_) image.alpha.assign(n, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
+    if (frame_has_alpha_) image.alpha[i] = rgba[4 * i + 3];
+  }
   return image;
+}
+
+void HillaireGl::Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec3>& radiance,
+                        std::vector<glm::dvec3>& transmittance, PassTimings* timings) {
+  if (!view_set_) throw Error("GL hillaire: Sample before SetView");
+  radiance.assign(views.size(), glm::dvec3(0.0));
+  transmittance.assign(views.size(), glm::dvec3(0.0));
+  if (views.empty()) return;
+  context_.MakeCurrent();
+  const ComputeProgram& program = context_.Program({ATMO_SKY_FILES}, R"glsl(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer Directions { vec4 directions[]; };
+layout(std430, binding = 1) writeonly buffer Results { vec4 results[]; };  // radiance, transmittance
+)glsl" + std::string(kSkyRadianceSource) + R"glsl(
+uniform int count;
+
+void main() {
+  int i = int(gl_GlobalInvocationID.x);
+  if (i >= count) return;
+  vec3 direction = directions[i].xyz;
+  results[2 * i] = vec4(GetSkyRadianceAlong(direction), 1.0);
+  results[2 * i + 1] = vec4(GetViewTransmittance(atmosphere, transmittance_texture, r, direction.z), 1.0);
+}
+)glsl", "sample");
+  std::vector<float> directions(4 * views.size());
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const glm::dvec3 v = glm::normalize(views[i]);
+    directions[4 * i] = static_cast<float>(v.x);
+    directions[4 * i + 1] = static_cast<float>(v.y);
+    directions[4 * i + 2] = static_cast<float>(v.z);
+  }
+  GLuint buffers[2] = {0, 0};
+  glCreateBuffers(2, buffers);
+  glNamedBufferStorage(buffers[0], static_cast<GLsizeiptr>(directions.size() * sizeof(float)), directions.data(), 0);
+  const auto results_bytes = static_cast<GLsizeiptr>(8 * views.size() * sizeof(float));
+  glNamedBufferStorage(buffers[1], results_bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[0]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1]);
+  SetSkyUniforms(program);
+  program.SetInt("count", static_cast<int>(views.size()));
+  BindSamplers(program, {{"transmittance_texture", &transmittance_},
+                         {"multiple_scattering_texture", &multiple_scattering_},
+                         {"ground_irradiance_texture", &ground_irradiance_},
+                         {"sky_view_texture", &sky_view_}});
+  {
+    GpuPassTimer timer(timings);
+    DispatchCompute1D(program, static_cast<int>(views.size()));
+    timer.Stop("sample_" + std::to_string(views.size()));
+  }
+  std::vector<float> results(8 * views.size());
+  glGetNamedBufferSubData(buffers[1], 0, results_bytes, results.data());
+  glDeleteBuffers(2, buffers);
+  CheckGlError("sample");
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    radiance[i] = glm::dvec3(results[8 * i], results[8 * i + 1], results[8 * i + 2]);
+    transmittance[i] = glm::dvec3(results[8 * i + 4], results[8 * i + 5], results[8 * i + 6]);
+  }
+}
+
+Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
+                       const HillaireSettings& settings, const RenderSettings& render, PassTimings* timings) {
+  ValidateCamera(render.camera);
+  for (const double value : {render.altitude_m, render.sun_elevation_deg, render.sun_azimuth_deg}) {
+    if (!std::isfinite(value)) throw Error("altitude and sun angles must be finite");
+  }
+  HillaireGl sky(context, parameters, settings);
+  sky.Precompute(timings);
+  sky.SetView(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg), render.terms.ground,
+              timings);
+  sky.RenderFrame(ToSharedCamera(render.camera), render.terms, timings);
+  return sky.ReadFrame();
 }
 
 }  // namespace atmo::gl

@@ -1,85 +1,135 @@
-// The hillaire tables computed by OpenGL compute shaders (private to the GL backend).
+// Model hillaire on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend.
 //
-// Each pass is a compute shader whose main() calls the shared per-texel kernel of
-// src/atmo/shared with the texel centre, in float, and writes an rgba32f image that is read back
-// into a shared::Texture2D (the layout of the CPU tables, so either backend's table feeds either
-// backend's lookups). The atmosphere is uploaded member by member as the uniform struct
-// `atmosphere` (program.h).
+// Every table and every per-pixel or per-direction evaluation is a GL compute pass whose main()
+// calls the shared per-texel kernels of src/atmo/shared in float, with the atmosphere in km
+// (ToSharedParameters(p, batch, 1000)): transmittance_lut, multiple_scattering_lut,
+// ground_irradiance_lut, sky_view_lut, ground_view_lut, frame_WxH, sample_N. The tables stay on the
+// GPU between passes (resources.h) and are read back only on request; programs are compiled once
+// per context (Context::Program), so a pass run again costs only its dispatch.
 //
-// To use it: with a gl::Context alive on this thread and km parameters
-// (ToSharedParameters(p, batch, 1000)):
-//   shared::Texture2D t = gl::ComputeTransmittanceTableGl(context, km, {256, 64}, 40);
-// Table values do not depend on the length unit (transmittance is unitless; the multiple-scattering
-// radiance integrates sigma_s dt), so GL and CPU tables are interchangeable.
+// To use it (a gl::Context alive on this thread):
+//   gl::HillaireGl sky(context, Preset("earth"), HillaireSettings{});
+//   sky.Precompute(&timings);                          // the view-independent tables
+//   sky.SetView(altitude_m, sun_direction, /*ground=*/true, &timings);
+//   sky.RenderFrame(ToSharedCamera(camera), terms, &timings);
+//   Image image = sky.ReadFrame();
+// or sky.Sample(directions, ...) for the radiance and transmittance of single directions (the
+// `atmo sample` contract). timings (may be null) receives each pass's GPU time.
+//
+// As on the CPU (HillaireModel), an observer inside the atmosphere looks the sky up in the
+// sky-view table; above the atmosphere, or with sky_view=off, every pixel or direction is ray
+// marched (IntegrateScatteredRadiance, ray_march_samples steps) and the lit ground is evaluated per
+// pixel. Tables and results are interchangeable with the CPU's (shared::Texture2D layout; the
+// values do not depend on the length unit).
 #pragma once
 
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
 #include "atmo/image.h"
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/timing.h"
 #include "gl/context.h"
+#include "gl/resources.h"
+#include "models/hillaire_model.h"
 #include "shared/shared.h"
 
 namespace atmo::gl {
 
-// Wall-clock times of one GL pass; each phase ends with glFinish.
-struct GlPassTiming {
-  double compile_ms = 0.0;   // shader compile + link (llvmpipe JITs here and at the first dispatch)
-  double dispatch_ms = 0.0;  // uniforms, dispatch, barrier, until the GPU is done
-  double readback_ms = 0.0;  // glGetTexImage into the Texture2D (or Image)
-  double gpu_ms = 0.0;       // the dispatch alone, measured on the GPU (GL_TIME_ELAPSED query);
-                             // dispatch_ms where the query reports 0 (llvmpipe dispatches synchronously)
+// The passes, one table (or image) each; inputs are sampled with GL_LINEAR and clamp to edge
+// (repeat in u for the sky view), the rules of shared::Texture2D. `out` decides the size.
+
+// texel (x, y) = ComputeTransmittanceToTopAtmosphereBoundaryTexel(km, size, (x + 0.5, y + 0.5), samples).
+void RunTransmittancePass(const Context& context, const shared::AtmosphereParameters& km, int sample_count,
+                          const GpuTexture& out);
+// texel = ComputeMultiScatteringTexel(km, transmittance, size, centre, directions, samples,
+// media_phase, ground_transfer); ground_transfer is unitless (shared::GetGroundTransfer, or 0).
+void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereParameters& km,
+                               const GpuTexture& transmittance, int direction_count, int sample_count,
+                               bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out);
+// width x 1: texel x = ComputeGroundIrradianceTexel(km, transmittance, multiple_scattering, width, x + 0.5, ...).
+void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
+                             const GpuTexture& transmittance, const GpuTexture& multiple_scattering,
+                             int direction_count, int sample_count, const GpuTexture& out);
+// The sky view of an observer at r_km (inside the atmosphere) and a sun at zenith cosine mu_s:
+// texel = ComputeSkyViewTexel(km, transmittance, multiple_scattering, size, centre, r_km, mu_s,
+// samples). The height must be even (sky and ground halves); `out` should repeat in u.
+void RunSkyViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
+                    const GpuTexture& multiple_scattering, double r_km, double mu_s, int sample_count,
+                    const GpuTexture& out);
+// out = sky_view + ComputeGroundViewTexel(km, transmittance, ground_irradiance, size, centre, r_km,
+// mu_s): the lit ground below the horizon (HillaireModel::AddGroundView on the CPU).
+void RunGroundViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
+                       const GpuTexture& ground_irradiance, const GpuTexture& sky_view, double r_km, double mu_s,
+                       const GpuTexture& out);
+
+class HillaireGl {
+ public:
+  // Throws atmo::Error for parameters hillaire rejects or without exactly 3 channels.
+  HillaireGl(const Context& context, const AtmosphereParameters& parameters, const HillaireSettings& settings);
+
+  // transmittance_lut, multiple_scattering_lut, ground_irradiance_lut.
+  void Precompute(PassTimings* timings = nullptr);
+  // The observer (altitude >= 0, metres) and the sun (unit, local frame: x east, y north, z up).
+  // Inside the atmosphere with the sky-view table on: sky_view_lut, and with `ground`
+  // ground_view_lut (the table that frames with the ground term read). Needs Precompute().
+  void SetView(double altitude_m, const glm::dvec3& sun_direction, bool ground, PassTimings* timings = nullptr);
+  bool uses_sky_view() const { return uses_sky_view_; }
+
+  // One frame through `camera` into a GPU image (frame_WxH): the sky (and the ground and the sun
+  // disc as `terms` says; `ground` needs SetView(..., ground = true) with the sky-view table) per
+  // unit solar irradiance times parameters.solar_irradiance, as atmo::RenderView.
+  void RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
+                   PassTimings* timings = nullptr);
+  // The last frame: RGB, with alpha (0 outside the circle) for a fisheye camera.
+  Image ReadFrame() const;
+
+  // Per unit direction (local frame): the scattered radiance per unit solar irradiance (no sun
+  // disc, no ground light) and the transmittance to the top of the atmosphere (0 towards the
+  // ground), as SkyView::Radiance and Transmittance (pass sample_N).
+  void Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec3>& radiance,
+              std::vector<glm::dvec3>& transmittance, PassTimings* timings = nullptr);
+
+  // Read-backs of the tables (shared::Texture2D layout).
+  shared::Texture2D ReadTransmittance() const { return transmittance_.Download2D(); }
+  shared::Texture2D ReadMultipleScattering() const { return multiple_scattering_.Download2D(); }
+  shared::Texture2D ReadGroundIrradiance() const { return ground_irradiance_.Download2D(); }
+  shared::Texture2D ReadSkyView() const { return sky_view_.Download2D(); }
+  shared::Texture2D ReadSkyAndGroundView() const { return sky_and_ground_view_.Download2D(); }
+
+ private:
+  void SetSkyUniforms(const ComputeProgram& program) const;
+
+  const Context& context_;
+  HillaireSettings settings_;
+  shared::AtmosphereParameters metres_;  // double, for what the host computes
+  shared::AtmosphereParameters km_;      // for the GPU (program.h)
+  shared::vec3 solar_irradiance_;
+  GpuTexture transmittance_;
+  GpuTexture multiple_scattering_;
+  GpuTexture ground_irradiance_;
+  GpuTexture sky_view_;
+  GpuTexture sky_and_ground_view_;
+  GpuTexture frame_;
+  bool precomputed_ = false;
+  bool view_set_ = false;
+  bool uses_sky_view_ = false;
+  bool has_ground_view_ = false;
+  double r_km_ = 0.0;
+  double mu_s_ = 1.0;
+  double horizon_nadir_angle_ = 0.0;
+  glm::dvec3 sun_{0.0, 0.0, 1.0};
+  bool frame_has_alpha_ = false;
 };
 
-// The transmittance table, texel (x, y) = ComputeTransmittanceToTopAtmosphereBoundaryTexel(
-// km_atmosphere, size, (x + 0.5, y + 0.5), sample_count) in float.
-shared::Texture2D ComputeTransmittanceTableGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                              shared::ivec2 size, int sample_count, GlPassTiming* timing = nullptr);
-
-// The multiple-scattering table, texel (x, y) = ComputeMultiScatteringTexel(km_atmosphere,
-// transmittance, size, (x + 0.5, y + 0.5), direction_count, sample_count, media_phase,
-// ground_transfer) in float. `transmittance` (from either backend) is sampled with GL_LINEAR and
-// clamp to edge, the rules shared::Texture2D follows; `ground_transfer` is unitless
-// (shared::GetGroundTransfer, or 0).
-shared::Texture2D ComputeMultipleScatteringTableGl(const Context& context,
-                                                   const shared::AtmosphereParameters& km_atmosphere,
-                                                   const shared::Texture2D& transmittance, shared::ivec2 size,
-                                                   int direction_count, int sample_count, bool media_phase,
-                                                   const shared::vec3& ground_transfer,
-                                                   GlPassTiming* timing = nullptr);
-
-// The ground-irradiance table (width x 1), texel x = ComputeGroundIrradianceTexel(km_atmosphere,
-// transmittance, multiple_scattering, width, x + 0.5, direction_count, sample_count) in float.
-shared::Texture2D ComputeGroundIrradianceTableGl(const Context& context,
-                                                 const shared::AtmosphereParameters& km_atmosphere,
-                                                 const shared::Texture2D& transmittance,
-                                                 const shared::Texture2D& multiple_scattering, int width,
-                                                 int direction_count, int sample_count,
-                                                 GlPassTiming* timing = nullptr);
-
-// The sky-view table of an observer at radius `r_km` (inside the atmosphere) and a sun at zenith
-// cosine `mu_s`: texel (x, y) = ComputeSkyViewTexel(km_atmosphere, transmittance,
-// multiple_scattering, size, (x + 0.5, y + 0.5), r_km, mu_s, sample_count) in float. The height
-// must be even (sky and ground halves); the result repeats in u (repeat_u), as the CPU table.
-shared::Texture2D ComputeSkyViewTableGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                        const shared::Texture2D& transmittance,
-                                        const shared::Texture2D& multiple_scattering, shared::ivec2 size, double r_km,
-                                        double mu_s, int sample_count, GlPassTiming* timing = nullptr);
-
-// `sky_view` plus the lit ground below the horizon: texel (x, y) = sky_view(x, y) +
-// ComputeGroundViewTexel(km_atmosphere, transmittance, ground_irradiance, size, (x + 0.5, y + 0.5),
-// r_km, mu_s) (HillaireModel::AddGroundView on the CPU).
-shared::Texture2D AddGroundViewGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                  const shared::Texture2D& transmittance, const shared::Texture2D& ground_irradiance,
-                                  const shared::Texture2D& sky_view, double r_km, double mu_s,
-                                  GlPassTiming* timing = nullptr);
-
-// The frame pass of configuration gl_f32_rgb: per pixel the camera ray (GetCameraRayDirection),
-// the sky-view table looked up with GetSkyViewTextureUvFromBeta(horizon_nadir_angle) and
-// GetAzimuthFromSun (GL_LINEAR, repeat in u, clamp in v), plus GetSunDiscRadiance at full
-// resolution when `sun_disc`, times `solar_irradiance` per channel. Returns an RGB image, with
-// alpha (0 outside the circle) for a fisheye camera, as atmo::RenderView.
-Image RenderSkyViewFrameGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                           const shared::Texture2D& transmittance, const shared::Texture2D& sky_view,
-                           const shared::CameraParameters& camera, double r_km, double horizon_nadir_angle,
-                           const shared::vec3& sun_direction, bool sun_disc, const shared::vec3& solar_irradiance,
-                           GlPassTiming* timing = nullptr);
+// Renders one frame of model hillaire on the GL backend (a HillaireGl through all passes):
+// what atmo::Render gives on the CPU. Throws atmo::Error (one line) for what atmo::Render rejects.
+Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
+                       const HillaireSettings& settings, const RenderSettings& render,
+                       PassTimings* timings = nullptr);
 
 }  // namespace atmo::gl
