@@ -342,8 +342,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         }
         luminance_sum += luminance * ray.weight;
       }
-      const vec3 second_order = luminance_sum / double(direction_count);
-      table.at(x, y) = glm::vec3(second_order / (vec3(1.0) - glm::min(f_ms, vec3(0.999))));
+      table.at(x, y) = glm::vec3(shared::GetMultiScatteringFromMeans(luminance_sum / double(direction_count), f_ms));
     }
   });
 }

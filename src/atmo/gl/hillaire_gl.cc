@@ -32,6 +32,34 @@ uniform AtmosphereParameters atmosphere;
 
 std::string TablePass(std::string_view body) { return std::string(kTablePassHeader) + std::string(body); }
 
+// For passes with one work group of 64 invocations per texel (as Hillaire 2020 does for its
+// multiple-scattering table): invocation `lane` integrates directions lane, lane + 64, ... and
+// SumOverWorkGroup adds two vec3 partial sums over the group (a tree in shared memory); every
+// invocation receives the totals. A GPU then runs 64 times more threads, each with 1/64 of a
+// texel's rays.
+constexpr std::string_view kWorkGroupSumSource = R"glsl(
+layout(local_size_x = 64) in;
+shared vec3 partial_a[64];
+shared vec3 partial_b[64];
+
+void SumOverWorkGroup(int lane, inout vec3 a, inout vec3 b) {
+  partial_a[lane] = a;
+  partial_b[lane] = b;
+  memoryBarrierShared();
+  barrier();
+  for (int stride = 32; stride > 0; stride /= 2) {
+    if (lane < stride) {
+      partial_a[lane] += partial_a[lane + stride];
+      partial_b[lane] += partial_b[lane + stride];
+    }
+    memoryBarrierShared();
+    barrier();
+  }
+  a = partial_a[0];
+  b = partial_b[0];
+}
+)glsl";
+
 // The sky seen along a direction, for the frame and the sample passes: the sky-view table or the
 // per-direction ray march (HillaireSkyView::Radiance on the CPU).
 constexpr std::string_view kSkyRadianceSource = R"glsl(
@@ -90,7 +118,10 @@ void main() {
 void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereParameters& km,
                                const GpuTexture& transmittance, int direction_count, int sample_count,
                                bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out) {
-  const ComputeProgram& program = context.Program({ATMO_MULTIPLE_SCATTERING_FILES}, TablePass(R"glsl(
+  // One work group per texel (kWorkGroupSumSource), then the texel kernel's last step.
+  const ComputeProgram& program = context.Program({ATMO_MULTIPLE_SCATTERING_FILES}, std::string(kWorkGroupSumSource) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
+uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
 uniform int direction_count;
 uniform int sample_count;
@@ -98,14 +129,29 @@ uniform bool media_phase;
 uniform vec3 ground_transfer;
 
 void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 psi_ms = ComputeMultiScatteringTexel(atmosphere, transmittance_texture, size, vec2(texel) + vec2(0.5),
-      direction_count, sample_count, media_phase, ground_transfer);
-  imageStore(output_table, texel, vec4(psi_ms, 1.0));
+  ivec2 texel = ivec2(gl_WorkGroupID.xy);
+  int lane = int(gl_LocalInvocationID.x);
+  float r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, imageSize(output_table), vec2(texel) + vec2(0.5), r, sun_direction);
+  vec3 luminance_sum = vec3(0.0);
+  vec3 transfer_sum = vec3(0.0);
+  for (int k = lane; k < direction_count; k += 64) {
+    vec3 luminance;
+    vec3 transfer;
+    IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
+        sun_direction, sample_count, media_phase, ground_transfer, luminance, transfer);
+    luminance_sum += luminance;
+    transfer_sum += transfer;
+  }
+  SumOverWorkGroup(lane, luminance_sum, transfer_sum);
+  if (lane == 0) {
+    vec3 psi_ms = GetMultiScatteringFromMeans(luminance_sum / float(direction_count),
+        transfer_sum / float(direction_count));
+    imageStore(output_table, texel, vec4(psi_ms, 1.0));
+  }
 }
-)glsl"), "multiple-scattering table");
+)glsl", "multiple-scattering table");
   SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetInt("direction_count", direction_count);
   program.SetInt("sample_count", sample_count);
@@ -113,34 +159,42 @@ void main() {
   program.SetVec3("ground_transfer", ground_transfer);
   BindSamplers(program, {{"transmittance_texture", &transmittance}});
   out.BindImage(0);
-  DispatchCompute2D(program, out.size2());
+  DispatchWorkGroups(program, {out.size().x, out.size().y, 1});
 }
 
 void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
                              const GpuTexture& transmittance, const GpuTexture& multiple_scattering,
                              int direction_count, int sample_count, const GpuTexture& out) {
-  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+  // One work group per texel (kWorkGroupSumSource), as ComputeGroundIrradianceTexel sums.
+  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, std::string(kWorkGroupSumSource) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
+uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
 uniform sampler2D multiple_scattering_texture;
 uniform int direction_count;
 uniform int sample_count;
 
 void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 irradiance = ComputeGroundIrradianceTexel(atmosphere, transmittance_texture, multiple_scattering_texture,
-      size.x, float(texel.x) + 0.5, direction_count, sample_count);
-  imageStore(output_table, texel, vec4(irradiance, 1.0));
+  ivec2 texel = ivec2(gl_WorkGroupID.xy);
+  int lane = int(gl_LocalInvocationID.x);
+  float mu_s = GetGroundIrradianceTexelMuS(imageSize(output_table).x, float(texel.x) + 0.5);
+  vec3 sum = vec3(0.0);
+  vec3 unused = vec3(0.0);
+  for (int k = lane; k < direction_count; k += 64) {
+    sum += ComputeGroundIrradianceTerm(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
+        direction_count, sample_count);
+  }
+  SumOverWorkGroup(lane, sum, unused);
+  if (lane == 0) imageStore(output_table, texel, vec4(sum * (2.0 * kPi / float(direction_count)), 1.0));
 }
-)glsl"), "ground-irradiance table");
+)glsl", "ground-irradiance table");
   SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetInt("direction_count", direction_count);
   program.SetInt("sample_count", sample_count);
   BindSamplers(program,
                {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   out.BindImage(0);
-  DispatchCompute2D(program, out.size2());
+  DispatchWorkGroups(program, {out.size().x, out.size().y, 1});
 }
 
 void RunSkyViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,

@@ -163,6 +163,10 @@ void DispatchCompute1D(const ComputeProgram& program, int count) {
   Dispatch(program, GroupCount(count, kGroupSize1D), 1, 1);
 }
 
+void DispatchWorkGroups(const ComputeProgram& program, shared::ivec3 groups) {
+  Dispatch(program, static_cast<GLuint>(groups.x), static_cast<GLuint>(groups.y), static_cast<GLuint>(groups.z));
+}
+
 namespace {
 
 double NowMs() {

@@ -80,6 +80,8 @@ inline constexpr int kGroupSize1D = 64;
 void DispatchCompute2D(const ComputeProgram& program, shared::ivec2 size);
 void DispatchCompute3D(const ComputeProgram& program, shared::ivec3 size);
 void DispatchCompute1D(const ComputeProgram& program, int count);
+// One work group per element of `groups` (for passes whose work group cooperates on one texel).
+void DispatchWorkGroups(const ComputeProgram& program, shared::ivec3 groups);
 
 // The GPU time of the passes between construction (or the last Stop) and Stop(name), added to
 // `timings` under `name`: a GL_TIME_ELAPSED query, or, on llvmpipe (which runs a dispatch on the

@@ -126,14 +126,29 @@ vec3 GetGroundTransfer(IN(AtmosphereParameters) atmosphere, int direction_count,
   return sum / Number(direction_count);
 }
 
+// The point and the sun of the texel at frag_coord of the multiple-scattering table: radius r
+// and the sun in the plane y = 0 at zenith cosine mu_s.
+void GetMultiScatteringTexelPoint(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size, IN(vec2) frag_coord,
+    OUT(Number) r, OUT(vec3) sun_direction) {
+  Number mu_s;
+  GetRMuSFromMultiScatteringTextureUv(atmosphere, texture_size, frag_coord / vec2(texture_size), r, mu_s);
+  sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+}
+
+// Psi_ms from the means over the directions of IntegrateMultiScatteringRay's luminance (L_2nd)
+// and transfer (f_ms). Each direction stands for 4 pi / count sr; with the isotropic phase
+// 1 / (4 pi) both integrals are plain means. f_ms < 1 always; 0.999 guards the division.
+vec3 GetMultiScatteringFromMeans(IN(vec3) second_order, IN(vec3) f_ms) {
+  return second_order / (vec3(1.0) - min(f_ms, vec3(0.999)));
+}
+
 // The per-texel kernel of the multiple-scattering table.
 vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase,
     IN(vec3) ground_transfer) {
   Number r;
-  Number mu_s;
-  GetRMuSFromMultiScatteringTextureUv(atmosphere, texture_size, frag_coord / vec2(texture_size), r, mu_s);
-  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
   vec3 luminance_sum = vec3(0.0);
   vec3 transfer_sum = vec3(0.0);
   for (int k = 0; k < direction_count; ++k) {
@@ -144,9 +159,5 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
     luminance_sum += luminance;
     transfer_sum += transfer;
   }
-  // Each direction stands for 4 pi / count sr; with the isotropic phase 1 / (4 pi) both
-  // integrals become plain means.
-  vec3 second_order = luminance_sum / Number(direction_count);
-  vec3 f_ms = transfer_sum / Number(direction_count);
-  return second_order / (vec3(1.0) - min(f_ms, vec3(0.999)));
+  return GetMultiScatteringFromMeans(luminance_sum / Number(direction_count), transfer_sum / Number(direction_count));
 }

@@ -196,23 +196,36 @@ vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTe
 // is a 1D table (x = (mu_s + 1) / 2 on texel centres). Its per-texel kernel integrates the
 // ray-marched radiance over `direction_count` directions uniform in z = cos(theta) (each of
 // solid angle 2 pi / count) with golden-angle azimuths.
+// The sun zenith cosine of the texel at frag_x of the ground-irradiance table.
+Number GetGroundIrradianceTexelMuS(int texture_width, Number frag_x) {
+  return 2.0 * GetUnitRangeFromTextureCoord(frag_x / Number(texture_width), texture_width) - 1.0;
+}
+
+// Direction k's term of the quadrature below, z L(R, w_k), for a sun at zenith cosine mu_s.
+vec3 ComputeGroundIrradianceTerm(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, Number mu_s, int k, int direction_count,
+    int sample_count) {
+  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+  Number golden_angle = kPi * (3.0 - sqrt(5.0));
+  Number z = 1.0 - (Number(k) + 0.5) / Number(direction_count);
+  Number phi = Number(k) * golden_angle;
+  Number s = SafeSqrt(1.0 - z * z);
+  vec3 direction = vec3(s * cos(phi), s * sin(phi), z);
+  vec3 transmittance;
+  return z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
+      atmosphere.bottom_radius, z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
+}
+
 vec3 ComputeGroundIrradianceTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(MultiScatteringTexture) multiple_scattering_texture, int texture_width, Number frag_x, int direction_count,
     int sample_count) {
-  Number mu_s = 2.0 * GetUnitRangeFromTextureCoord(frag_x / Number(texture_width), texture_width) - 1.0;
-  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
-  Number golden_angle = kPi * (3.0 - sqrt(5.0));
-  vec3 irradiance = vec3(0.0);
+  Number mu_s = GetGroundIrradianceTexelMuS(texture_width, frag_x);
+  vec3 sum = vec3(0.0);
   for (int k = 0; k < direction_count; ++k) {
-    Number z = 1.0 - (Number(k) + 0.5) / Number(direction_count);
-    Number phi = Number(k) * golden_angle;
-    Number s = SafeSqrt(1.0 - z * z);
-    vec3 direction = vec3(s * cos(phi), s * sin(phi), z);
-    vec3 transmittance;
-    irradiance += z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
-        atmosphere.bottom_radius, z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
+    sum += ComputeGroundIrradianceTerm(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
+        direction_count, sample_count);
   }
-  return irradiance * (2.0 * kPi / Number(direction_count));
+  return sum * (2.0 * kPi / Number(direction_count));
 }
 
 vec3 GetGroundIrradianceFromSky(IN(TransmittanceTexture) ground_irradiance_texture, Number mu_s) {
