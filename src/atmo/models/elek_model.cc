@@ -205,16 +205,30 @@ void ElekModel::SetRgba(std::size_t b, const std::vector<float>& rgba) {
   }
 }
 
+void ElekModel::SetComputedTables(std::size_t b, shared::Texture2D transmittance,
+                                  std::vector<cpu::ElekScattering> orders, cpu::ElekScattering total) {
+  if (!settings_.table.empty()) {
+    throw Error("model elek loads its table (option table=" + settings_.table + "); it takes no computed tables");
+  }
+  Batch& batch = batches_.at(b);
+  const glm::ivec3 s = settings_.size;
+  const auto same_size = [&](const cpu::ElekScattering& t) {
+    const auto sized = [&](const shared::Texture3D& c) { return c.width == s.x && c.height == s.y && c.depth == s.z; };
+    return sized(t.rayleigh) && sized(t.mie);
+  };
+  bool ok = transmittance.width == settings_.transmittance_lut.x &&
+            transmittance.height == settings_.transmittance_lut.y &&
+            orders.size() == static_cast<std::size_t>(settings_.orders) && same_size(total);
+  for (const cpu::ElekScattering& order : orders) ok = ok && same_size(order);
+  if (!ok) throw Error("elek tables: the computed tables do not have the sizes and order count of the settings");
+  batch.transmittance = std::move(transmittance);
+  batch.orders = std::move(orders);
+  batch.total = std::move(total);
+}
+
 shared::vec3 ElekModel::BatchRadiance(const Batch& batch, double r, double mu, double mu_s, double nu) const {
-  const shared::AtmosphereParameters& a = batch.atmosphere;
-  double t_limit = 1e300;
-  if (!shared::MoveToAtmosphereEntry(a, r, mu, mu_s, nu, t_limit)) return shared::vec3(0.0);
-  const double h = r - a.bottom_radius;
-  const shared::vec3 rayleigh = shared::GetElekTableValue(a, batch.total.rayleigh, settings_.mapping, h, mu, mu_s);
-  const shared::vec3 mie_table = shared::GetElekTableValue(a, batch.total.mie, settings_.mapping, h, mu, mu_s);
-  const shared::vec3 mie =
-      settings_.mie_per_channel ? mie_table : shared::GetElekMieFromFirstChannel(a, rayleigh, mie_table.x);
-  return shared::GetRayleighPhase(a, nu) * rayleigh + shared::GetMiePhase(a, nu) * mie;
+  return shared::GetElekRadiance(batch.atmosphere, batch.total.rayleigh, batch.total.mie, settings_.mapping,
+                                 settings_.mie_per_channel, r, mu, mu_s, nu);
 }
 
 // The per-view state: the observer radius and the sun. The table has no per-view part.

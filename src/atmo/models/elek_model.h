@@ -84,6 +84,12 @@ class ElekModel final : public Model {
   std::vector<float> Rgba(std::size_t batch) const;
   // Replaces the batch's summed table by an RGBA one (a loaded table; its orders are dropped).
   void SetRgba(std::size_t batch, const std::vector<float>& rgba);
+  // Sets the tables of a batch computed elsewhere (the GL backend, gl/elek_gl.h) instead of by
+  // Precompute(): the transmittance table, the orders I^(1) .. I^(K) and their sum, each with the
+  // sizes of the settings. Throws atmo::Error for other sizes or for a model that loads its table
+  // (option table=NAME).
+  void SetComputedTables(std::size_t batch, shared::Texture2D transmittance, std::vector<cpu::ElekScattering> orders,
+                         cpu::ElekScattering total);
 
  private:
   void ComputeTables(Batch& batch) const;

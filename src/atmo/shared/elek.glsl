@@ -111,6 +111,13 @@ ElekRayNode GetElekRayNode(IN(AtmosphereParameters) atmosphere, int steps, Numbe
   node.t = GetElekNodeDistance(steps, t_max, i, sample_count);
   node.weight = GetElekNodeWeight(steps, t_max, i, sample_count);
   node.r = sqrt(max(node.t * node.t + 2.0 * r * mu * node.t + r * r, 0.0));
+  // The last node of a ray that meets the ground is on it. The law of cosines above cancels to R
+  // there, off by ~1 m in float (km): a ground node would then see a sun down to ~6e-4 below its
+  // horizon that double (off by ~1e-9 m) shadows, where Mie is densest (the GL tables differed by
+  // up to 15x in such texels). Exact R gives both backends the P_c rule of the true ground point.
+  if (i == sample_count && RayIntersectsGround(atmosphere, r, mu)) {
+    node.r = atmosphere.bottom_radius;
+  }
   node.mu = ClampCosine((r * mu + node.t) / max(node.r, 1e-30));
   node.densities = GetDensities(atmosphere, node.r);
   node.extinction = GetExtinctionFromDensities(atmosphere, node.densities);
@@ -194,11 +201,12 @@ void ComputeElekMultipleScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(
     if (i > 0) optical_depth = AccumulateElekOpticalDepth(optical_depth, previous, node);
     Number mu_s_i = GetElekNodeSunCosine(r, mu_s, nu, node);
     bool same_side = nu - node.mu * mu_s_i >= 0.0;
-    Number h_i = node.r - atmosphere.bottom_radius;
-    vec3 g_r = same_side ? GetElekTableValue(atmosphere, gather_rayleigh_0, mapping, h_i, node.mu, mu_s_i)
-                         : GetElekTableValue(atmosphere, gather_rayleigh_pi, mapping, h_i, node.mu, mu_s_i);
-    vec3 g_m = same_side ? GetElekTableValue(atmosphere, gather_mie_0, mapping, h_i, node.mu, mu_s_i)
-                         : GetElekTableValue(atmosphere, gather_mie_pi, mapping, h_i, node.mu, mu_s_i);
+    // GetElekTableValue of the slice's tables, with the coordinate (the same for the four
+    // tables, which have one size) formed once.
+    vec3 uvw = GetElekUvwFromHMuMuS(atmosphere, mapping, node.r - atmosphere.bottom_radius, node.mu, mu_s_i);
+    vec3 coord = GetElekTextureCoordFromUvw(textureSize(gather_rayleigh_0, 0), uvw);
+    vec3 g_r = vec3(same_side ? texture(gather_rayleigh_0, coord) : texture(gather_rayleigh_pi, coord));
+    vec3 g_m = vec3(same_side ? texture(gather_mie_0, coord) : texture(gather_mie_pi, coord));
     vec3 view = exp(-optical_depth) * node.weight;
     rayleigh_sum += g_r * view * node.densities.x;
     mie_sum += g_m * view * node.densities.y;
@@ -339,4 +347,23 @@ vec3 GetElekMieFromFirstChannel(IN(AtmosphereParameters) atmosphere, IN(vec3) ra
     return mie_first * beta_m / beta_m.x;
   }
   return mie_first * (rayleigh / rayleigh.x) * (beta_r.x / beta_r) * (beta_m / beta_m.x);
+}
+
+// Radiance per unit solar irradiance seen from radius r along the view (mu, nu) with the sun at
+// mu_s, from the summed tables: L = p_R(nu) I_R + p_M(nu) I_M at the point where the view ray
+// enters the atmosphere (the observer itself when inside); 0 for a ray that misses it. The Mie
+// part is the table's own per channel (`mie_per_channel`, option mie=rgb) or that of the first
+// channel rebuilt by GetElekMieFromFirstChannel (the seed's RGBA table). The elek sky view on the
+// CPU and the GL frame both call it.
+vec3 GetElekRadiance(IN(AtmosphereParameters) atmosphere, IN(Texture3D) rayleigh_table, IN(Texture3D) mie_table,
+    int mapping, bool mie_per_channel, Number r, Number mu, Number mu_s, Number nu) {
+  Number t_limit = 1e30;  // no limit: longer than any ray to the atmosphere (length)
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
+    return vec3(0.0);
+  }
+  Number h = r - atmosphere.bottom_radius;
+  vec3 rayleigh = GetElekTableValue(atmosphere, rayleigh_table, mapping, h, mu, mu_s);
+  vec3 mie_value = GetElekTableValue(atmosphere, mie_table, mapping, h, mu, mu_s);
+  vec3 mie = mie_per_channel ? mie_value : GetElekMieFromFirstChannel(atmosphere, rayleigh, mie_value.x);
+  return GetRayleighPhase(atmosphere, nu) * rayleigh + GetMiePhase(atmosphere, nu) * mie;
 }

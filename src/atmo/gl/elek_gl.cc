@@ -1,0 +1,535 @@
+#include "gl/elek_gl.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include <epoxy/gl.h>
+
+#include "atmo/error.h"
+#include "cpu/camera.h"
+#include "gl/program.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo::gl {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Every elek pass compiles the same shared files (in shared.h's order): elek.glsl reads the
+// transmittance (transmittance.glsl), the phases (phase.glsl) and, for the radiance lookup, the
+// atmosphere entry of sky.glsl; the frame adds the camera.
+const ComputeProgram& ElekProgram(const Context& context, const std::string& main_source, const char* name,
+                                  double& compile_ms) {
+  double ms = 0.0;
+  const ComputeProgram& program =
+      context.Program({"definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl",
+                       "multiple_scattering.glsl", "sky.glsl", "camera.glsl", "elek.glsl"},
+                      main_source, name, &ms);
+  compile_ms += ms;
+  return program;
+}
+
+// The declarations of the 3D table passes (work groups of kGroupSize3D^3 = 4 x 4 x 4).
+// ElekStoredTexel is the CPU's Store (cpu/elek_tables.cc): what would be a subnormal float
+// (|x| < 1e-30, far below any visible radiance) is stored as 0.
+constexpr const char* kTable3DHeader = R"glsl(
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+uniform AtmosphereParameters atmosphere;
+
+vec4 ElekStoredTexel(vec3 value) {
+  return vec4(mix(value, vec3(0.0), lessThan(abs(value), vec3(1e-30))), 1.0);
+}
+)glsl";
+
+// The transmittance table of the sun rays (the CPU's cpu::ComputeTransmittanceTable).
+constexpr const char* kTransmittanceMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D transmittance_table;
+uniform AtmosphereParameters atmosphere;
+uniform int sample_count;
+
+void main() {
+  ivec2 size = imageSize(transmittance_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(texel, size))) return;
+  vec3 transmittance =
+      ComputeTransmittanceToTopAtmosphereBoundaryTexel(atmosphere, size, vec2(texel) + vec2(0.5), sample_count);
+  imageStore(transmittance_table, texel, vec4(transmittance, 1.0));
+}
+)glsl";
+
+// Order 1, texel by texel (cpu::ComputeElekSingleScatteringTable).
+constexpr const char* kSingleMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D rayleigh_table;
+layout(rgba32f, binding = 1) uniform writeonly image3D mie_table;
+uniform sampler2D transmittance_texture;
+uniform int mapping;
+uniform int steps;
+uniform int sample_count;
+
+void main() {
+  ivec3 size = imageSize(rayleigh_table);
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  vec3 rayleigh;
+  vec3 mie;
+  ComputeElekSingleScatteringTexel(atmosphere, transmittance_texture, mapping, steps, size, texel, sample_count,
+      rayleigh, mie);
+  imageStore(rayleigh_table, texel, ElekStoredTexel(rayleigh));
+  imageStore(mie_table, texel, ElekStoredTexel(mie));
+}
+)glsl";
+
+// Order k >= 2 from the gather tables of order k - 1 (cpu::ComputeElekMultipleScatteringTable);
+// without the phase gather the same tables are bound to both azimuth slices.
+constexpr const char* kScatterMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D rayleigh_table;
+layout(rgba32f, binding = 1) uniform writeonly image3D mie_table;
+uniform sampler3D gather_rayleigh_0;
+uniform sampler3D gather_mie_0;
+uniform sampler3D gather_rayleigh_pi;
+uniform sampler3D gather_mie_pi;
+uniform int mapping;
+uniform int steps;
+uniform int sample_count;
+
+void main() {
+  ivec3 size = imageSize(rayleigh_table);
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  vec3 rayleigh;
+  vec3 mie;
+  ComputeElekMultipleScatteringTexel(atmosphere, gather_rayleigh_0, gather_mie_0, gather_rayleigh_pi, gather_mie_pi,
+      mapping, steps, size, texel, sample_count, rayleigh, mie);
+  imageStore(rayleigh_table, texel, ElekStoredTexel(rayleigh));
+  imageStore(mie_table, texel, ElekStoredTexel(mie));
+}
+)glsl";
+
+// The gather matrix, texel (j, y) = ComputeElekGatherWeightTexel of gather row y and table row j
+// (Rayleigh in x, Mie in y), not normalised: the gather pass divides by the row sums, as
+// cpu::ComputeElekGatherMatrix normalises its rows.
+constexpr const char* kGatherMatrixMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D gather_matrix;
+uniform AtmosphereParameters atmosphere;
+uniform int mapping;
+uniform int point_count;
+uniform int azimuth_count;
+
+void main() {
+  ivec2 size = imageSize(gather_matrix);  // (table rows, gather rows)
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(texel, size))) return;
+  vec2 weight = ComputeElekGatherWeightTexel(atmosphere, mapping, size.y, size.x, texel.y, texel.x, point_count,
+      azimuth_count);
+  imageStore(gather_matrix, texel, vec4(weight, 0.0, 1.0));
+}
+)glsl";
+
+// G_c[x, y, z] = sum_j M_c[y][j] I_c[x, j, z] / sum_j M_c[y][j] (cpu::ComputeElekGatherTable;
+// `coupled`: I_R + I_M feeds both components).
+constexpr const char* kGatherMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D gather_rayleigh;
+layout(rgba32f, binding = 1) uniform writeonly image3D gather_mie;
+layout(rgba32f, binding = 2) uniform readonly image2D gather_matrix;
+layout(rgba32f, binding = 3) uniform readonly image3D order_rayleigh;
+layout(rgba32f, binding = 4) uniform readonly image3D order_mie;
+uniform bool coupled;
+
+void main() {
+  ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  int rows = imageSize(order_rayleigh).y;
+  vec2 row_sum = vec2(0.0);
+  vec3 rayleigh_sum = vec3(0.0);
+  vec3 mie_sum = vec3(0.0);
+  for (int j = 0; j < rows; ++j) {
+    vec2 m = imageLoad(gather_matrix, ivec2(j, texel.y)).xy;
+    vec3 i_r = imageLoad(order_rayleigh, ivec3(texel.x, j, texel.z)).rgb;
+    vec3 i_m = imageLoad(order_mie, ivec3(texel.x, j, texel.z)).rgb;
+    rayleigh_sum += m.x * (coupled ? i_r + i_m : i_r);
+    mie_sum += m.y * (coupled ? i_r + i_m : i_m);
+    row_sum += m;
+  }
+  imageStore(gather_rayleigh, texel, ElekStoredTexel(rayleigh_sum / row_sum.x));
+  imageStore(gather_mie, texel, ElekStoredTexel(mie_sum / row_sum.y));
+}
+)glsl";
+
+// The weights of the phase gather of one azimuth slice, texel (j, y, z) =
+// ComputeElekPhaseGatherWeightTexel of gather row y, table row j and the sun cosine of slice z:
+// (RR, RM, MR, MM).
+constexpr const char* kPhaseWeightsMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D weights;
+uniform int mapping;
+uniform bool opposite_side;
+uniform int point_count;
+uniform int azimuth_count;
+
+void main() {
+  ivec3 size = imageSize(weights);  // (table rows, gather rows, D)
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  float h;
+  float mu;
+  float mu_s;
+  GetElekHMuMuSFromUvw(atmosphere, mapping, GetElekUvwFromTexel(size, ivec3(0, 0, texel.z)), h, mu, mu_s);
+  vec4 weight = ComputeElekPhaseGatherWeightTexel(atmosphere, mapping, size.y, size.x, texel.y, texel.x, mu_s,
+      opposite_side, point_count, azimuth_count);
+  imageStore(weights, texel, weight);
+}
+)glsl";
+
+// The phase gather of one slice (cpu::ComputeElekPhaseGatherTables).
+constexpr const char* kPhaseGatherMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D gather_rayleigh;
+layout(rgba32f, binding = 1) uniform writeonly image3D gather_mie;
+layout(rgba32f, binding = 2) uniform readonly image3D weights;
+layout(rgba32f, binding = 3) uniform readonly image3D order_rayleigh;
+layout(rgba32f, binding = 4) uniform readonly image3D order_mie;
+uniform bool coupled;
+
+void main() {
+  ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  int rows = imageSize(order_rayleigh).y;
+  vec3 rayleigh_sum = vec3(0.0);
+  vec3 mie_sum = vec3(0.0);
+  for (int j = 0; j < rows; ++j) {
+    vec4 k = imageLoad(weights, ivec3(j, texel.y, texel.z));
+    vec3 i_r = imageLoad(order_rayleigh, ivec3(texel.x, j, texel.z)).rgb;
+    vec3 i_m = imageLoad(order_mie, ivec3(texel.x, j, texel.z)).rgb;
+    if (coupled) {
+      rayleigh_sum += k.x * i_r + k.y * i_m;
+      mie_sum += k.z * i_r + k.w * i_m;
+    } else {
+      rayleigh_sum += k.x * i_r;
+      mie_sum += k.w * i_m;
+    }
+  }
+  imageStore(gather_rayleigh, texel, ElekStoredTexel(rayleigh_sum));
+  imageStore(gather_mie, texel, ElekStoredTexel(mie_sum));
+}
+)glsl";
+
+// total = order (first_order) or total + order, in the CPU's order of float additions.
+constexpr const char* kSumMain = R"glsl(
+layout(rgba32f, binding = 0) uniform image3D total_rayleigh;
+layout(rgba32f, binding = 1) uniform image3D total_mie;
+uniform sampler3D order_rayleigh;
+uniform sampler3D order_mie;
+uniform bool first_order;
+
+void main() {
+  ivec3 size = imageSize(total_rayleigh);
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  vec3 rayleigh = texelFetch(order_rayleigh, texel, 0).rgb;
+  vec3 mie = texelFetch(order_mie, texel, 0).rgb;
+  if (!first_order) {
+    rayleigh = imageLoad(total_rayleigh, texel).rgb + rayleigh;
+    mie = imageLoad(total_mie, texel).rgb + mie;
+  }
+  imageStore(total_rayleigh, texel, vec4(rayleigh, 1.0));
+  imageStore(total_mie, texel, vec4(mie, 1.0));
+}
+)glsl";
+
+// The frame: what RenderView asks of ElekModel's SkyView (Radiance + SunDiscRadiance; no
+// ground), with the same cosine clamps, times the solar irradiance.
+constexpr const char* kFrameMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform sampler3D rayleigh_table;
+uniform sampler3D mie_table;
+uniform CameraParameters camera;
+uniform int mapping;
+uniform bool mie_per_channel;
+uniform float r;             // km
+uniform vec3 sun_direction;  // unit, local frame (x east, y north, z up)
+uniform bool sun_disc;
+uniform vec3 solar_irradiance;
+
+void main() {
+  ivec2 size = imageSize(output_image);
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(pixel, size))) return;
+  vec3 direction;
+  bool seen = GetCameraRayDirection(camera, vec2(pixel) + vec2(0.5), direction);
+  vec3 radiance = vec3(0.0);
+  if (seen) {
+    float mu = ClampCosine(direction.z);
+    float nu = dot(direction, sun_direction);
+    radiance = GetElekRadiance(atmosphere, rayleigh_table, mie_table, mapping, mie_per_channel, r, mu,
+        ClampCosine(sun_direction.z), ClampCosine(nu));
+    if (sun_disc) {
+      radiance += GetSunDiscRadiance(atmosphere, transmittance_texture, r, mu, nu);
+    }
+  }
+  imageStore(output_image, pixel, vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0));
+}
+)glsl";
+
+// The programs of the table passes, compiled (or taken from the context's cache) before any pass
+// is timed.
+struct ElekPrograms {
+  const ComputeProgram* transmittance = nullptr;
+  const ComputeProgram* single = nullptr;
+  const ComputeProgram* scatter = nullptr;
+  const ComputeProgram* gather_matrix = nullptr;
+  const ComputeProgram* gather = nullptr;
+  const ComputeProgram* phase_weights = nullptr;
+  const ComputeProgram* phase_gather = nullptr;
+  const ComputeProgram* sum = nullptr;
+};
+
+std::string Table3D(const char* main_source) { return std::string(kTable3DHeader) + main_source; }
+
+ElekPrograms GetElekPrograms(const Context& context, const ElekSettings& settings, double& compile_ms) {
+  ElekPrograms p;
+  p.transmittance = &ElekProgram(context, kTransmittanceMain, "elek transmittance table", compile_ms);
+  p.single = &ElekProgram(context, Table3D(kSingleMain), "elek single scattering", compile_ms);
+  p.sum = &ElekProgram(context, Table3D(kSumMain), "elek sum", compile_ms);
+  if (settings.orders >= 2) {
+    p.scatter = &ElekProgram(context, Table3D(kScatterMain), "elek multiple scattering", compile_ms);
+    p.gather_matrix = &ElekProgram(context, kGatherMatrixMain, "elek gather matrix", compile_ms);
+    p.gather = &ElekProgram(context, Table3D(kGatherMain), "elek gather", compile_ms);
+    if (settings.phase_gather) {
+      p.phase_weights = &ElekProgram(context, Table3D(kPhaseWeightsMain), "elek phase gather weights", compile_ms);
+      p.phase_gather = &ElekProgram(context, Table3D(kPhaseGatherMain), "elek phase gather", compile_ms);
+    }
+  }
+  return p;
+}
+
+ElekScatteringGl MakeScattering(shared::ivec3 size) { return {GpuTexture::Make3D(size), GpuTexture::Make3D(size)}; }
+
+void BindOutputs(const ElekScatteringGl& out) {
+  out.rayleigh.BindImage(0);
+  out.mie.BindImage(1);
+}
+
+// Binds tables to image units 2, 3, ... for imageLoad (units 0 and 1 hold the outputs): the
+// matrix products read texels without filtering, and on llvmpipe imageLoad costs a fraction of
+// texelFetch (the gather pass of 32x64x32 x 256 rows: 45 ms instead of 260 ms).
+void BindInputImages(std::initializer_list<const GpuTexture*> tables) {
+  GLuint unit = 2;
+  for (const GpuTexture* t : tables) {
+    glBindImageTexture(unit++, t->id(), 0, t->is_3d() ? GL_TRUE : GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  }
+}
+
+void CheckSettings(const ElekSettings& s) {
+  if (!s.table.empty()) {
+    throw Error("the gl backend computes the elek table; option table=" + s.table + " (a loaded table) is CPU-only");
+  }
+  const bool ok = s.size.x >= 2 && s.size.y >= 2 && s.size.z >= 2 && s.orders >= 1 && s.samples >= 1 &&
+                  s.gather_rows >= 2 && (s.gather_points == 1 || s.gather_points == 2 || s.gather_points == 4) &&
+                  s.gather_azimuths >= 2 && s.transmittance_lut.x >= 2 && s.transmittance_lut.y >= 2 &&
+                  s.transmittance_samples >= 1;
+  if (!ok) throw Error("elek settings out of range (see ElekSettings::FromOptions)");
+}
+
+void SetCamera(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
+  const std::string p = name + ".";
+  program.SetInt(p + "kind", c.kind);
+  program.SetInt(p + "width", c.width);
+  program.SetInt(p + "height", c.height);
+  program.SetFloat(p + "horizontal_fov", c.horizontal_fov);
+  program.SetFloat(p + "yaw", c.yaw);
+  program.SetFloat(p + "pitch", c.pitch);
+  program.SetVec3(p + "forward", c.forward);
+  program.SetVec3(p + "right", c.right);
+  program.SetVec3(p + "up", c.up);
+  program.SetFloat(p + "tan_half_fov", c.tan_half_fov);
+}
+
+}  // namespace
+
+shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_t batch) {
+  shared::AtmosphereParameters km = ToSharedParameters(model.parameters(), batch, 1000.0);
+  km.rayleigh_phase = model.batches().at(batch).atmosphere.rayleigh_phase;  // option rayleigh_phase
+  return km;
+}
+
+// The passes of ElekModel::ComputeTables, in its order.
+ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::AtmosphereParameters& km,
+                                 const ElekSettings& settings, PassTimings* timings) {
+  CheckSettings(settings);
+  context.MakeCurrent();
+  double compile_ms = 0.0;
+  const ElekPrograms p = GetElekPrograms(context, settings, compile_ms);
+  if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
+  for (const ComputeProgram* program :
+       {p.transmittance, p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights, p.phase_gather}) {
+    if (program != nullptr) SetAtmosphereUniforms(*program, "atmosphere", km);
+  }
+  const shared::ivec3 size = settings.size;
+  ElekTablesGl tables;
+  GpuPassTimer timer(timings);
+
+  tables.transmittance = GpuTexture::Make2D(settings.transmittance_lut);
+  p.transmittance->SetInt("sample_count", settings.transmittance_samples);
+  tables.transmittance.BindImage(0);
+  DispatchCompute2D(*p.transmittance, settings.transmittance_lut);
+  timer.Stop("elek_transmittance_lut");
+
+  const auto set_ray = [&](const ComputeProgram& program) {
+    program.SetInt("mapping", settings.mapping);
+    program.SetInt("steps", settings.steps);
+    program.SetInt("sample_count", settings.samples);
+  };
+  tables.orders.push_back(MakeScattering(size));
+  set_ray(*p.single);
+  BindSamplers(*p.single, {{"transmittance_texture", &tables.transmittance}});
+  BindOutputs(tables.orders[0]);
+  DispatchCompute3D(*p.single, size);
+  timer.Stop("elek_single_lut");
+
+  GpuTexture matrix;
+  if (settings.orders >= 2) {
+    matrix = GpuTexture::Make2D({size.y, settings.gather_rows});
+    p.gather_matrix->SetInt("mapping", settings.mapping);
+    p.gather_matrix->SetInt("point_count", settings.gather_points);
+    p.gather_matrix->SetInt("azimuth_count", settings.gather_azimuths);
+    matrix.BindImage(0);
+    DispatchCompute2D(*p.gather_matrix, matrix.size2());
+    timer.Stop("elek_gather_matrix_lut");
+    set_ray(*p.scatter);
+    p.gather->SetInt("coupled", settings.coupled ? 1 : 0);
+  }
+  const shared::ivec3 gather_size(size.x, settings.gather_rows, size.z);
+  for (int k = 2; k <= settings.orders; ++k) {
+    const ElekScatteringGl& previous = tables.orders[k - 2];
+    const bool phase = settings.phase_gather && k == 2;
+    ElekScatteringGl gather_0 = MakeScattering(gather_size);
+    ElekScatteringGl gather_pi;
+    if (phase) {
+      // The CPU's point count for the phase gather (ElekModel::ComputeTables): 4 points become 2.
+      const int point_count = settings.gather_points == 4 ? 2 : settings.gather_points;
+      gather_pi = MakeScattering(gather_size);
+      // One weight table per slice, so that no pass overwrites a table an earlier pass reads.
+      const GpuTexture weights[2] = {GpuTexture::Make3D({size.y, settings.gather_rows, size.z}),
+                                     GpuTexture::Make3D({size.y, settings.gather_rows, size.z})};
+      p.phase_weights->SetInt("mapping", settings.mapping);
+      p.phase_weights->SetInt("point_count", point_count);
+      p.phase_weights->SetInt("azimuth_count", settings.gather_azimuths);
+      p.phase_gather->SetInt("coupled", settings.coupled ? 1 : 0);
+      for (int slice = 0; slice < 2; ++slice) {
+        p.phase_weights->SetInt("opposite_side", slice);
+        weights[slice].BindImage(0);
+        DispatchCompute3D(*p.phase_weights, weights[slice].size());
+        BindInputImages({&weights[slice], &previous.rayleigh, &previous.mie});
+        BindOutputs(slice == 0 ? gather_0 : gather_pi);
+        DispatchCompute3D(*p.phase_gather, gather_size);
+      }
+    } else {
+      BindInputImages({&matrix, &previous.rayleigh, &previous.mie});
+      BindOutputs(gather_0);
+      DispatchCompute3D(*p.gather, gather_size);
+    }
+    timer.Stop("elek_gather_" + std::to_string(k) + "_lut");
+    const ElekScatteringGl& slice_pi = phase ? gather_pi : gather_0;
+    tables.orders.push_back(MakeScattering(size));
+    BindSamplers(*p.scatter, {{"gather_rayleigh_0", &gather_0.rayleigh},
+                              {"gather_mie_0", &gather_0.mie},
+                              {"gather_rayleigh_pi", &slice_pi.rayleigh},
+                              {"gather_mie_pi", &slice_pi.mie}});
+    BindOutputs(tables.orders.back());
+    DispatchCompute3D(*p.scatter, size);
+    timer.Stop("elek_scatter_" + std::to_string(k) + "_lut");
+  }
+
+  tables.total = MakeScattering(size);
+  glBindImageTexture(0, tables.total.rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+  glBindImageTexture(1, tables.total.mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+  for (std::size_t k = 0; k < tables.orders.size(); ++k) {
+    p.sum->SetInt("first_order", k == 0 ? 1 : 0);
+    BindSamplers(*p.sum, {{"order_rayleigh", &tables.orders[k].rayleigh}, {"order_mie", &tables.orders[k].mie}});
+    DispatchCompute3D(*p.sum, size);
+  }
+  timer.Stop("elek_sum_lut");
+  CheckGlError("elek tables");
+  return tables;
+}
+
+void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* timings) {
+  CheckSettings(model.settings());
+  for (std::size_t b = 0; b < model.batches().size(); ++b) {
+    ElekTablesGl tables = ComputeElekTablesGl(context, ElekKmAtmosphere(model, b), model.settings(), timings);
+    const auto start = Clock::now();
+    std::vector<cpu::ElekScattering> orders;
+    const auto download = [](const ElekScatteringGl& t) {
+      cpu::ElekScattering s;
+      s.rayleigh = t.rayleigh.Download3D();
+      s.mie = t.mie.Download3D();
+      return s;
+    };
+    for (const ElekScatteringGl& order : tables.orders) orders.push_back(download(order));
+    model.SetComputedTables(b, tables.transmittance.Download2D(), std::move(orders), download(tables.total));
+    if (timings != nullptr) timings->Add("elek_gl_readback", MillisecondsSince(start));
+  }
+}
+
+Image RenderElekGl(const Context& context, const AtmosphereParameters& parameters, const ElekSettings& settings,
+                   const RenderSettings& render, PassTimings* timings) {
+  ValidateCamera(render.camera);
+  for (const double value : {render.altitude_m, render.sun_elevation_deg, render.sun_azimuth_deg}) {
+    if (!std::isfinite(value)) throw Error("altitude and sun angles must be finite");
+  }
+  if (parameters.channel_count() != 3) {
+    throw Error("the gl backend renders 3 channels (red, green, blue); these parameters have " +
+                std::to_string(parameters.channel_count()));
+  }
+  const ElekModel model(parameters, settings);  // checks the parameters (spherical, valid)
+  CheckSettings(settings);
+  if (render.altitude_m < 0.0) throw Error("altitude_m must be >= 0 for model elek");
+  const shared::AtmosphereParameters km = ElekKmAtmosphere(model, 0);
+  const ElekTablesGl tables = ComputeElekTablesGl(context, km, settings, timings);
+
+  double compile_ms = 0.0;
+  const ComputeProgram& program = ElekProgram(context, kFrameMain, "elek frame", compile_ms);
+  if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
+  const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
+  const shared::CameraParameters camera = ToSharedCamera(render.camera);
+  SetAtmosphereUniforms(program, "atmosphere", km);
+  SetCamera(program, "camera", camera);
+  program.SetInt("mapping", settings.mapping);
+  program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
+  program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
+  program.SetVec3("sun_direction", sun);
+  program.SetInt("sun_disc", render.terms.sun_disc ? 1 : 0);
+  program.SetVec3("solar_irradiance", shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
+                                                   parameters.solar_irradiance[2]));
+  BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
+                         {"rayleigh_table", &tables.total.rayleigh},
+                         {"mie_table", &tables.total.mie}});
+  const GpuTexture frame = GpuTexture::Make2D({camera.width, camera.height});
+  frame.BindImage(0);
+  GpuPassTimer timer(timings);
+  DispatchCompute2D(program, {camera.width, camera.height});
+  timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  const std::vector<float> rgba = frame.DownloadRgba();
+  Image image(camera.width, camera.height, 3);
+  const bool has_alpha = camera.kind == shared::kCameraFisheye;
+  if (has_alpha) image.alpha.assign(static_cast<std::size_t>(camera.width) * camera.height, 0.0f);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(camera.width) * camera.height; ++i) {
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
+    if (has_alpha) image.alpha[i] = rgba[4 * i + 3];
+  }
+  return image;
+}
+
+}  // namespace atmo::gl

@@ -1,0 +1,74 @@
+// Model elek computed on the GL backend: configuration gl_f32_rgb (STYLE.md).
+//
+// The table of one batch of three channels is built by compute passes that call the per-texel
+// kernels of src/atmo/shared/elek.glsl in float, with the atmosphere in km, and the tables stay on
+// the GPU between passes (GpuTexture, resources.h): the transmittance table, order 1, the gather
+// matrix, per order k >= 2 the gather table (the matrix product over view-zenith rows, or the
+// phase gather of gather=phase for k = 2) and the scattering pass, and the sum. Each 3D table is
+// two rgba32f textures (Rayleigh, Mie; rgb per channel). The passes mirror ElekModel's
+// ComputeTables (cpu/elek_tables.h) and are timed under its pass names: elek_transmittance_lut,
+// elek_single_lut, elek_gather_matrix_lut, elek_gather_K_lut, elek_scatter_K_lut, elek_sum_lut
+// (plus elek_gl_compile for the programs and elek_gl_readback for PrecomputeElekGl's downloads).
+// Every ElekSettings option is supported; mie=alpha|rgb only changes the lookup.
+//
+// To use it (a gl::Context alive on this thread):
+//   ElekModel model(Preset("atmosphere-plus"), ElekSettings::FromOptions(options));  // not CreateModel
+//   PassTimings timings;
+//   gl::PrecomputeElekGl(context, model, &timings);  // instead of model.Precompute()
+//   auto sky = model.View(0.0, sun);                 // the CPU lookups, on the GL-computed tables
+// or, with the tables never leaving the GPU,
+//   Image image = gl::RenderElekGl(context, Preset("atmosphere-plus"), ElekSettings{}, render, &timings);
+// Tables and radiance do not depend on the length unit (I integrates sigma_s dt), so GL tables
+// answer the CPU's lookups in metres.
+//
+// Errors (atmo::Error, one line): a model that loads its table (option table=NAME), parameters
+// elek rejects, and for RenderElekGl what atmo::Render rejects and parameters without exactly 3
+// channels.
+#pragma once
+
+#include <vector>
+
+#include "atmo/image.h"
+#include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/timing.h"
+#include "gl/context.h"
+#include "gl/resources.h"
+#include "models/elek_model.h"
+
+namespace atmo::gl {
+
+// One factored scattering table on the GPU: Rayleigh and Mie, rgb per channel.
+struct ElekScatteringGl {
+  GpuTexture rayleigh;
+  GpuTexture mie;
+};
+
+// The tables of one batch on the GPU.
+struct ElekTablesGl {
+  GpuTexture transmittance;              // transmittance_lut, 2D
+  std::vector<ElekScatteringGl> orders;  // I^(1) .. I^(K)
+  ElekScatteringGl total;                // their sum
+};
+
+// The tables of one batch: `km_atmosphere` = ToSharedParameters(p, batch, 1000) with the
+// settings' rayleigh_phase (ElekKmAtmosphere). `settings.table` must be empty.
+ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                                 const ElekSettings& settings, PassTimings* timings = nullptr);
+
+// The km parameters of batch `batch` of `model` (its rayleigh_phase option applied).
+shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_t batch);
+
+// Fills every batch of `model` with tables computed on GL and downloaded (transmittance, orders,
+// sum: ElekModel::SetComputedTables), so that its SkyView answers from them.
+void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* timings = nullptr);
+
+// The tables on GL, then the frame pass: per pixel the camera ray (GetCameraRayDirection),
+// GetElekRadiance (what ElekModel's SkyView answers) plus GetSunDiscRadiance when
+// render.terms.sun_disc, times the solar irradiance; alpha (0 outside the circle) for a fisheye
+// camera, as atmo::Render. Elek has no lit ground, so terms.ground adds nothing, as on the CPU.
+// The frame pass is timed as frame_WxH.
+Image RenderElekGl(const Context& context, const AtmosphereParameters& parameters, const ElekSettings& settings,
+                   const RenderSettings& render, PassTimings* timings = nullptr);
+
+}  // namespace atmo::gl
