@@ -17,7 +17,11 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/timing.h"
+#ifdef ATMO_HAVE_GL
+#include "gl/context.h"
+#include "models/elek_model.h"
 #include "models/hillaire_model.h"
+#endif
 
 namespace atmo::cli {
 
@@ -43,15 +47,17 @@ ModelOptions ParseModelOptions(const std::vector<std::string>& options);
 // (`command_has_gl` false) or a model other than hillaire and elek.
 void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 #ifdef ATMO_HAVE_GL
-// The --option settings of model hillaire (the "seed" option dropped, as on the CPU).
+// The --option settings of models hillaire and elek (the "seed" option dropped, as on the CPU).
 HillaireSettings GlHillaireSettings(const CommonOptions& common);
-// Renders model hillaire on the gl backend (a fresh headless context; --option settings as for the
-// CPU model), each pass's GPU time into `timings`. Throws atmo::Error, e.g. when no GL context can
-// be made.
-Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
-                 PassTimings* timings = nullptr);
+ElekSettings GlElekSettings(const CommonOptions& common);
+// Renders model hillaire or elek on the gl backend (--option settings as for the CPU model), each
+// pass's GPU time into `timings`: every table and the frame are GPU passes.
+Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
+                 const RenderSettings& settings, PassTimings* timings = nullptr);
 #endif
-// Creates (and so precomputes) the model named by --model with the --option settings.
+// Creates (and so precomputes) the model named by --model with the --option settings. With
+// --backend gl, model elek computes its table on the GPU (gl::PrecomputeElekGl) and answers from
+// it; other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.

@@ -9,6 +9,7 @@
 #include "commands.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
+#include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
 #endif
 
@@ -54,20 +55,43 @@ void CheckBackend(const CommonOptions& common, bool command_has_gl) {
 }
 
 #ifdef ATMO_HAVE_GL
-HillaireSettings GlHillaireSettings(const CommonOptions& common) {
+namespace {
+
+// The --option settings without "seed", which the deterministic models ignore (as CreateModel does).
+ModelOptions DeterministicModelOptions(const CommonOptions& common) {
   ModelOptions options = ParseModelOptions(common.options);
-  options.erase("seed");  // deterministic, as on the CPU
-  return HillaireSettings::FromOptions(options);
+  options.erase("seed");
+  return options;
 }
 
-Image RenderOnGl(const CommonOptions& common, const AtmosphereParameters& parameters, const RenderSettings& settings,
-                 PassTimings* timings) {
-  const gl::Context context;
+}  // namespace
+
+HillaireSettings GlHillaireSettings(const CommonOptions& common) {
+  return HillaireSettings::FromOptions(DeterministicModelOptions(common));
+}
+
+ElekSettings GlElekSettings(const CommonOptions& common) {
+  return ElekSettings::FromOptions(DeterministicModelOptions(common));
+}
+
+Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
+                 const RenderSettings& settings, PassTimings* timings) {
+  if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
 #endif
 
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {
+#ifdef ATMO_HAVE_GL
+  if (common.backend == "gl" && common.model == "elek") {
+    // The table computed on the GPU and read back: the model answers from it on the CPU.
+    auto model = std::make_unique<ElekModel>(parameters, GlElekSettings(common));
+    const gl::Context context;
+    gl::PrecomputeElekGl(context, *model);
+    return model;
+  }
+  if (common.backend == "gl") throw Error("model " + common.model + " has no CPU model with GL tables; use --backend cpu");
+#endif
   // --seed travels as the "seed" option that every model accepts (deterministic ones ignore it).
   ModelOptions options = ParseModelOptions(common.options);
   if (common.seed_given) {

@@ -1,6 +1,7 @@
 // `atmo precompute`: computes a model's table and exports it. Today only model elek has an
 // exportable table (NAME.exr, NAME.raw, NAME.json; the format is in include/atmo/elek.h and
-// docs/models/elek.md). The files are written atomically, the manifest last.
+// docs/models/elek.md). The files are written atomically, the manifest last. With --backend gl the
+// table is computed on the GPU (gl::PrecomputeElekGl) and read back for export.
 #include <chrono>
 #include <cstdio>
 
@@ -11,7 +12,7 @@
 namespace atmo::cli {
 
 int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command) {
-  CheckBackend(common);
+  CheckBackend(common, /*command_has_gl=*/true);
   if (common.model != "elek") {
     throw Error("precompute exports the table of model elek; model " + common.model + " has none (use --model elek)");
   }

@@ -72,7 +72,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     throw Error("--spp is the number of Monte Carlo paths per pixel of model reference; model '" + common.model +
                 "' is deterministic and takes no --spp");
   }
-  // On the gl backend the GL passes compute the tables (RenderOnGl); no CPU model is made.
+  // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, parameters);
   const std::string model_name = model != nullptr ? std::string(model->name()) : common.model;
 
@@ -142,7 +142,12 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     progress.Finish();
   } else {
 #ifdef ATMO_HAVE_GL
-    image = on_gl ? RenderOnGl(common, parameters, settings) : Render(*model, settings);
+    if (on_gl) {
+      const gl::Context context;
+      image = RenderOnGl(context, common, parameters, settings);
+    } else {
+      image = Render(*model, settings);
+    }
 #else
     image = Render(*model, settings);
 #endif
