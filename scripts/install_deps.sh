@@ -13,6 +13,7 @@ PACKAGES=(
   libtbb-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
+  libglfw3-dev xvfb xauth
 )
 
 missing=()

@@ -1,13 +1,17 @@
-// A headless OpenGL 4.5 core context (private to the GL backend).
+// An OpenGL 4.5 core context (private to the GL backend): headless, or in a window.
 //
-// EGL surfaceless (EGL_MESA_platform_surfaceless): no window, no X server, no environment
-// variables. On a machine without a GPU it runs on Mesa llvmpipe; on one with a GPU, Mesa picks its
-// render node (set LIBGL_ALWAYS_SOFTWARE=1 to force llvmpipe for reference runs).
+// Headless, `gl::Context context;`: EGL without a window or an X server. A hardware EGL device
+// (EGL_EXT_platform_device, e.g. the NVIDIA driver) is preferred; otherwise the surfaceless
+// platform (EGL_MESA_platform_surfaceless), which on a machine without a GPU is Mesa llvmpipe.
+// LIBGL_ALWAYS_SOFTWARE=1 skips the hardware devices (reference runs on llvmpipe).
+// Windowed, `gl::Context context(WindowOptions{1280, 720, "atmo"});`: a GLFW window (GLX on
+// X11) whose context runs the same passes, for the viewer; it needs a display (DISPLAY; Xvfb
+// will do) and a build with GLFW.
 //
-// To use it: `gl::Context context;` (throws atmo::Error, one line, when no context can be made),
-// then issue GL calls on the same thread; the context is current from construction until
-// destruction. Not copyable or movable: GL objects belong to it. Not thread-safe: one thread
-// uses a context at a time.
+// Either throws atmo::Error, one line, when no context can be made. Issue GL calls on the same
+// thread; the context is current from construction until destruction (MakeCurrent() after
+// another context was). Not copyable or movable: GL objects belong to it. Not thread-safe: one
+// thread uses a context at a time.
 #pragma once
 
 #include <initializer_list>
@@ -20,15 +24,28 @@ namespace atmo::gl {
 
 class ComputeProgram;
 
+struct WindowOptions {
+  int width = 1280;   // pixels, [1, 16384]
+  int height = 720;   // pixels, [1, 16384]
+  std::string title = "atmo";
+  bool visible = true;
+};
+
 class Context {
  public:
-  Context();
+  Context();                                       // headless (EGL)
+  explicit Context(const WindowOptions& options);  // in a GLFW window
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
 
   // Makes the context current on the calling thread again (after another context was).
   void MakeCurrent() const;
+
+  // The GLFW window (GLFWwindow*) of a windowed context, null for a headless one.
+  void* window() const { return window_; }
+  // Presents the window's back buffer (nothing for a headless context).
+  void SwapBuffers() const;
 
   const std::string& renderer() const { return renderer_; }  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   const std::string& version() const { return version_; }    // GL_VERSION, e.g. "4.5 (Core Profile) Mesa 22.3.6"
@@ -44,6 +61,9 @@ class Context {
  private:
   void* display_ = nullptr;  // EGLDisplay (kept opaque so that this header does not pull in EGL)
   void* context_ = nullptr;  // EGLContext
+  void* window_ = nullptr;   // GLFWwindow* (windowed), else null
+
+  void ReadDriverStrings();
   std::string renderer_;
   std::string version_;
   mutable std::map<std::string, std::unique_ptr<ComputeProgram>> programs_;  // by full source
