@@ -279,6 +279,18 @@ TEST(GlElek, FisheyeImageMatchesCpu) {
   ExpectImagesMatch(context, Preset("earth"), render);
 }
 
+// The whole sphere, sky and the (unlit) ground below the horizon, and an observer above the
+// atmosphere, whose rays enter it first (GetElekRadiance's MoveToAtmosphereEntry).
+TEST(GlElek, EquirectImageMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  RenderSettings render;
+  render.camera = {CameraKind::kEquirect, 96, 48};
+  render.sun_elevation_deg = 15.0;
+  ExpectImagesMatch(context, Preset("atmosphere-plus"), render);
+  render.altitude_m = 300e3;
+  ExpectImagesMatch(context, Preset("earth"), render);
+}
+
 // Parameters with a fourth channel (a copy of the third): two batches of three channels.
 AtmosphereParameters FourChannels(AtmosphereParameters p) {
   for (std::vector<double>* v :
