@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "cpu/camera.h"
+#include "gl/hillaire_gl.h"
 #include "gl/program.h"
 #include "physics/shared_parameters.h"
 
@@ -45,23 +46,6 @@ uniform AtmosphereParameters atmosphere;
 
 vec4 ElekStoredTexel(vec3 value) {
   return vec4(mix(value, vec3(0.0), lessThan(abs(value), vec3(1e-30))), 1.0);
-}
-)glsl";
-
-// The transmittance table of the sun rays (the CPU's cpu::ComputeTransmittanceTable).
-constexpr const char* kTransmittanceMain = R"glsl(
-layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 0) uniform writeonly image2D transmittance_table;
-uniform AtmosphereParameters atmosphere;
-uniform int sample_count;
-
-void main() {
-  ivec2 size = imageSize(transmittance_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (any(greaterThanEqual(texel, size))) return;
-  vec3 transmittance =
-      ComputeTransmittanceToTopAtmosphereBoundaryTexel(atmosphere, size, vec2(texel) + vec2(0.5), sample_count);
-  imageStore(transmittance_table, texel, vec4(transmittance, 1.0));
 }
 )glsl";
 
@@ -285,7 +269,6 @@ void main() {
 // The programs of the table passes, compiled (or taken from the context's cache) before any pass
 // is timed.
 struct ElekPrograms {
-  const ComputeProgram* transmittance = nullptr;
   const ComputeProgram* single = nullptr;
   const ComputeProgram* scatter = nullptr;
   const ComputeProgram* gather_matrix = nullptr;
@@ -299,7 +282,6 @@ std::string Table3D(const char* main_source) { return std::string(kTable3DHeader
 
 ElekPrograms GetElekPrograms(const Context& context, const ElekSettings& settings, double& compile_ms) {
   ElekPrograms p;
-  p.transmittance = &ElekProgram(context, kTransmittanceMain, "elek transmittance table", compile_ms);
   p.single = &ElekProgram(context, Table3D(kSingleMain), "elek single scattering", compile_ms);
   p.sum = &ElekProgram(context, Table3D(kSumMain), "elek sum", compile_ms);
   if (settings.orders >= 2) {
@@ -342,19 +324,6 @@ void CheckSettings(const ElekSettings& s) {
   if (!ok) throw Error("elek settings out of range (see ElekSettings::FromOptions)");
 }
 
-void SetCamera(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
-  const std::string p = name + ".";
-  program.SetInt(p + "kind", c.kind);
-  program.SetInt(p + "width", c.width);
-  program.SetInt(p + "height", c.height);
-  program.SetFloat(p + "horizontal_fov", c.horizontal_fov);
-  program.SetFloat(p + "yaw", c.yaw);
-  program.SetFloat(p + "pitch", c.pitch);
-  program.SetVec3(p + "forward", c.forward);
-  program.SetVec3(p + "right", c.right);
-  program.SetVec3(p + "up", c.up);
-  program.SetFloat(p + "tan_half_fov", c.tan_half_fov);
-}
 
 }  // namespace
 
@@ -373,17 +342,16 @@ ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::Atmospher
   const ElekPrograms p = GetElekPrograms(context, settings, compile_ms);
   if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
   for (const ComputeProgram* program :
-       {p.transmittance, p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights, p.phase_gather}) {
+       {p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights, p.phase_gather}) {
     if (program != nullptr) SetAtmosphereUniforms(*program, "atmosphere", km);
   }
   const shared::ivec3 size = settings.size;
   ElekTablesGl tables;
   GpuPassTimer timer(timings);
 
+  // The transmittance table of the sun rays: hillaire's pass (the CPU's cpu::ComputeTransmittanceTable).
   tables.transmittance = GpuTexture::Make2D(settings.transmittance_lut);
-  p.transmittance->SetInt("sample_count", settings.transmittance_samples);
-  tables.transmittance.BindImage(0);
-  DispatchCompute2D(*p.transmittance, settings.transmittance_lut);
+  RunTransmittancePass(context, km, settings.transmittance_samples, tables.transmittance);
   timer.Stop("elek_transmittance_lut");
 
   const auto set_ray = [&](const ComputeProgram& program) {
@@ -505,7 +473,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
   const shared::CameraParameters camera = ToSharedCamera(render.camera);
   SetAtmosphereUniforms(program, "atmosphere", km);
-  SetCamera(program, "camera", camera);
+  SetCameraUniforms(program, "camera", camera);
   program.SetInt("mapping", settings.mapping);
   program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
   program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);

@@ -346,23 +346,6 @@ void HillaireGl::SetSkyUniforms(const ComputeProgram& program) const {
   program.SetInt("ray_march_samples", settings_.ray_march_samples);
 }
 
-namespace {
-
-void SetCameraUniforms(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
-  const std::string p = name + ".";
-  program.SetInt(p + "kind", c.kind);
-  program.SetInt(p + "width", c.width);
-  program.SetInt(p + "height", c.height);
-  program.SetFloat(p + "horizontal_fov", c.horizontal_fov);
-  program.SetFloat(p + "yaw", c.yaw);
-  program.SetFloat(p + "pitch", c.pitch);
-  program.SetVec3(p + "forward", c.forward);
-  program.SetVec3(p + "right", c.right);
-  program.SetVec3(p + "up", c.up);
-  program.SetFloat(p + "tan_half_fov", c.tan_half_fov);
-}
-
-}  // namespace
 
 void HillaireGl::RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
                              PassTimings* timings) {

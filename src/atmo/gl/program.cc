@@ -106,4 +106,19 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   program.SetFloat(p + "sun_angular_radius", a.sun_angular_radius);
 }
 
+// Every member of CameraParameters in definitions.glsl, in its order.
+void SetCameraUniforms(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& c) {
+  const std::string p = name + ".";
+  program.SetInt(p + "kind", c.kind);
+  program.SetInt(p + "width", c.width);
+  program.SetInt(p + "height", c.height);
+  program.SetFloat(p + "horizontal_fov", c.horizontal_fov);
+  program.SetFloat(p + "yaw", c.yaw);
+  program.SetFloat(p + "pitch", c.pitch);
+  program.SetVec3(p + "forward", c.forward);
+  program.SetVec3(p + "right", c.right);
+  program.SetVec3(p + "up", c.up);
+  program.SetFloat(p + "tan_half_fov", c.tan_half_fov);
+}
+
 }  // namespace atmo::gl

@@ -40,4 +40,7 @@ class ComputeProgram {
 void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& name,
                            const shared::AtmosphereParameters& atmosphere);
 
+// Uploads a shared::CameraParameters to the uniform struct `name` (e.g. "camera"), member by member.
+void SetCameraUniforms(const ComputeProgram& program, const std::string& name, const shared::CameraParameters& camera);
+
 }  // namespace atmo::gl
