@@ -222,7 +222,7 @@ void Context::SwapBuffers() const {
 #endif
 }
 
-const ComputeProgram& Context::Program(std::initializer_list<std::string_view> shared_files,
+const ComputeProgram& Context::Program(std::span<const std::string_view> shared_files,
                                        std::string_view main_source, std::string_view name,
                                        double* compile_ms) const {
   const auto start = std::chrono::steady_clock::now();

@@ -17,6 +17,7 @@
 #include <initializer_list>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -55,8 +56,13 @@ class Context {
   // ends, so that passes run again (bench repeats, a viewer's frames) do not recompile. `name`
   // names the pass in compiler errors (atmo::Error). `compile_ms`, when given, receives the time
   // this call spent compiling (0 for a cached program).
-  const ComputeProgram& Program(std::initializer_list<std::string_view> shared_files, std::string_view main_source,
+  const ComputeProgram& Program(std::span<const std::string_view> shared_files, std::string_view main_source,
                                 std::string_view name, double* compile_ms = nullptr) const;
+  const ComputeProgram& Program(std::initializer_list<std::string_view> shared_files, std::string_view main_source,
+                                std::string_view name, double* compile_ms = nullptr) const {
+    return Program(std::span<const std::string_view>(shared_files.begin(), shared_files.size()), main_source, name,
+                   compile_ms);
+  }
 
  private:
   void* display_ = nullptr;  // EGLDisplay (kept opaque so that this header does not pull in EGL)

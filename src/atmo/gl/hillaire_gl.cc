@@ -16,12 +16,15 @@ namespace atmo::gl {
 namespace {
 
 // The shared files of the table passes, and of the passes that read the sky, in shared.h's order.
-#define ATMO_TRANSMITTANCE_FILES "definitions.glsl", "geometry.glsl", "medium.glsl", "transmittance.glsl"
-#define ATMO_MULTIPLE_SCATTERING_FILES \
-  "definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl", "multiple_scattering.glsl"
-#define ATMO_SKY_FILES                                                                                         \
-  "definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl", "multiple_scattering.glsl", \
-      "sky.glsl", "camera.glsl"
+constexpr std::string_view kTransmittanceFiles[] = {"definitions.glsl", "geometry.glsl", "medium.glsl",
+                                                    "transmittance.glsl"};
+constexpr std::string_view kMultipleScatteringFiles[] = {"definitions.glsl", "geometry.glsl",
+                                                         "medium.glsl",      "phase.glsl",
+                                                         "transmittance.glsl", "multiple_scattering.glsl"};
+constexpr std::string_view kSkyFiles[] = {"definitions.glsl",   "geometry.glsl",
+                                          "medium.glsl",        "phase.glsl",
+                                          "transmittance.glsl", "multiple_scattering.glsl",
+                                          "sky.glsl",           "camera.glsl"};
 
 // The declarations every table pass shares: one rgba32f output image (unit 0), the atmosphere.
 constexpr std::string_view kTablePassHeader = R"glsl(
@@ -97,7 +100,7 @@ std::string SkyRadianceSource(bool use_sky_view) {
 
 void RunTransmittancePass(const Context& context, const shared::AtmosphereParameters& km, int sample_count,
                           const GpuTexture& out) {
-  const ComputeProgram& program = context.Program({ATMO_TRANSMITTANCE_FILES}, TablePass(R"glsl(
+  const ComputeProgram& program = context.Program(kTransmittanceFiles, TablePass(R"glsl(
 uniform int sample_count;
 
 void main() {
@@ -119,7 +122,7 @@ void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereP
                                const GpuTexture& transmittance, int direction_count, int sample_count,
                                bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out) {
   // One work group per texel (kWorkGroupSumSource), then the texel kernel's last step.
-  const ComputeProgram& program = context.Program({ATMO_MULTIPLE_SCATTERING_FILES}, std::string(kWorkGroupSumSource) + R"glsl(
+  const ComputeProgram& program = context.Program(kMultipleScatteringFiles, std::string(kWorkGroupSumSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
@@ -166,7 +169,7 @@ void RunGroundIrradiancePass(const Context& context, const shared::AtmospherePar
                              const GpuTexture& transmittance, const GpuTexture& multiple_scattering,
                              int direction_count, int sample_count, const GpuTexture& out) {
   // One work group per texel (kWorkGroupSumSource), as ComputeGroundIrradianceTexel sums.
-  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, std::string(kWorkGroupSumSource) + R"glsl(
+  const ComputeProgram& program = context.Program(kSkyFiles, std::string(kWorkGroupSumSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
@@ -201,7 +204,7 @@ void RunSkyViewPass(const Context& context, const shared::AtmosphereParameters& 
                     const GpuTexture& multiple_scattering, double r_km, double mu_s, int sample_count,
                     const GpuTexture& out) {
   if (out.size().y < 4 || out.size().y % 2 != 0) throw Error("GL sky-view table: the height must be even and >= 4");
-  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+  const ComputeProgram& program = context.Program(kSkyFiles, TablePass(R"glsl(
 uniform sampler2D transmittance_texture;
 uniform sampler2D multiple_scattering_texture;
 uniform float r;     // km
@@ -230,7 +233,7 @@ void main() {
 void RunGroundViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
                        const GpuTexture& ground_irradiance, const GpuTexture& sky_view, double r_km, double mu_s,
                        const GpuTexture& out) {
-  const ComputeProgram& program = context.Program({ATMO_SKY_FILES}, TablePass(R"glsl(
+  const ComputeProgram& program = context.Program(kSkyFiles, TablePass(R"glsl(
 uniform sampler2D transmittance_texture;
 uniform sampler2D ground_irradiance_texture;
 uniform sampler2D sky_view_texture;
@@ -354,7 +357,7 @@ void HillaireGl::RenderFrame(const shared::CameraParameters& camera, const Radia
     throw Error("GL hillaire: a frame with the ground term needs SetView(..., ground = true)");
   }
   context_.MakeCurrent();
-  const ComputeProgram& program = context_.Program({ATMO_SKY_FILES}, R"glsl(
+  const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
 )glsl" + SkyRadianceSource(uses_sky_view_) + R"glsl(
@@ -427,7 +430,7 @@ void HillaireGl::Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec
   transmittance.assign(views.size(), glm::dvec3(0.0));
   if (views.empty()) return;
   context_.MakeCurrent();
-  const ComputeProgram& program = context_.Program({ATMO_SKY_FILES}, R"glsl(
+  const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Directions { vec4 directions[]; };
 layout(std430, binding = 1) writeonly buffer Results { vec4 results[]; };  // radiance, transmittance

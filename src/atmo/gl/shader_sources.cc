@@ -28,8 +28,7 @@ std::string_view GlslPrelude() {
 )glsl";
 }
 
-std::string BuildComputeShaderSource(std::initializer_list<std::string_view> shared_files,
-                                     std::string_view main_source) {
+std::string BuildComputeShaderSource(std::span<const std::string_view> shared_files, std::string_view main_source) {
   std::string source(GlslPrelude());
   int part = 1;
   for (std::string_view file : shared_files) {
@@ -42,7 +41,7 @@ std::string BuildComputeShaderSource(std::initializer_list<std::string_view> sha
   return source;
 }
 
-std::string DescribeSourceStrings(std::initializer_list<std::string_view> shared_files) {
+std::string DescribeSourceStrings(std::span<const std::string_view> shared_files) {
   std::string text = "source strings: 0 prelude";
   int part = 1;
   for (std::string_view file : shared_files) text += ", " + std::to_string(part++) + " " + std::string(file);

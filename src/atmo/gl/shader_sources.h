@@ -10,6 +10,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -34,8 +35,12 @@ std::string_view GlslPrelude();
 // size, the images and uniforms, and main()). Each part starts with `#line 1 N`, N = its index
 // (0 prelude, 1.. the files, last the main source), so that compiler messages name the part;
 // DescribeSourceStrings() spells the numbering out for error messages.
-std::string BuildComputeShaderSource(std::initializer_list<std::string_view> shared_files,
-                                     std::string_view main_source);
-std::string DescribeSourceStrings(std::initializer_list<std::string_view> shared_files);
+std::string BuildComputeShaderSource(std::span<const std::string_view> shared_files, std::string_view main_source);
+std::string DescribeSourceStrings(std::span<const std::string_view> shared_files);
+inline std::string BuildComputeShaderSource(std::initializer_list<std::string_view> shared_files,
+                                            std::string_view main_source) {
+  return BuildComputeShaderSource(std::span<const std::string_view>(shared_files.begin(), shared_files.size()),
+                                  main_source);
+}
 
 }  // namespace atmo::gl
