@@ -15,11 +15,11 @@
 #pragma once
 
 #include <initializer_list>
-#include <map>
 #include <memory>
 #include <span>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 
 namespace atmo::gl {
 
@@ -72,7 +72,8 @@ class Context {
   void ReadDriverStrings();
   std::string renderer_;
   std::string version_;
-  mutable std::map<std::string, std::unique_ptr<ComputeProgram>> programs_;  // by full source
+  // By the shared files' names and the main source.
+  mutable std::unordered_map<std::string, std::unique_ptr<ComputeProgram>> programs_;
 };
 
 }  // namespace atmo::gl
