@@ -1,5 +1,5 @@
-// `atmo bench`: times the model's precomputation passes and one frame, repeated, on the CPU or (model
-// hillaire, --backend gl) on the GL backend, where every pass is the GPU time of its dispatch.
+// `atmo bench`: times the model's precomputation passes and one frame, repeated, on the CPU or (models
+// hillaire and elek, --backend gl) on the GL backend, where every pass is the GPU time of its dispatch.
 //
 // Each repeat runs model->Precompute(), builds the view for a sun at 30 degrees elevation, and
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
