@@ -17,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "gl/context.h"
+#include "gl_test_context.h"
 #include "gl/elek_gl.h"
 #include "models/elek_model.h"
 #include "shared/shared.h"
@@ -24,40 +25,9 @@
 namespace atmo::gl {
 namespace {
 
-// One context for the whole file (creating one costs ~10 ms on llvmpipe); null when none can be
-// made, with the reason kept for the skip message.
-struct SharedContext {
-  std::unique_ptr<Context> context;
-  std::string error;
-};
+using testing::GetSharedContext;
+using testing::SamplerSlack;
 
-SharedContext& GetSharedContext() {
-  static SharedContext shared = [] {
-    SharedContext s;
-    try {
-      s.context = std::make_unique<Context>();
-    } catch (const Error& e) {
-      s.error = e.what();
-    }
-    return s;
-  }();
-  return shared;
-}
-
-#define ATMO_REQUIRE_GL_CONTEXT(context)      \
-  if (GetSharedContext().context == nullptr) { \
-    GTEST_SKIP() << GetSharedContext().error;  \
-  }                                            \
-  const Context& context = *GetSharedContext().context
-
-// The bounds below are measured on llvmpipe, whose sampler blends texels with float weights. A
-// hardware sampler blends with fixed-point weights (8 bits of fraction on NVIDIA and AMD): up to
-// 1/512 of the difference of neighbouring texels per lookup, which the table passes (31 lookups
-// per ray) and the frame inherit; no GPU was lent to measure it, so there the bounds are loosened
-// by this factor.
-double SamplerSlack(const Context& context) {
-  return context.renderer().find("llvmpipe") != std::string::npos ? 1.0 : 20.0;
-}
 
 // Relative differences of `gl` from `cpu` over the values (all texels, all channels) where the
 // CPU value is above `floor` times the largest one: below it a table holds the planet's shadow,

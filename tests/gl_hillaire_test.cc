@@ -15,6 +15,7 @@
 #include "cli_fixture.h"
 #include "cpu/hillaire_tables.h"
 #include "gl/context.h"
+#include "gl_test_context.h"
 #include "gl/hillaire_gl.h"
 #include "gl/shader_sources.h"
 #include "models/hillaire_model.h"
@@ -28,31 +29,8 @@ namespace {
 using shared::ivec2;
 using shared::Texture2D;
 
-// One context for the whole program (creating one costs ~10 ms on llvmpipe); null when none
-// can be made, with the reason kept for the skip message.
-struct SharedContext {
-  std::unique_ptr<Context> context;
-  std::string error;
-};
-
-SharedContext& GetSharedContext() {
-  static SharedContext shared = [] {
-    SharedContext s;
-    try {
-      s.context = std::make_unique<Context>();
-    } catch (const Error& e) {
-      s.error = e.what();
-    }
-    return s;
-  }();
-  return shared;
-}
-
-#define ATMO_REQUIRE_GL_CONTEXT(context)                            \
-  if (GetSharedContext().context == nullptr) {                      \
-    GTEST_SKIP() << GetSharedContext().error;                       \
-  }                                                                 \
-  const Context& context = *GetSharedContext().context
+using testing::GetSharedContext;
+using testing::SamplerSlack;
 
 // Runs `pass` (writing the GpuTexture it is given) into a fresh table of `size` and reads it
 // back; `gpu_ms` receives the pass's GPU time (GpuPassTimer).
@@ -167,8 +145,8 @@ TEST(GlHillaire, MultipleScatteringTableMatchesCpu) {
     // ~1e-4 per sample, averaging over 64 x 20 samples), plus llvmpipe's GL_LINEAR taps of the
     // transmittance table, which it blends in float as shared::Texture2D does in double.
     // Measured on llvmpipe: max rel 6.8e-5 (values 1e-3 and above), max abs 7.8e-7.
-    EXPECT_LT(d.max_rel, 2e-4);
-    EXPECT_LT(d.max_abs, 3e-6);
+    EXPECT_LT(d.max_rel, SamplerSlack(context) * 2e-4);
+    EXPECT_LT(d.max_abs, SamplerSlack(context) * 3e-6);
   }
 }
 
@@ -228,7 +206,7 @@ TEST(GlHillaire, SkyViewTableMatchesCpu) {
     std::printf("sky view %dx%d, %d samples, altitude %.0f m, sun %.0f deg: GL vs CPU max abs %.3g, max rel (L > "
                 "1e-3) %.3g; GPU %.2f ms\n",
                 size.x, size.y, samples, c.altitude_m, c.sun_elevation_deg, d.max_abs, d.max_rel, gpu_ms);
-    EXPECT_LT(d.max_rel, c.max_rel);
+    EXPECT_LT(d.max_rel, SamplerSlack(context) * c.max_rel);
   }
 }
 
@@ -259,8 +237,8 @@ TEST(GlHillaire, GroundViewMatchesCpu) {
   // Tolerance: as the sky-view table at low altitude; the ground term adds one transmittance
   // lookup and one ground-irradiance lookup per texel (GL_LINEAR in float against double).
   // Measured on llvmpipe: max rel 1.3e-4, max abs 5.8e-6.
-  EXPECT_LT(d.max_rel, 5e-4);
-  EXPECT_LT(d.max_abs, 2e-5);
+  EXPECT_LT(d.max_rel, SamplerSlack(context) * 5e-4);
+  EXPECT_LT(d.max_abs, SamplerSlack(context) * 2e-5);
 
   // Its ground irradiance table, GL from the same tables.
   const GpuTexture multiple_scattering_gpu = GpuTexture::Upload(batch.multiple_scattering);
@@ -271,7 +249,7 @@ TEST(GlHillaire, GroundViewMatchesCpu) {
   const Difference g = Compare(ground_gl, batch.ground_irradiance);
   std::printf("ground irradiance %d: GL vs CPU max abs %.3g, max rel %.3g\n", batch.ground_irradiance.width, g.max_abs,
               g.max_rel);
-  EXPECT_LT(g.max_rel, 1e-3);
+  EXPECT_LT(g.max_rel, SamplerSlack(context) * 1e-3);
 }
 
 struct FrameDifference {
@@ -338,10 +316,10 @@ TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
       const std::size_t centre = sun_pixel * 3;
       EXPECT_GT(cpu.pixels[centre], 100.0f * cpu.pixels[0]) << "the centre pixel should see the sun disc";
       std::printf("sun disc pixel: GL / CPU = %.6f\n", gl.pixels[centre] / cpu.pixels[centre]);
-      // Tolerance: GetSunDiscRadiance divides by 2 pi (1 - cos alpha) with alpha = 4.65 mrad; in
-      // float, 1 - cos alpha = 1.08e-5 loses all but ~2 digits to cancellation (float ulp at 1 is
-      // 6e-8, 0.5% of it). Measured on llvmpipe: +0.185%.
-      EXPECT_NEAR(gl.pixels[centre] / cpu.pixels[centre], 1.0, 5e-3);
+      // Tolerance: the disc's radiance is 1 / (4 pi sin^2(alpha / 2)) (no cancellation in float)
+      // times the view transmittance, one lookup of the transmittance table (the tables differ
+      // by up to 2.2e-4 relative, above). Measured on llvmpipe: +2e-6.
+      EXPECT_NEAR(gl.pixels[centre] / cpu.pixels[centre], 1.0, SamplerSlack(context) * 3e-4);
     }
     // Tolerance: the tables differ by float-vs-double (above: ~1e-4 relative), and the frame
     // adds float camera rays and uv (the CPU lookup is float too) and the GPU's bilinear
@@ -349,8 +327,8 @@ TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
     // difference of ~1e-7 moves the result by up to ~1e-4 relative.
     // Measured on llvmpipe: max rel 1.0e-3, mean rel 2.2e-4 (perspective), 1.7e-4 (fisheye),
     // 6.7e-5 (equirect).
-    EXPECT_LT(d.max_rel, 2e-3);
-    EXPECT_LT(d.mean_rel, 5e-4);
+    EXPECT_LT(d.max_rel, SamplerSlack(context) * 2e-3);
+    EXPECT_LT(d.mean_rel, SamplerSlack(context) * 5e-4);
     EXPECT_EQ(d.max_abs_alpha, 0.0);
   }
 }
@@ -394,8 +372,8 @@ TEST(GlHillaire, RayMarchedFrameMatchesCpu) {
     // rel 1.9e-5 / 3.9e-5 (400 km, perspective / equirect, limb included), 1.3e-4 (1 km);
     // mean rel <= 1.1e-5. The bounds leave room for grazing rays at the limb, where distances
     // are square roots of small differences of ~4e7 km^2 terms in float.
-    EXPECT_LT(d.max_rel, 1e-3);
-    EXPECT_LT(d.mean_rel, 1e-4);
+    EXPECT_LT(d.max_rel, SamplerSlack(context) * 1e-3);
+    EXPECT_LT(d.mean_rel, SamplerSlack(context) * 1e-4);
     EXPECT_EQ(d.max_abs_alpha, 0.0);
   }
 }
@@ -440,8 +418,8 @@ TEST(GlHillaire, SampleMatchesCpu) {
     // Tolerance: as the sky-view table and the ray-marched frame (float against double, ~1e-4
     // relative per table, the GPU's bilinear taps); the transmittance is one lookup of the
     // transmittance table (max abs 1.5e-5 between the backends' tables).
-    EXPECT_LT(max_rel, 2e-3);
-    EXPECT_LT(max_abs_t, 5e-5);
+    EXPECT_LT(max_rel, SamplerSlack(context) * 2e-3);
+    EXPECT_LT(max_abs_t, SamplerSlack(context) * 5e-5);
   }
 }
 
@@ -516,7 +494,7 @@ TEST_F(GlCliTest, SampleMatchesTheCpuBackend) {
     // Tolerance: the tables' float-vs-double differences (GlHillaire.SampleMatchesCpu, the elek
     // table tests in gl_elek_test.cc), including twilight (sun 95 degrees) where the values are
     // 1e-4 of the day's. Measured on llvmpipe: 7.1e-4 (hillaire), 1.5e-5 (elek).
-    EXPECT_LT(worst, 2e-3) << model;
+    EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3) << model;
   }
 }
 
@@ -533,7 +511,8 @@ TEST_F(GlCliTest, PrecomputeOnGlWritesATableTheCpuLoads) {
   const double worst = MaxRelativeDifference(RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv")),
                                              RadianceColumn(atmo::testing::ReadFile(dir_ / "loaded.csv")), 1e-6);
   std::printf("elek table precomputed on gl, loaded on the cpu: max rel %.3g against the cpu table\n", worst);
-  EXPECT_LT(worst, 2e-3);  // as SampleMatchesTheCpuBackend (measured 2.3e-5)
+  // As SampleMatchesTheCpuBackend (measured 2.3e-5).
+  EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3);
 }
 
 TEST_F(GlCliTest, BenchRunsElekOnGl) {
