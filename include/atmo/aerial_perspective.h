@@ -24,8 +24,18 @@ struct AerialPerspectiveSettings {
   double max_distance_m = 32000.0;  // slice z ends at (z + 1) / depth * max_distance_m
 };
 
+// Throws atmo::Error for sizes outside [1, 512] or a distance that is not finite and > 0.
+void ValidateAerialPerspectiveSettings(const AerialPerspectiveSettings& settings);
+
 class AerialPerspectiveVolume {
  public:
+  AerialPerspectiveVolume() = default;
+  // A volume computed elsewhere (the GL backend): `radiance` and `transmittance` hold
+  // channel_count values per froxel, froxel (x, y, z) at x + width (y + height z). Throws
+  // atmo::Error when the sizes disagree.
+  AerialPerspectiveVolume(const AerialPerspectiveSettings& settings, const Camera& camera, std::size_t channel_count,
+                          std::vector<float> radiance, std::vector<float> transmittance);
+
   // (x, y) in image pixels of the camera (pixel centres at +0.5), distance in metres; trilinear
   // between froxels; between the camera and the first slice, linear from (0 radiance, 1
   // transmittance); beyond max_distance_m clamped to the last slice.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
@@ -12,15 +13,19 @@
 
 namespace atmo {
 
-AerialPerspectiveVolume ComputeAerialPerspectiveVolume(const SkyView& sky, const Camera& camera,
-                                                       const AerialPerspectiveSettings& settings) {
-  ValidateCamera(camera);
+void ValidateAerialPerspectiveSettings(const AerialPerspectiveSettings& settings) {
   for (int side : {settings.width, settings.height, settings.depth}) {
     if (side < 1 || side > 512) throw Error("aerial perspective volume sizes must be in [1, 512]");
   }
   if (!(settings.max_distance_m > 0.0) || !std::isfinite(settings.max_distance_m)) {
     throw Error("aerial perspective max_distance_m must be finite and > 0");
   }
+}
+
+AerialPerspectiveVolume ComputeAerialPerspectiveVolume(const SkyView& sky, const Camera& camera,
+                                                       const AerialPerspectiveSettings& settings) {
+  ValidateCamera(camera);
+  ValidateAerialPerspectiveSettings(settings);
   AerialPerspectiveVolume volume;
   volume.settings_ = settings;
   volume.camera_ = camera;
@@ -54,6 +59,21 @@ AerialPerspectiveVolume ComputeAerialPerspectiveVolume(const SkyView& sky, const
     }
   });
   return volume;
+}
+
+AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialPerspectiveSettings& settings, const Camera& camera,
+                                                 std::size_t channel_count, std::vector<float> radiance,
+                                                 std::vector<float> transmittance)
+    : settings_(settings),
+      camera_(camera),
+      channel_count_(channel_count),
+      radiance_(std::move(radiance)),
+      transmittance_(std::move(transmittance)) {
+  const std::size_t values =
+      static_cast<std::size_t>(settings.width) * settings.height * settings.depth * channel_count;
+  if (radiance_.size() != values || transmittance_.size() != values) {
+    throw Error("aerial perspective volume: expected " + std::to_string(values) + " values per quantity");
+  }
 }
 
 void AerialPerspectiveVolume::Lookup(double px, double py, double distance_m, std::span<double> radiance,

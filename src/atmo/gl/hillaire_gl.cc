@@ -480,6 +480,79 @@ void main() {
   }
 }
 
+AerialPerspectiveVolume HillaireGl::ComputeAerialPerspective(const Camera& camera,
+                                                            const AerialPerspectiveSettings& settings,
+                                                            PassTimings* timings) {
+  if (!view_set_) throw Error("GL hillaire: ComputeAerialPerspective before SetView");
+  ValidateCamera(camera);
+  ValidateAerialPerspectiveSettings(settings);
+  context_.MakeCurrent();
+  const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+layout(rgba32f, binding = 0) uniform writeonly image3D radiance_volume;
+layout(rgba32f, binding = 1) uniform writeonly image3D transmittance_volume;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform sampler2D multiple_scattering_texture;
+uniform CameraParameters camera;
+uniform float r;                // km
+uniform float mu_s;
+uniform vec3 sun_direction;     // unit, local frame
+uniform float max_distance;     // km, the far end of the last slice
+uniform int ray_march_samples;
+
+void main() {
+  ivec3 size = imageSize(radiance_volume);
+  ivec3 froxel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(froxel, size))) return;
+  // The froxel's centre in image pixels, and its slice's far distance.
+  vec2 frag = (vec2(froxel.xy) + vec2(0.5)) / vec2(size.xy) * vec2(camera.width, camera.height);
+  float distance = float(froxel.z + 1) / float(size.z) * max_distance;
+  vec3 direction;
+  vec3 radiance = vec3(0.0);
+  vec3 transmittance = vec3(1.0);
+  if (GetCameraRayDirection(camera, frag, direction)) {
+    radiance = IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture, r,
+        direction.z, mu_s, dot(direction, sun_direction), distance, ray_march_samples, transmittance);
+  }
+  imageStore(radiance_volume, froxel, vec4(radiance, 1.0));
+  imageStore(transmittance_volume, froxel, vec4(transmittance, 1.0));
+}
+)glsl", "aerial-perspective volume");
+  const shared::ivec3 size(settings.width, settings.height, settings.depth);
+  if (aerial_radiance_.empty() || aerial_radiance_.size() != size) {
+    aerial_radiance_ = GpuTexture::Make3D(size);
+    aerial_transmittance_ = GpuTexture::Make3D(size);
+  }
+  SetAtmosphereUniforms(program, "atmosphere", km_);
+  SetCameraUniforms(program, "camera", ToSharedCamera(camera));
+  program.SetFloat("r", r_km_);
+  program.SetFloat("mu_s", mu_s_);
+  program.SetVec3("sun_direction", sun_);
+  program.SetFloat("max_distance", settings.max_distance_m / 1000.0);
+  program.SetInt("ray_march_samples", settings_.ray_march_samples);
+  BindSamplers(program,
+               {{"transmittance_texture", &transmittance_}, {"multiple_scattering_texture", &multiple_scattering_}});
+  aerial_radiance_.BindImage(0);
+  aerial_transmittance_.BindImage(1);
+  {
+    GpuPassTimer timer(timings);
+    DispatchCompute3D(program, size);
+    timer.Stop("aerial_perspective_lut");
+  }
+  CheckGlError("aerial perspective");
+  // Read back into the CPU's volume (rgb of each froxel, in its x + width (y + height z) order).
+  const auto rgb = [](const std::vector<float>& rgba) {
+    std::vector<float> values(rgba.size() / 4 * 3);
+    for (std::size_t i = 0; i < rgba.size() / 4; ++i) {
+      for (int c = 0; c < 3; ++c) values[3 * i + c] = rgba[4 * i + c];
+    }
+    return values;
+  };
+  return AerialPerspectiveVolume(settings, camera, 3, rgb(aerial_radiance_.DownloadRgba()),
+                                 rgb(aerial_transmittance_.DownloadRgba()));
+}
+
 Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
                        const HillaireSettings& settings, const RenderSettings& render, PassTimings* timings) {
   ValidateCamera(render.camera);

@@ -28,6 +28,7 @@
 
 #include <glm/glm.hpp>
 
+#include "atmo/aerial_perspective.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -94,6 +95,13 @@ class HillaireGl {
   void Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec3>& radiance,
               std::vector<glm::dvec3>& transmittance, PassTimings* timings = nullptr);
 
+  // The aerial-perspective volume of `camera` (aerial_perspective_lut; Hillaire 2020, section
+  // 5.4), as atmo::ComputeAerialPerspectiveVolume on the CPU: per froxel the camera ray through
+  // its centre, ray marched (ray_march_samples steps) to the slice's distance; kept on the GPU as
+  // two 3D textures (radiance, transmittance) and read back into the CPU's volume type.
+  AerialPerspectiveVolume ComputeAerialPerspective(const Camera& camera, const AerialPerspectiveSettings& settings,
+                                                   PassTimings* timings = nullptr);
+
   // Read-backs of the tables (shared::Texture2D layout).
   shared::Texture2D ReadTransmittance() const { return transmittance_.Download2D(); }
   shared::Texture2D ReadMultipleScattering() const { return multiple_scattering_.Download2D(); }
@@ -115,6 +123,8 @@ class HillaireGl {
   GpuTexture sky_view_;
   GpuTexture sky_and_ground_view_;
   GpuTexture frame_;
+  GpuTexture aerial_radiance_;
+  GpuTexture aerial_transmittance_;
   bool precomputed_ = false;
   bool view_set_ = false;
   bool uses_sky_view_ = false;
