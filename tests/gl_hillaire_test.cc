@@ -282,6 +282,20 @@ FrameDifference CompareFrames(const Image& gl, const Image& cpu, std::size_t ski
   return d;
 }
 
+// One frame of `render` on GL (every pass on the GPU, the GPU times into `timings`) and on the
+// CPU through `model` (precomputed with the same settings), in that order.
+std::pair<Image, Image> RenderOnBothBackends(const Context& context, const AtmosphereParameters& parameters,
+                                             const HillaireModel& model, const RenderSettings& render,
+                                             PassTimings& timings) {
+  Image gl = RenderHillaireGl(context, parameters, model.settings(), render, &timings);
+  const std::unique_ptr<SkyView> view =
+      model.View(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
+  Image cpu = RenderView(*view, render.camera, render.terms, parameters.solar_irradiance);
+  EXPECT_EQ(gl.pixels.size(), cpu.pixels.size());
+  EXPECT_EQ(gl.alpha.size(), cpu.alpha.size());
+  return {std::move(gl), std::move(cpu)};
+}
+
 // The whole GL frame (every table and the frame pass on the GPU, gl_f32_rgb) against the CPU
 // frame (cpu tables in double, the float vectorised sky-view lookup), for each camera kind.
 TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
@@ -300,12 +314,8 @@ TEST(GlHillaire, FrameMatchesCpuForEachCamera) {
     render.sun_azimuth_deg = 180.0;
     render.terms = RadianceTerms{true, true};
     PassTimings timings;
-    const Image gl = RenderHillaireGl(context, earth, settings, render, &timings);
-    const std::unique_ptr<SkyView> view =
-        model.View(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
-    const Image cpu = RenderView(*view, render.camera, render.terms, earth.solar_irradiance);
+    const auto [gl, cpu] = RenderOnBothBackends(context, earth, model, render, timings);
     ASSERT_EQ(gl.pixels.size(), cpu.pixels.size());
-    ASSERT_EQ(gl.alpha.size(), cpu.alpha.size());
     const std::size_t sun_pixel = 16 * 65 + 32;
     const FrameDifference d =
         CompareFrames(gl, cpu, kind == CameraKind::kPerspective ? sun_pixel : cpu.pixels.size());
@@ -358,11 +368,8 @@ TEST(GlHillaire, RayMarchedFrameMatchesCpu) {
     render.sun_azimuth_deg = 150.0;
     render.terms = RadianceTerms{true, true};
     PassTimings timings;
-    const Image gl = RenderHillaireGl(context, earth, settings, render, &timings);
+    const auto [gl, cpu] = RenderOnBothBackends(context, earth, model, render, timings);
     EXPECT_LT(timings.LastMs("sky_view_lut"), 0.0) << "the frame should be ray marched, not looked up";
-    const std::unique_ptr<SkyView> view =
-        model.View(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
-    const Image cpu = RenderView(*view, render.camera, render.terms, earth.solar_irradiance);
     ASSERT_EQ(gl.pixels.size(), cpu.pixels.size());
     const FrameDifference d = CompareFrames(gl, cpu, cpu.pixels.size());
     std::printf("ray-marched frame %s at %.0f m (sky_view %s): GL vs CPU max rel %.3g, mean rel %.3g\n",

@@ -137,16 +137,10 @@ void main() {
   float r;
   vec3 sun_direction;
   GetMultiScatteringTexelPoint(atmosphere, imageSize(output_table), vec2(texel) + vec2(0.5), r, sun_direction);
-  vec3 luminance_sum = vec3(0.0);
-  vec3 transfer_sum = vec3(0.0);
-  for (int k = lane; k < direction_count; k += 64) {
-    vec3 luminance;
-    vec3 transfer;
-    IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
-        sun_direction, sample_count, media_phase, ground_transfer, luminance, transfer);
-    luminance_sum += luminance;
-    transfer_sum += transfer;
-  }
+  vec3 luminance_sum;
+  vec3 transfer_sum;
+  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, lane, 64, direction_count,
+      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum);
   SumOverWorkGroup(lane, luminance_sum, transfer_sum);
   if (lane == 0) {
     vec3 psi_ms = GetMultiScatteringFromMeans(luminance_sum / float(direction_count),
@@ -181,14 +175,11 @@ void main() {
   ivec2 texel = ivec2(gl_WorkGroupID.xy);
   int lane = int(gl_LocalInvocationID.x);
   float mu_s = GetGroundIrradianceTexelMuS(imageSize(output_table).x, float(texel.x) + 0.5);
-  vec3 sum = vec3(0.0);
+  vec3 sum = SumGroundIrradianceTerms(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, lane, 64,
+      direction_count, sample_count);
   vec3 unused = vec3(0.0);
-  for (int k = lane; k < direction_count; k += 64) {
-    sum += ComputeGroundIrradianceTerm(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
-        direction_count, sample_count);
-  }
   SumOverWorkGroup(lane, sum, unused);
-  if (lane == 0) imageStore(output_table, texel, vec4(sum * (2.0 * kPi / float(direction_count)), 1.0));
+  if (lane == 0) imageStore(output_table, texel, vec4(GetGroundIrradianceFromSum(sum, direction_count), 1.0));
 }
 )glsl", "ground-irradiance table");
   SetAtmosphereUniforms(program, "atmosphere", km);

@@ -142,16 +142,15 @@ vec3 GetMultiScatteringFromMeans(IN(vec3) second_order, IN(vec3) f_ms) {
   return second_order / (vec3(1.0) - min(f_ms, vec3(0.999)));
 }
 
-// The per-texel kernel of the multiple-scattering table.
-vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase,
-    IN(vec3) ground_transfer) {
-  Number r;
-  vec3 sun_direction;
-  GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
-  vec3 luminance_sum = vec3(0.0);
-  vec3 transfer_sum = vec3(0.0);
-  for (int k = 0; k < direction_count; ++k) {
+// The sums of IntegrateMultiScatteringRay's luminance and transfer over the directions k = first,
+// first + stride, ... < direction_count: all of them with (0, 1); a GPU work group gives each of
+// its invocations a share (first = invocation, stride = group size) and adds the partial sums.
+void SumMultiScatteringRays(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    Number r, IN(vec3) sun_direction, int first, int stride, int direction_count, int sample_count, bool media_phase,
+    IN(vec3) ground_transfer, OUT(vec3) luminance_sum, OUT(vec3) transfer_sum) {
+  luminance_sum = vec3(0.0);
+  transfer_sum = vec3(0.0);
+  for (int k = first; k < direction_count; k += stride) {
     vec3 luminance;
     vec3 transfer;
     IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
@@ -159,5 +158,18 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
     luminance_sum += luminance;
     transfer_sum += transfer;
   }
+}
+
+// The per-texel kernel of the multiple-scattering table.
+vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase,
+    IN(vec3) ground_transfer) {
+  Number r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
+  vec3 luminance_sum;
+  vec3 transfer_sum;
+  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, 0, 1, direction_count, sample_count,
+      media_phase, ground_transfer, luminance_sum, transfer_sum);
   return GetMultiScatteringFromMeans(luminance_sum / Number(direction_count), transfer_sum / Number(direction_count));
 }

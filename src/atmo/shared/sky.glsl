@@ -216,16 +216,30 @@ vec3 ComputeGroundIrradianceTerm(IN(AtmosphereParameters) atmosphere, IN(Transmi
       atmosphere.bottom_radius, z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
 }
 
+// The sum of the terms k = first, first + stride, ... < direction_count (all with (0, 1); see
+// SumMultiScatteringRays for the shares of a GPU work group).
+vec3 SumGroundIrradianceTerms(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, Number mu_s, int first, int stride, int direction_count,
+    int sample_count) {
+  vec3 sum = vec3(0.0);
+  for (int k = first; k < direction_count; k += stride) {
+    sum += ComputeGroundIrradianceTerm(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
+        direction_count, sample_count);
+  }
+  return sum;
+}
+
+// The irradiance from the sum of all the terms: each direction stands for 2 pi / count sr.
+vec3 GetGroundIrradianceFromSum(IN(vec3) sum, int direction_count) {
+  return sum * (2.0 * kPi / Number(direction_count));
+}
+
 vec3 ComputeGroundIrradianceTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(MultiScatteringTexture) multiple_scattering_texture, int texture_width, Number frag_x, int direction_count,
     int sample_count) {
   Number mu_s = GetGroundIrradianceTexelMuS(texture_width, frag_x);
-  vec3 sum = vec3(0.0);
-  for (int k = 0; k < direction_count; ++k) {
-    sum += ComputeGroundIrradianceTerm(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
-        direction_count, sample_count);
-  }
-  return sum * (2.0 * kPi / Number(direction_count));
+  return GetGroundIrradianceFromSum(SumGroundIrradianceTerms(atmosphere, transmittance_texture,
+      multiple_scattering_texture, mu_s, 0, 1, direction_count, sample_count), direction_count);
 }
 
 vec3 GetGroundIrradianceFromSky(IN(TransmittanceTexture) ground_irradiance_texture, Number mu_s) {
