@@ -20,6 +20,11 @@
 
 namespace atmo {
 
+// The colour space of an image's channels, written into EXRs as the standard `chromaticities`
+// attribute: Rec.709 primaries with the D65 white, or CIE XYZ (primaries (1, 0), (0, 1), (0, 0),
+// white (1/3, 1/3)). kUnspecified writes none (per-wavelength or relative channels).
+enum class ColourSpace { kUnspecified, kLinearSrgb, kCieXyz };
+
 struct Image {
   int width = 0;
   int height = 0;
@@ -30,6 +35,7 @@ struct Image {
   // Optional EXR channel names, one per channel; empty means the defaults: R, G, B for 3 channels,
   // else C0..Cn-1. Monte Carlo renders name their 6 channels R, G, B, R.stderr, G.stderr, B.stderr.
   std::vector<std::string> channel_names;
+  ColourSpace colour_space = ColourSpace::kUnspecified;
 
   Image() = default;
   Image(int w, int h, int c)

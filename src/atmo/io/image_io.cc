@@ -28,6 +28,7 @@
 #include <vector>
 
 #include <ImfChannelList.h>
+#include <ImfStandardAttributes.h>
 #include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -239,6 +240,12 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
   }
   for (const std::string& name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
   if (!image.alpha.empty()) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
+  if (image.colour_space == ColourSpace::kLinearSrgb) {
+    Imf::addChromaticities(header, Imf::Chromaticities());  // OpenEXR's default: Rec.709, D65
+  } else if (image.colour_space == ColourSpace::kCieXyz) {
+    Imf::addChromaticities(header, Imf::Chromaticities(Imath::V2f(1.0f, 0.0f), Imath::V2f(0.0f, 1.0f),
+                                                       Imath::V2f(0.0f, 0.0f), Imath::V2f(1.0f / 3.0f, 1.0f / 3.0f)));
+  }
   std::set<std::string> seen;
   for (const auto& [name, value] : metadata) {
     if (name.empty()) throw Error(WriteError(path, "metadata with an empty name"));
@@ -293,6 +300,8 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     std::vector<std::string> names;
     if (list.findChannel("R") && list.findChannel("G") && list.findChannel("B")) {
       names = {"R", "G", "B"};
+    } else if (list.findChannel("X") && list.findChannel("Y") && list.findChannel("Z")) {
+      names = {"X", "Y", "Z"};
     } else {
       for (int c = 0;; ++c) {
         std::string name = ExrChannelName(c, /*channel_count=*/0);  // C0, C1, ...
@@ -300,7 +309,7 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
         names.push_back(std::move(name));
       }
     }
-    if (names.empty()) throw Error(ReadError(path, "no R, G, B or C0.. channels"));
+    if (names.empty()) throw Error(ReadError(path, "no R, G, B, X, Y, Z or C0.. channels"));
     std::vector<std::string> extras;
     for (auto it = list.begin(); it != list.end(); ++it) {
       const std::string name = it.name();
@@ -336,6 +345,10 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
     image.channel_names = names;
+    if (Imf::hasChromaticities(header)) {
+      const Imf::Chromaticities& c = Imf::chromaticities(header);
+      image.colour_space = c.red.x == 1.0f && c.green.y == 1.0f ? ColourSpace::kCieXyz : ColourSpace::kLinearSrgb;
+    }
 
     if (metadata != nullptr) {
       metadata->clear();

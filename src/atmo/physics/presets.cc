@@ -7,6 +7,7 @@
 
 #include "atmo/error.h"
 #include "atmo/parameters.h"
+#include "atmo/spectrum.h"
 
 namespace atmo {
 namespace {
@@ -128,6 +129,7 @@ AtmosphereParameters Simple() {
 
 AtmosphereParameters Preset(std::string_view name) {
   if (name == "earth") return Earth();
+  if (name == "earth-spectral") return EarthSpectral();
   if (name == "atmosphere-plus") return AtmospherePlus();
   if (name == "simple") return Simple();
   std::string known;
@@ -137,6 +139,6 @@ AtmosphereParameters Preset(std::string_view name) {
   throw Error("unknown preset '" + std::string(name) + "' (known: " + known + ")");
 }
 
-std::vector<std::string> PresetNames() { return {"earth", "atmosphere-plus", "simple"}; }
+std::vector<std::string> PresetNames() { return {"earth", "earth-spectral", "atmosphere-plus", "simple"}; }
 
 }  // namespace atmo
