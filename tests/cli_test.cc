@@ -16,7 +16,9 @@
 
 #include <gtest/gtest.h>
 
+#include "atmo/colour.h"
 #include "atmo/image.h"
+#include "atmo/spectrum.h"
 #include "cli_fixture.h"
 
 namespace {
@@ -246,9 +248,9 @@ TEST_F(CliTest, ReferenceRenderIsTheSameForOneAndTwoThreads) {
 TEST_F(CliTest, ReferenceRenderPixelMatchesSample) {
   // Equirect pixel (x, y) of a 16x8 image looks at view zenith 180 (y + 0.5) / 8 and at azimuth
   // 360 ((x + 0.5) / 16 - 0.5) from the sun (the view is centred on the sun). Pixel (12, 2): view
-  // zenith 56.25, azimuth 101.25, well clear of the sun disc and the ground. The render multiplies
-  // by the solar irradiance, 1 for the earth preset.
-  const RunResult render = Run(ATMO_REFERENCE_RENDER "--spp 512 --exr px.exr --png ''");
+  // zenith 56.25, azimuth 101.25, well clear of the sun disc and the ground. With --unit relative
+  // the render multiplies by the solar irradiance, 1 for the earth preset.
+  const RunResult render = Run(ATMO_REFERENCE_RENDER "--spp 512 --unit relative --exr px.exr --png ''");
   ASSERT_EQ(render.exit_code, 0) << render.err;
   const atmo::Image image = atmo::ReadExr(dir_ / "px.exr");
   const RunResult sample = Run(
@@ -336,10 +338,72 @@ const FailureCase kFailureCases[] = {
     {"SppForADeterministicModel", "render --model simple --preset simple --spp 16" ATMO_TINY_RENDER,
      "takes no --spp"},
     {"SppOfOne", "render --model reference --spp 1" ATMO_TINY_RENDER, "--spp"},
+    {"UnknownUnit", "render --unit lumens" ATMO_TINY_RENDER, "--unit"},
+    {"XyzWithoutLuminance", "render --unit radiance --xyz" ATMO_TINY_RENDER, "--xyz needs --unit luminance"},
+    {"SpectralTooFew", "sample --spectral 2" ATMO_SAMPLE_ONE, "--spectral"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Cli, CliFailureTest, ::testing::ValuesIn(kFailureCases),
                          [](const ::testing::TestParamInfo<FailureCase>& info) { return info.param.name; });
+
+TEST_F(CliTest, RenderUnitsAreRecordedAndConsistent) {
+  // One equirect in the three units: luminance (linear sRGB with chromaticities, cd/m^2),
+  // radiance (one channel per wavelength, W m^-2 sr^-1 nm^-1) and relative. Each is the same sky:
+  // radiance = relative x E_sun(lambda), luminance = the colour conversion of relative.
+  const std::string base = "render --camera equirect --width 16 --height 8 --sun-elevation 30 --png '' --spectral 5 ";
+  for (const char* unit : {"luminance", "radiance", "relative"}) {
+    const RunResult r = Run(base + "--unit " + unit + " --exr " + unit + ".exr");
+    ASSERT_EQ(r.exit_code, 0) << unit << ": " << r.err;
+  }
+  atmo::ImageMetadata metadata;
+  const atmo::Image luminance = atmo::ReadExr(dir_ / "luminance.exr", &metadata);
+  std::map<std::string, std::string> values(metadata.begin(), metadata.end());
+  EXPECT_EQ(values["atmo:unit"], "luminance");
+  EXPECT_NE(values["atmo:radianceUnit"].find("cd/m^2"), std::string::npos);
+  EXPECT_EQ(luminance.colour_space, atmo::ColourSpace::kLinearSrgb);
+  ASSERT_EQ(luminance.channels, 3);
+  const atmo::Image radiance = atmo::ReadExr(dir_ / "radiance.exr");
+  const atmo::Image relative = atmo::ReadExr(dir_ / "relative.exr");
+  ASSERT_EQ(radiance.channels, 5);
+  ASSERT_EQ(relative.channels, 5);
+  const atmo::SpectralConversion convert(atmo::SpectralWavelengths(5));
+  // Relative holds r x solar_irradiance, and MakeSpectral sets solar_irradiance to E_sun: in this
+  // case relative and radiance hold the same numbers.
+  for (int c = 0; c < 5; ++c) EXPECT_NEAR(radiance.at(4, 2, c), relative.at(4, 2, c), 1e-6 * relative.at(4, 2, c));
+  std::vector<double> r(5);
+  for (int c = 0; c < 5; ++c) r[c] = relative.at(4, 2, c) / convert.solar_irradiance()[c];
+  const glm::dvec3 rgb = convert.LinearSrgb(r);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(luminance.at(4, 2, k), rgb[k], 1e-4 * std::abs(rgb[k]) + 1e-3) << k;
+  // XYZ on request, with the XYZ chromaticities.
+  ASSERT_EQ(Run(base + "--xyz --exr xyz.exr").exit_code, 0);
+  const atmo::Image xyz = atmo::ReadExr(dir_ / "xyz.exr");
+  EXPECT_EQ(xyz.colour_space, atmo::ColourSpace::kCieXyz);
+  EXPECT_EQ(xyz.channel_names, (std::vector<std::string>{"X", "Y", "Z"}));
+}
+
+TEST_F(CliTest, SampleUnitsAgree) {
+  const std::string query = "sample --altitude 0 --sun-zenith 40 --view-zenith 70 --azimuth 120 ";
+  const RunResult relative = Run(query);
+  const RunResult radiance = Run(query + "--unit radiance");
+  const RunResult luminance = Run(query + "--unit luminance");
+  ASSERT_EQ(luminance.exit_code, 0) << luminance.err;
+  const auto rel = SampleRows(relative.out);
+  const auto rad = SampleRows(radiance.out);
+  ASSERT_EQ(rel.size(), 3u);
+  ASSERT_EQ(rad.size(), 3u);
+  const std::vector<double> wavelengths = {680.0, 550.0, 440.0};
+  const atmo::SpectralConversion convert(wavelengths);
+  std::vector<double> r(3);
+  for (int c = 0; c < 3; ++c) {
+    r[c] = std::stod(rel[c][5]);
+    EXPECT_NEAR(std::stod(rad[c][5]), r[c] * atmo::SolarSpectralIrradiance(wavelengths[c]), 1e-8 * std::stod(rad[c][5]));
+  }
+  const std::vector<std::string> lines = Lines(luminance.out);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,luminance_cd_m2,luminous_transmittance,stderr");
+  const std::vector<std::string> fields = Split(lines[1]);
+  EXPECT_NEAR(std::stod(fields[4]), convert.Luminance(r), 1e-6 * convert.Luminance(r));
+}
 
 TEST_F(CliTest, CsvRowErrorNamesTheLine) {
   WriteFile(dir_ / "grid.csv", std::string(kGridHeader) + "\n0,30,60,90\n0,30,60\n");

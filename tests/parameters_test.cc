@@ -32,19 +32,19 @@ std::string ErrorMessage(const std::function<void()>& f) {
 // ---------------------------------------------------------------------------------------------
 // Presets.
 
-TEST(Presets, NamesListTheThreePresets) {
-  EXPECT_EQ(PresetNames(), (std::vector<std::string>{"earth", "atmosphere-plus", "simple"}));
+TEST(Presets, NamesListThePresets) {
+  EXPECT_EQ(PresetNames(), (std::vector<std::string>{"earth", "earth-spectral", "atmosphere-plus", "simple"}));
   for (const std::string& name : PresetNames()) {
     const AtmosphereParameters p = Preset(name);
     EXPECT_EQ(p.name, name);
     EXPECT_NO_THROW(Validate(p)) << name;
-    EXPECT_EQ(p.channel_count(), 3u) << name;
+    EXPECT_EQ(p.channel_count(), name == "earth-spectral" ? 16u : 3u) << name;
   }
 }
 
 TEST(Presets, UnknownNameListsKnownOnes) {
   EXPECT_EQ(ErrorMessage([] { Preset("x"); }),
-            "unknown preset 'x' (known: earth, atmosphere-plus, simple)");
+            "unknown preset 'x' (known: earth, earth-spectral, atmosphere-plus, simple)");
 }
 
 TEST(Presets, EarthMatchesDesignTable) {
@@ -447,7 +447,7 @@ TEST(ParametersJson, UnknownNamesListTheKnownOnes) {
   const std::string geometry = ErrorMessage([] { FromJson(R"({"geometry": "flat"})"); });
   EXPECT_NE(geometry.find("unknown geometry 'flat'"), std::string::npos) << geometry;
   EXPECT_EQ(ErrorMessage([] { FromJson(R"({"preset": "mars"})"); }),
-            "unknown preset 'mars' (known: earth, atmosphere-plus, simple)");
+            "unknown preset 'mars' (known: earth, earth-spectral, atmosphere-plus, simple)");
 }
 
 TEST(ParametersJson, ValuesAreValidated) {

@@ -37,9 +37,12 @@ struct CommonOptions {
   std::uint64_t seed = 0;
   bool seed_given = false;
   std::vector<std::string> options;  // KEY=VALUE strings for atmo::ModelOptions
+  // --spectral N: resample the parameters to N wavelengths over 360..830 nm (atmo::MakeSpectral);
+  // 0: as they are.
+  int spectral = 0;
 };
 
-// The parameters named by --preset or --config. Throws atmo::Error.
+// The parameters named by --preset or --config, made spectral by --spectral. Throws atmo::Error.
 AtmosphereParameters LoadParameters(const CommonOptions& common);
 // Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
 ModelOptions ParseModelOptions(const std::vector<std::string>& options);
@@ -84,6 +87,11 @@ struct RenderCommand {
   std::string png_path = "sky.png";  // empty: no PNG
   // Monte Carlo paths per pixel (model reference only; default: its `samples` option).
   std::optional<std::uint64_t> spp;
+  // What the EXR holds (atmo/colour.h): luminance (linear sRGB, Y in cd/m^2; XYZ with --xyz),
+  // radiance (W m^-2 sr^-1 nm^-1 per wavelength) or relative (the model's channels x
+  // solar_irradiance, as before physical units).
+  std::string unit = "luminance";
+  bool xyz = false;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
 
@@ -94,6 +102,9 @@ struct SampleCommand {
   std::optional<double> sun_zenith_deg;
   std::optional<double> view_zenith_deg;
   std::optional<double> azimuth_deg;
+  // relative (DESIGN.md §4: sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1 per
+  // wavelength row) or luminance (one row per point: luminance_cd_m2, stderr).
+  std::string unit = "relative";
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
 

@@ -6,6 +6,7 @@
 #include <system_error>
 
 #include "atmo/error.h"
+#include "atmo/spectrum.h"
 #include "commands.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
@@ -18,8 +19,9 @@ namespace atmo::cli {
 namespace fs = std::filesystem;
 
 AtmosphereParameters LoadParameters(const CommonOptions& common) {
-  if (!common.config.empty()) return LoadParametersFile(common.config);
-  return Preset(common.preset);
+  AtmosphereParameters parameters = common.config.empty() ? Preset(common.preset) : LoadParametersFile(common.config);
+  if (common.spectral != 0) parameters = MakeSpectral(parameters, common.spectral);
+  return parameters;
 }
 
 ModelOptions ParseModelOptions(const std::vector<std::string>& options) {

@@ -120,6 +120,10 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")
       ->expected(1)
       ->take_all();
+  app->add_option("--spectral", common.spectral,
+                  "resample the atmosphere to N wavelengths over 360-830 nm, each medium by its physics "
+                  "(docs/spectral.md)")
+      ->check(CLI::Range(3, 256));
 }
 
 }  // namespace
@@ -169,6 +173,12 @@ int main(int argc, char** argv) {
   render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
   render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")
       ->capture_default_str();
+  render_app->add_option("--unit", render.unit,
+                         "what the EXR holds: luminance (linear sRGB, cd/m^2), radiance (W m^-2 sr^-1 nm^-1 per "
+                         "wavelength) or relative (per unit solar irradiance x solar_irradiance)")
+      ->check(CLI::IsMember({"luminance", "radiance", "relative"}))
+      ->capture_default_str();
+  render_app->add_flag("--xyz", render.xyz, "with --unit luminance: CIE 1931 XYZ channels instead of linear sRGB");
   render_app
       ->add_option_function<std::uint64_t>(
           "--spp", [&render](const std::uint64_t& n) { render.spp = n; },
@@ -182,6 +192,11 @@ int main(int argc, char** argv) {
   CLI::Option* grid = sample_app->add_option(
       "--grid", sample.grid_path, "CSV with header altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg");
   sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
+  sample_app->add_option("--unit", sample.unit,
+                         "relative (sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1) or luminance "
+                         "(cd/m^2, one row per point)")
+      ->check(CLI::IsMember({"relative", "radiance", "luminance"}))
+      ->capture_default_str();
   CLI::Option* single[] = {
       AddOptionalNumber(sample_app, "--altitude", sample.altitude_m, "observer altitude in metres"),
       AddOptionalNumber(sample_app, "--sun-zenith", sample.sun_zenith_deg,

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/render.h"
@@ -35,12 +36,54 @@ std::string JoinOptions(const std::vector<std::string>& options) {
   return text;
 }
 
+// A display exposure for a luminance image when none is given: the reflected-light meter of
+// photography on the log-average luminance, EV100 = log2(L_avg S / K) with S = 100, K = 12.5,
+// and exposure 1 / (1.2 2^EV100) (saturation-based speed).
+double AutoExposure(const Image& rgb) {
+  double sum = 0.0;
+  std::size_t count = 0;
+  const std::size_t pixels = static_cast<std::size_t>(rgb.width) * rgb.height;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    if (!rgb.alpha.empty() && rgb.alpha[p] == 0.0f) continue;
+    const double y = 0.2126 * rgb.pixels[3 * p] + 0.7152 * rgb.pixels[3 * p + 1] + 0.0722 * rgb.pixels[3 * p + 2];
+    if (!(y > 0.0) || !std::isfinite(y)) continue;
+    sum += std::log(y);
+    ++count;
+  }
+  const double average = count == 0 ? 1.0 : std::exp(sum / static_cast<double>(count));
+  const double ev100 = std::log2(average * 100.0 / 12.5);
+  return 1.0 / (1.2 * std::exp2(ev100));
+}
+
+std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<double>& solar_irradiance) {
+  switch (unit) {
+    case RadianceUnit::kLuminance:
+      return xyz ? "cd/m^2 (CIE 1931 XYZ, Y = luminance)" : "cd/m^2 (linear Rec.709/sRGB, D65; Y = luminance)";
+    case RadianceUnit::kRadiance: return "W m^-2 sr^-1 nm^-1 (spectral radiance, one channel per wavelength)";
+    case RadianceUnit::kRelative: break;
+  }
+  return "sr^-1 per unit solar irradiance, times solar_irradiance (" + JoinValues(solar_irradiance) + ")";
+}
+
 }  // namespace
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
   const bool on_gl = common.backend == "gl";
   const AtmosphereParameters parameters = LoadParameters(common);
+  const RadianceUnit unit = ParseRadianceUnit(command.unit);
+  if (command.xyz && unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
+  // The models answer per unit solar irradiance; in physical units the colour conversion brings
+  // in the solar spectrum, so the model's images are rendered with solar_irradiance 1.
+  AtmosphereParameters model_parameters = parameters;
+  if (unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
+  const SpectralConversion convert(parameters.wavelengths_nm);
+  const ImageColour exr_colour = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
+                                 : command.xyz                   ? ImageColour::kXyz
+                                                                 : ImageColour::kLinearSrgb;
+  // The PNG shows colour: the legacy channels as they are for a relative 3-channel render (the
+  // seed's look), else the converted linear sRGB.
+  const bool legacy_png = unit == RadianceUnit::kRelative && parameters.channel_count() == 3;
 
   RenderSettings settings;
   settings.camera.kind = ParseCameraKind(command.camera);
@@ -60,7 +103,6 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
 
   ToneMapping mapping;
   mapping.op = ParseToneMapper(command.tonemap);
-  mapping.exposure = command.exposure.value_or(parameters.exposure);
   mapping.gamma = command.gamma;
 
   // Fail fast, before precomputing anything, when an output cannot be written.
@@ -73,7 +115,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                 "' is deterministic and takes no --spp");
   }
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
-  const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, parameters);
+  const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, model_parameters);
   const std::string model_name = model != nullptr ? std::string(model->name()) : common.model;
 
   const auto start = std::chrono::steady_clock::now();
@@ -86,8 +128,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       {"atmo:backend", common.backend},
       {"atmo:preset", parameters.name},
       {"atmo:parameterHash", ParameterHashHex(parameters)},
-      {"atmo:radianceUnit", "sr^-1 per unit solar irradiance, times solar_irradiance (" +
-                                JoinValues(parameters.solar_irradiance) + ")"},
+      {"atmo:unit", std::string(ToString(unit))},
+      {"atmo:radianceUnit", UnitDescription(unit, command.xyz, parameters.solar_irradiance)},
       {"atmo:renderTimeMs", ""},
       {"atmo:camera", std::string(ToString(settings.camera.kind))},
       {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
@@ -109,16 +151,29 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     metadata.emplace_back(key, value);
   };
-  // Writes the outputs asked for; `exr_image` may carry more channels than `image` (PNG).
-  const auto write = [&](const Image& image, const Image& exr_image, double render_ms) {
+  // Writes the outputs asked for from the model's image (per channel) and, for a Monte Carlo
+  // model, its standard errors (same unit).
+  const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
     std::vector<std::string> written;
     if (!command.exr_path.empty()) {
       set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
+      Image exr_image = unit == RadianceUnit::kRelative ? image : ConvertImage(image, convert, exr_colour);
+      if (standard_error != nullptr) {
+        ProgressiveImage with_error;
+        with_error.radiance = exr_image;
+        with_error.standard_error =
+            unit == RadianceUnit::kRelative ? *standard_error : ConvertStandardError(*standard_error, convert, exr_colour);
+        exr_image = WithStandardErrorChannels(with_error);
+        exr_image.colour_space = with_error.radiance.colour_space;
+      }
       WriteExr(command.exr_path, exr_image, metadata);
       written.push_back(command.exr_path);
     }
     if (!command.png_path.empty()) {
-      WritePng(command.png_path, image, mapping);
+      const Image display = legacy_png ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
+      ToneMapping png_mapping = mapping;
+      png_mapping.exposure = command.exposure.value_or(legacy_png ? parameters.exposure : AutoExposure(display));
+      WritePng(command.png_path, display, png_mapping);
       written.push_back(command.png_path);
     }
     return written;
@@ -130,13 +185,13 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   if (model != nullptr && IsMonteCarlo(*model)) {
     ProgressiveSettings progressive;
     progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option
-    set_metadata("atmo:standardErrorChannels", "R.stderr, G.stderr, B.stderr: standard error of R, G, B (same unit)");
+    set_metadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
     ProgressBar progress("render");
     progressive.on_progress = [&](double done, double total) { progress.Update(done, total); };
     progressive.on_pass = [&](const ProgressiveImage& pass) {
       set_metadata("atmo:samplesPerPixel", std::to_string(pass.samples_per_pixel));
       render_ms = elapsed_ms();
-      written = write(pass.radiance, WithStandardErrorChannels(pass), render_ms);
+      written = write(pass.radiance, &pass.standard_error, render_ms);
     };
     image = RenderProgressive(*model, settings, progressive).radiance;
     progress.Finish();
@@ -144,7 +199,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
 #ifdef ATMO_HAVE_GL
     if (on_gl) {
       const gl::Context context;
-      image = RenderOnGl(context, common, parameters, settings);
+      image = RenderOnGl(context, common, model_parameters, settings);
     } else {
       image = Render(*model, settings);
     }
@@ -152,7 +207,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     image = Render(*model, settings);
 #endif
     render_ms = elapsed_ms();
-    written = write(image, image, render_ms);
+    written = write(image, nullptr, render_ms);
   }
 
   std::string files;

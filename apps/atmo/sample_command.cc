@@ -21,6 +21,8 @@
 
 #include <glm/glm.hpp>
 
+#include "atmo/colour.h"
+#include "atmo/spectrum.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "commands.h"
@@ -37,6 +39,10 @@ namespace {
 
 constexpr const char* kOutputHeader =
     "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,transmittance,stderr";
+// --unit luminance: one row per point. The transmittance is the luminous one, the sun's
+// luminance-weighted transmittance: sum_c w_c T_c / sum_c w_c with w_c the luminance weights.
+constexpr const char* kLuminanceHeader =
+    "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,luminance_cd_m2,luminous_transmittance,stderr";
 
 // What one query gives per channel.
 struct SampleResult {
@@ -75,7 +81,7 @@ using GroupEvaluator = std::function<void(const PointGroup& group, std::vector<S
 
 // Every point through `evaluate`, group by group, and the whole CSV text in the input order.
 std::string EvaluatePoints(const std::vector<double>& wavelengths_nm, const std::vector<SamplePoint>& points,
-                           const GroupEvaluator& evaluate) {
+                           RadianceUnit unit, const GroupEvaluator& evaluate) {
   std::vector<SampleResult> results(points.size());
   ProgressBar progress("sample");
   std::size_t done = 0;
@@ -89,15 +95,33 @@ std::string EvaluatePoints(const std::vector<double>& wavelengths_nm, const std:
     }
     done += group.indices.size();
   }
-  std::string csv = std::string(kOutputHeader) + "\n";
+  const SpectralConversion convert(wavelengths_nm);
+  std::string csv = std::string(unit == RadianceUnit::kLuminance ? kLuminanceHeader : kOutputHeader) + "\n";
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SamplePoint& point = points[i];
+    const SampleResult& result = results[i];
     const std::string inputs = Format("%.10g,%.10g,%.10g,%.10g,", point.altitude_m, point.sun_zenith_deg,
                                       point.view_zenith_deg, point.azimuth_deg);
+    if (unit == RadianceUnit::kLuminance) {
+      // The channels' estimates are independent (the reference traces each channel apart), so
+      // the luminance's standard error adds their weighted variances.
+      double weight_sum = 0.0, transmittance = 0.0, variance = 0.0;
+      for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
+        const double w = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
+        weight_sum += w;
+        transmittance += w * result.transmittance[c];
+        variance += (w * result.standard_error[c]) * (w * result.standard_error[c]);
+      }
+      csv += inputs + Format("%.9e,%.9e,%.9e\n", convert.Luminance(result.radiance),
+                             weight_sum > 0.0 ? transmittance / weight_sum : 0.0, std::sqrt(variance));
+      continue;
+    }
     for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
+      // --unit radiance: times the solar spectral irradiance at the channel's wavelength.
+      const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
       csv += inputs;
-      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], results[i].radiance[c], results[i].transmittance[c],
-                    results[i].standard_error[c]);
+      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], scale * result.radiance[c], result.transmittance[c],
+                    scale * result.standard_error[c]);
     }
   }
   return csv;
@@ -138,6 +162,7 @@ GroupEvaluator HillaireGlEvaluator(gl::HillaireGl& sky) {
 int RunSample(const CommonOptions& common, const SampleCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
   const AtmosphereParameters parameters = LoadParameters(common);
+  const RadianceUnit unit = ParseRadianceUnit(command.unit);
 
   std::vector<SamplePoint> points;
   if (!command.grid_path.empty()) {
@@ -159,12 +184,12 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
     const gl::Context context;
     gl::HillaireGl sky(context, parameters, GlHillaireSettings(common));
     sky.Precompute();
-    csv = EvaluatePoints(parameters.wavelengths_nm, points, HillaireGlEvaluator(sky));
+    csv = EvaluatePoints(parameters.wavelengths_nm, points, unit, HillaireGlEvaluator(sky));
   }
 #endif
   if (csv.empty()) {
     const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
-    csv = EvaluatePoints(parameters.wavelengths_nm, points, ModelEvaluator(*model));
+    csv = EvaluatePoints(parameters.wavelengths_nm, points, unit, ModelEvaluator(*model));
   }
 
   if (command.out_path.empty()) {

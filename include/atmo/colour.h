@@ -84,6 +84,10 @@ enum class ImageColour {
 // irradiance, one per wavelength of `convert`) into `colour`; alpha is kept and the colour space
 // is recorded in Image::colour_space. Throws atmo::Error for a channel-count mismatch.
 Image ConvertImage(const Image& relative, const SpectralConversion& convert, ImageColour colour);
+// The standard error of ConvertImage(relative) from the per-channel standard errors of
+// `relative`, for estimates whose channels are independent (the reference traces each channel's
+// paths apart): sigma_k = sqrt(sum_c (w_kc sigma_c)^2) for output channel k.
+Image ConvertStandardError(const Image& standard_error, const SpectralConversion& convert, ImageColour colour);
 
 // CIELAB of an XYZ colour against the white `white_xyz` (CIE 1976), and the CIEDE2000 colour
 // difference of two Lab colours (Sharma, Wu and Dalal 2005, with kL = kC = kH = 1).

@@ -46,13 +46,15 @@ struct RenderSettings {
 // Largest accepted image side, to reject absurd resolutions before allocating.
 constexpr int kMaxImageSide = 16384;
 
+// One image channel per model channel (per wavelength: 3 for the RGB presets, N for a spectral
+// atmosphere; atmo::ConvertImage in atmo/colour.h turns them into colour and physical units).
 // Throws atmo::Error for invalid settings (non-finite angles, a resolution outside
-// [1, kMaxImageSide], a field of view outside (0, 180)) or a model whose channel count is not 3.
+// [1, kMaxImageSide], a field of view outside (0, 180)).
 Image Render(const Model& model, const RenderSettings& settings);
 
 // Renders a prepared view (its per-view tables already built) through a camera: the frame pass
 // alone. Radiance is multiplied per channel by `solar_irradiance` (one value per channel). Same
-// errors as Render for the camera; the view must have 3 channels.
+// errors as Render for the camera; `solar_irradiance` has one value per channel of the view.
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance);
 

@@ -64,10 +64,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   for (double value : {settings.altitude_m, settings.sun_elevation_deg, settings.sun_azimuth_deg}) {
     if (!std::isfinite(value)) throw Error("altitude and sun angles must be finite");
   }
-  if (model.channel_count() != 3) {
-    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
-                std::to_string(model.channel_count()));
-  }
+  const std::size_t nc = model.channel_count();  // channels (wavelengths)
   const std::uint64_t total =
       progressive.samples_per_pixel == 0 ? reference->settings().samples : progressive.samples_per_pixel;
   if (total < 2 || progressive.first_pass_samples < 2) {
@@ -86,18 +83,18 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   const std::vector<double>& irradiance = model.parameters().solar_irradiance;
 
   // The sun disc is deterministic: once per pixel.
-  std::vector<double> disc(pixel_count * 3, 0.0);
+  std::vector<double> disc(pixel_count * nc, 0.0);
   if (settings.terms.sun_disc) {
     oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, pixel_count),
                               [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
                                 for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                                  if (!IsZero(views[i])) sky.SunDiscRadiance(views[i], std::span(&disc[3 * i], 3));
+                                  if (!IsZero(views[i])) sky.SunDiscRadiance(views[i], std::span(&disc[nc * i], nc));
                                 }
                               });
   }
 
-  std::vector<double> sum(pixel_count * 3, 0.0);
-  std::vector<double> sum_sq(pixel_count * 3, 0.0);
+  std::vector<double> sum(pixel_count * nc, 0.0);
+  std::vector<double> sum_sq(pixel_count * nc, 0.0);
   const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count);
   std::atomic<std::uint64_t> rows_done{0};  // rows of all passes, times their path count
   std::mutex progress_mutex;
@@ -108,7 +105,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   while (done < total) {
     const std::uint64_t count = next - done;
     const auto trace_rows = [&](const oneapi::tbb::blocked_range<int>& rows) {
-      cpu::PathTally tally(3);
+      cpu::PathTally tally(nc);
       for (int y = rows.begin(); y < rows.end(); ++y) {
         for (int x = 0; x < width; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * width + x;
@@ -117,9 +114,9 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
           std::fill(tally.sum_sq.begin(), tally.sum_sq.end(), 0.0);
           tally.paths = 0;
           sky.AddPaths(views[i], settings.terms.ground, done, count, tally);
-          for (std::size_t c = 0; c < 3; ++c) {
-            sum[3 * i + c] += tally.sum[c * cpu::kTallySlots];
-            sum_sq[3 * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+          for (std::size_t c = 0; c < nc; ++c) {
+            sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
+            sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
           }
         }
         const std::uint64_t paths_done = rows_done.fetch_add(count) + count;
@@ -134,18 +131,18 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
     next = std::min(total, 2 * next);
 
     // The estimate so far: mean and standard error of the mean (sample variance / n).
-    result.radiance = Image(width, height, 3);
+    result.radiance = Image(width, height, static_cast<int>(nc));
     result.radiance.alpha = alpha;
-    result.standard_error = Image(width, height, 3);
+    result.standard_error = Image(width, height, static_cast<int>(nc));
     result.samples_per_pixel = done;
     ++result.pass;
     const double n = static_cast<double>(done);
     for (std::size_t i = 0; i < pixel_count; ++i) {
-      for (std::size_t c = 0; c < 3; ++c) {
-        const double mean = sum[3 * i + c] / n;
-        const double variance = std::max(0.0, (sum_sq[3 * i + c] - n * mean * mean) / (n - 1.0));
-        result.radiance.pixels[3 * i + c] = static_cast<float>((mean + disc[3 * i + c]) * irradiance[c]);
-        result.standard_error.pixels[3 * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
+      for (std::size_t c = 0; c < nc; ++c) {
+        const double mean = sum[nc * i + c] / n;
+        const double variance = std::max(0.0, (sum_sq[nc * i + c] - n * mean * mean) / (n - 1.0));
+        result.radiance.pixels[nc * i + c] = static_cast<float>((mean + disc[nc * i + c]) * irradiance[c]);
+        result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
       }
     }
     if (progressive.on_pass) progressive.on_pass(result);
@@ -155,14 +152,21 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
 
 Image WithStandardErrorChannels(const ProgressiveImage& image) {
   const Image& radiance = image.radiance;
-  Image out(radiance.width, radiance.height, 6);
-  out.channel_names = {"R", "G", "B", "R.stderr", "G.stderr", "B.stderr"};
+  const std::size_t nc = static_cast<std::size_t>(radiance.channels);
+  Image out(radiance.width, radiance.height, static_cast<int>(2 * nc));
+  // R, G, B for three channels (or the image's own names), C0..Cn-1 otherwise; then NAME.stderr.
+  std::vector<std::string> names = radiance.channel_names;
+  if (names.empty()) {
+    for (std::size_t c = 0; c < nc; ++c) names.push_back(nc == 3 ? std::string(1, "RGB"[c]) : "C" + std::to_string(c));
+  }
+  for (std::size_t c = 0; c < nc; ++c) names.push_back(names[c] + ".stderr");
+  out.channel_names = names;
   out.alpha = radiance.alpha;
   const std::size_t pixel_count = static_cast<std::size_t>(radiance.width) * radiance.height;
   for (std::size_t i = 0; i < pixel_count; ++i) {
-    for (std::size_t c = 0; c < 3; ++c) {
-      out.pixels[6 * i + c] = radiance.pixels[3 * i + c];
-      out.pixels[6 * i + 3 + c] = image.standard_error.pixels[3 * i + c];
+    for (std::size_t c = 0; c < nc; ++c) {
+      out.pixels[2 * nc * i + c] = radiance.pixels[nc * i + c];
+      out.pixels[2 * nc * i + nc + c] = image.standard_error.pixels[nc * i + c];
     }
   }
   return out;

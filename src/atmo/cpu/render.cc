@@ -18,11 +18,8 @@ void CheckFinite(double value, const char* name) {
   if (!std::isfinite(value)) throw Error(std::string(name) + " must be finite");
 }
 
-void CheckThreeChannels(std::size_t channels) {
-  if (channels != 3) {
-    throw Error("rendering an image needs 3 channels (red, green, blue); these parameters have " +
-                std::to_string(channels));
-  }
+void CheckChannels(std::size_t channels) {
+  if (channels == 0) throw Error("rendering an image needs at least one channel");
 }
 
 }  // namespace
@@ -85,7 +82,7 @@ Image Render(const Model& model, const RenderSettings& settings) {
   CheckFinite(settings.altitude_m, "altitude");
   CheckFinite(settings.sun_elevation_deg, "sun elevation");
   CheckFinite(settings.sun_azimuth_deg, "sun azimuth");
-  CheckThreeChannels(model.channel_count());
+  CheckChannels(model.channel_count());
   const std::unique_ptr<SkyView> sky =
       model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
   return RenderView(*sky, settings.camera, settings.terms, model.parameters().solar_irradiance);
@@ -94,15 +91,15 @@ Image Render(const Model& model, const RenderSettings& settings) {
 Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance) {
   ValidateCamera(camera_settings);
-  CheckThreeChannels(sky.channel_count());
-  if (solar_irradiance.size() != 3) throw Error("solar_irradiance must have one value per channel");
+  const std::size_t n = sky.channel_count();
+  CheckChannels(n);
+  if (solar_irradiance.size() != n) throw Error("solar_irradiance must have one value per channel");
   const shared::CameraParameters camera = ToSharedCamera(camera_settings);
   const int width = camera_settings.width;
-  Image image(width, camera_settings.height, 3);
+  Image image(width, camera_settings.height, static_cast<int>(n));
   const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
-  const float irradiance[3] = {static_cast<float>(solar_irradiance[0]), static_cast<float>(solar_irradiance[1]),
-                               static_cast<float>(solar_irradiance[2])};
+  const std::vector<float> irradiance(solar_irradiance.begin(), solar_irradiance.end());
 
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
@@ -117,10 +114,10 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
           if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
         }
       }
-      float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
-      sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * 3));
-      for (int x = 0; x < width; ++x) {
-        for (int c = 0; c < 3; ++c) row[3 * x + c] *= irradiance[c];
+      float* row = &image.pixels[static_cast<std::size_t>(y) * width * n];
+      sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * n));
+      for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
+        for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
       }
     }
   });

@@ -124,6 +124,51 @@ double SpectralConversion::SpectralRadiance(std::size_t channel, double relative
 glm::dvec3 XyzToLinearSrgb(const glm::dvec3& xyz) { return kXyzToSrgb * xyz; }
 glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb) { return glm::inverse(kXyzToSrgb) * rgb; }
 
+namespace {
+
+// The per-channel weights of output channels k = 0..2 (linear sRGB or XYZ, Y in cd/m^2).
+std::vector<glm::vec3> OutputWeights(const SpectralConversion& convert, ImageColour colour) {
+  std::vector<glm::vec3> weights(convert.channel_count());
+  for (std::size_t c = 0; c < weights.size(); ++c) {
+    const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.xyz_weights()[c];
+    weights[c] = glm::vec3(colour == ImageColour::kLinearSrgb ? XyzToLinearSrgb(xyz) : xyz);
+  }
+  return weights;
+}
+
+void NameChannels(Image& image, ImageColour colour) {
+  if (colour == ImageColour::kXyz) {
+    image.channel_names = {"X", "Y", "Z"};
+    image.colour_space = ColourSpace::kCieXyz;
+  } else {
+    image.colour_space = ColourSpace::kLinearSrgb;
+  }
+}
+
+}  // namespace
+
+Image ConvertStandardError(const Image& standard_error, const SpectralConversion& convert, ImageColour colour) {
+  const std::size_t n = convert.channel_count();
+  if (static_cast<std::size_t>(standard_error.channels) != n) {
+    throw Error("the image has " + std::to_string(standard_error.channels) + " channels, the colour conversion " +
+                std::to_string(n));
+  }
+  if (colour == ImageColour::kSpectral) return ConvertImage(standard_error, convert, colour);
+  const std::vector<glm::vec3> weights = OutputWeights(convert, colour);
+  Image out(standard_error.width, standard_error.height, 3);
+  const std::size_t pixels = static_cast<std::size_t>(standard_error.width) * standard_error.height;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    glm::vec3 sum(0.0f);
+    for (std::size_t c = 0; c < n; ++c) {
+      const glm::vec3 term = weights[c] * standard_error.pixels[p * n + c];
+      sum += term * term;
+    }
+    for (int k = 0; k < 3; ++k) out.pixels[p * 3 + k] = std::sqrt(sum[k]);
+  }
+  NameChannels(out, colour);
+  return out;
+}
+
 Image ConvertImage(const Image& relative, const SpectralConversion& convert, ImageColour colour) {
   const std::size_t n = convert.channel_count();
   if (static_cast<std::size_t>(relative.channels) != n) {
@@ -146,22 +191,13 @@ Image ConvertImage(const Image& relative, const SpectralConversion& convert, Ima
   Image out(relative.width, relative.height, 3);
   out.alpha = relative.alpha;
   // Single-precision weights per output channel, folded with the XYZ -> sRGB matrix when asked.
-  std::vector<glm::vec3> weights(n);
-  for (std::size_t c = 0; c < n; ++c) {
-    const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.xyz_weights()[c];
-    weights[c] = glm::vec3(colour == ImageColour::kLinearSrgb ? XyzToLinearSrgb(xyz) : xyz);
-  }
+  const std::vector<glm::vec3> weights = OutputWeights(convert, colour);
   for (std::size_t p = 0; p < pixels; ++p) {
     glm::vec3 sum(0.0f);
     for (std::size_t c = 0; c < n; ++c) sum += weights[c] * relative.pixels[p * n + c];
     for (int k = 0; k < 3; ++k) out.pixels[p * 3 + k] = sum[k];
   }
-  if (colour == ImageColour::kXyz) {
-    out.channel_names = {"X", "Y", "Z"};
-    out.colour_space = ColourSpace::kCieXyz;
-  } else {
-    out.colour_space = ColourSpace::kLinearSrgb;
-  }
+  NameChannels(out, colour);
   return out;
 }
 

@@ -1,0 +1,41 @@
+// Illuminance from the sun and the sky: what a lux meter reads, from any model.
+//
+// To use it:
+//   auto model = atmo::CreateModel("hillaire", atmo::Preset("earth-spectral"));
+//   auto sky = model->View(0.0, atmo::SunDirection(/*elevation_deg=*/60.0, /*azimuth_deg=*/180.0));
+//   atmo::Illuminance e = atmo::ComputeIlluminance(*sky, model->parameters());
+//   // e.direct_normal_lux, e.diffuse_horizontal_lux, e.global_horizontal_lux
+//
+// direct: the sun's transmitted irradiance, sum over wavelengths of E_sun(lambda) T(lambda) (T the
+// transmittance towards the sun's centre), with the luminous weights of atmo::SpectralConversion.
+// diffuse: the scattered radiance of the upper hemisphere, integral of L cos(theta) d(omega) (the
+// sun disc excluded, the ground below the horizon not seen), by a midpoint rule in zenith and
+// azimuth. global = diffuse + direct x cos(sun zenith) (0 for a sun below the horizon).
+#pragma once
+
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+
+namespace atmo {
+
+struct Illuminance {
+  double direct_normal_lux = 0.0;
+  double direct_horizontal_lux = 0.0;
+  double diffuse_horizontal_lux = 0.0;
+  double global_horizontal_lux = 0.0;
+  // The same, radiometric, over 360..830 nm, W m^-2.
+  double direct_normal_w_m2 = 0.0;
+  double diffuse_horizontal_w_m2 = 0.0;
+};
+
+struct IlluminanceSettings {
+  int zenith_steps = 90;    // 1 degree
+  int azimuth_steps = 180;  // 2 degrees
+};
+
+// Throws atmo::Error for step counts outside [2, 4096] or a view whose channels do not match the
+// parameters.
+Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& parameters,
+                               const IlluminanceSettings& settings = {});
+
+}  // namespace atmo
