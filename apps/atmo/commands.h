@@ -146,4 +146,11 @@ struct PrecomputeCommand {
 };
 int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command);
 
+// `atmo illuminance`: sun and sky illuminance on a horizontal plane, one CSV row per elevation.
+struct IlluminanceCommand {
+  std::vector<double> sun_elevations_deg = {30.0};
+  std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
+};
+int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& command);
+
 }  // namespace atmo::cli

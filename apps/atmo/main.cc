@@ -8,6 +8,7 @@
 //   atmo presets [--dump NAME]
 //   atmo bench   [--repeat N | --quick] [--width W --height H]
 //   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json)
+//   atmo illuminance [--sun-elevation E ...] [--altitude A]   (lux on a horizontal plane, CSV)
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
@@ -271,6 +272,19 @@ int main(int argc, char** argv) {
   AddCommonOptions(precompute_app, common);
   precompute_app->add_option("--out", precompute.out, "output NAME (without extension)")->required();
 
+  atmo::cli::IlluminanceCommand illuminance;
+  CLI::App* illuminance_app = app.add_subcommand(
+      "illuminance", "sun and sky illuminance on a horizontal plane, in lux (CSV)");
+  AddCommonOptions(illuminance_app, common);
+  illuminance_app
+      ->add_option("--sun-elevation", illuminance.sun_elevations_deg,
+                   "sun elevation(s) in degrees, e.g. --sun-elevation 10 30 60")
+      ->check(kFinite)
+      ->check(RangeOf(-90.0, 90.0))
+      ->capture_default_str();
+  AddOptionalNumber(illuminance_app, "--altitude", illuminance.altitude_m,
+                    "observer altitude in metres [default: the preset's]");
+
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;
   for (CLI::App* table_app : {render_app, sample_app, bench_app}) {
@@ -315,6 +329,7 @@ int main(int argc, char** argv) {
     if (presets_app->parsed()) return atmo::cli::RunPresets(common, presets);
     if (bench_app->parsed()) return atmo::cli::RunBench(common, bench);
     if (precompute_app->parsed()) return atmo::cli::RunPrecompute(common, precompute);
+    if (illuminance_app->parsed()) return atmo::cli::RunIlluminance(common, illuminance);
     return 2;
   } catch (const atmo::Error& error) {
     PrintError(error.what());
