@@ -42,6 +42,9 @@
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include "atmo/error.h"
 #include "atmo/image.h"
 
@@ -447,19 +450,22 @@ void WritePng(const fs::path& path, const Image& image, const ToneMapping& mappi
       at[0] = static_cast<png_byte>(code);
     }
   };
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * image.width + x;
-      const float* p = image.pixels.data() + i * 3;
-      const std::array<float, 3> display = ToneMapPixel(p[0], p[1], p[2], mapping);
-      png_byte* out = bytes.data() + i * out_channels * bytes_per_sample;
-      for (int c = 0; c < 3; ++c) {
-        const double noise = mapping.dither ? DitherCodes(x, y, c) : 0.0;
-        put(out + c * bytes_per_sample, ToCode(display[c], max_code, noise));
+  // Rows in parallel: each pixel's codes depend on that pixel alone (the dither on x, y, c).
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& range) {
+    for (int y = range.begin(); y != range.end(); ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * image.width + x;
+        const float* p = image.pixels.data() + i * 3;
+        const std::array<float, 3> display = ToneMapPixel(p[0], p[1], p[2], mapping);
+        png_byte* out = bytes.data() + i * out_channels * bytes_per_sample;
+        for (int c = 0; c < 3; ++c) {
+          const double noise = mapping.dither ? DitherCodes(x, y, c) : 0.0;
+          put(out + c * bytes_per_sample, ToCode(display[c], max_code, noise));
+        }
+        if (has_alpha) put(out + 3 * bytes_per_sample, ToCode(ClampAlpha(image.alpha[i]), max_code, 0.0));
       }
-      if (has_alpha) put(out + 3 * bytes_per_sample, ToCode(ClampAlpha(image.alpha[i]), max_code, 0.0));
     }
-  }
+  });
   std::vector<png_bytep> rows(image.height);
   for (int y = 0; y < image.height; ++y) rows[y] = bytes.data() + y * row_bytes;
 
