@@ -132,8 +132,8 @@ std::uint32_t Hash32(std::uint32_t x) {
 // rounding error's mean and variance no longer depend on the value (Lipshitz, Wannamaker &
 // Vanderkooy 1992): on average the codes equal the exact value, and gradients show no bands.
 double DitherCodes(int x, int y, int c) {
-  const std::uint32_t seed =
-      Hash32(static_cast<std::uint32_t>(x) + Hash32(static_cast<std::uint32_t>(y) + Hash32(static_cast<std::uint32_t>(c))));
+  const auto u32 = [](int v) { return static_cast<std::uint32_t>(v); };
+  const std::uint32_t seed = Hash32(u32(x) + Hash32(u32(y) + Hash32(u32(c))));
   constexpr double kTwoTo32 = 4294967296.0;
   const double u1 = Hash32(seed ^ 0x9e3779b9U) / kTwoTo32;
   const double u2 = Hash32(seed ^ 0x7f4a7c15U) / kTwoTo32;
@@ -451,7 +451,8 @@ void WritePng(const fs::path& path, const Image& image, const ToneMapping& mappi
     }
   };
   // Rows in parallel: each pixel's codes depend on that pixel alone (the dither on x, y, c).
-  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& range) {
+  using Rows = oneapi::tbb::blocked_range<int>;
+  oneapi::tbb::parallel_for(Rows(0, image.height), [&](const Rows& range) {
     for (int y = range.begin(); y != range.end(); ++y) {
       for (int x = 0; x < image.width; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * image.width + x;
