@@ -2,9 +2,12 @@
 #include <png.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <csetjmp>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +16,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -90,20 +94,60 @@ void ExpectBitExact(const std::vector<float>& expected, const std::vector<float>
   }
 }
 
-// Decodes a PNG with libpng's simplified API into 8-bit RGB or RGBA.
-std::vector<png_byte> DecodePng(const fs::path& path, bool rgba, int* width, int* height) {
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&png, path.c_str())) throw std::runtime_error(png.message);
-  png.format = rgba ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB;
-  std::vector<png_byte> bytes(PNG_IMAGE_SIZE(png));
-  if (!png_image_finish_read(&png, nullptr, bytes.data(), 0, nullptr)) {
-    png_image_free(&png);
-    throw std::runtime_error(png.message);
+// A PNG as stored: samples without any transformation (no gamma or colour conversion, 16-bit
+// samples as read), and its colour chunks. Read with libpng's full API, not the writer's code.
+struct RawPng {
+  int width = 0, height = 0, channels = 0, bit_depth = 0;
+  std::vector<int> samples;  // interleaved, row 0 first
+  bool srgb = false;         // an sRGB chunk
+  double gamma = 0.0;        // the gAMA chunk's value, 0 without one
+  bool chrm = false;         // a cHRM chunk, with:
+  double white_x = 0, white_y = 0, red_x = 0, red_y = 0, green_x = 0, green_y = 0, blue_x = 0, blue_y = 0;
+};
+
+RawPng ReadPngRaw(const fs::path& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) throw std::runtime_error("cannot open " + path.string());
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  RawPng raw;
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    std::fclose(file);
+    throw std::runtime_error("libpng cannot read " + path.string());
   }
-  *width = static_cast<int>(png.width);
-  *height = static_cast<int>(png.height);
-  return bytes;
+  png_init_io(png, file);
+  png_read_png(png, info, PNG_TRANSFORM_IDENTITY, nullptr);
+  raw.width = static_cast<int>(png_get_image_width(png, info));
+  raw.height = static_cast<int>(png_get_image_height(png, info));
+  raw.channels = png_get_channels(png, info);
+  raw.bit_depth = png_get_bit_depth(png, info);
+  int intent = 0;
+  raw.srgb = png_get_sRGB(png, info, &intent) != 0;
+  if (!png_get_gAMA(png, info, &raw.gamma)) raw.gamma = 0.0;
+  raw.chrm = png_get_cHRM(png, info, &raw.white_x, &raw.white_y, &raw.red_x, &raw.red_y, &raw.green_x, &raw.green_y,
+                          &raw.blue_x, &raw.blue_y) != 0;
+  png_bytepp rows = png_get_rows(png, info);
+  const int bytes_per_sample = raw.bit_depth / 8;
+  raw.samples.reserve(static_cast<std::size_t>(raw.width) * raw.height * raw.channels);
+  for (int y = 0; y < raw.height; ++y) {
+    for (int i = 0; i < raw.width * raw.channels; ++i) {
+      const png_byte* at = rows[y] + i * bytes_per_sample;
+      raw.samples.push_back(bytes_per_sample == 2 ? (at[0] << 8) | at[1] : at[0]);  // big-endian
+    }
+  }
+  png_destroy_read_struct(&png, &info, nullptr);
+  std::fclose(file);
+  return raw;
+}
+
+// The 8-bit samples of an RGB (rgba false) or RGBA PNG, as stored.
+std::vector<png_byte> DecodePng(const fs::path& path, bool rgba, int* width, int* height) {
+  const RawPng raw = ReadPngRaw(path);
+  if (raw.bit_depth != 8 || raw.channels != (rgba ? 4 : 3)) throw std::runtime_error("unexpected PNG layout");
+  *width = raw.width;
+  *height = raw.height;
+  return std::vector<png_byte>(raw.samples.begin(), raw.samples.end());
 }
 
 std::uint8_t ExpectedByte(float linear, const ToneMapping& mapping) {
@@ -316,9 +360,10 @@ TEST(Exr, ReadingATruncatedFileThrowsAtmoError) {
 // ------------------------------------------------------------------------------------------------
 // PNG
 
-TEST(Png, DecodedBytesAreRoundedToneMappedValues) {
+TEST(Png, SeedMappingBytesAreRoundedToneMappedValues) {
+  // The seed's look (per channel, bare gamma, no dither): every byte is round(255 ToneMapValue).
   TempDir dir;
-  const ToneMapping mapping{ToneMapper::kExponential, 2.0, 2.2};
+  const ToneMapping mapping = SeedToneMapping(ToneMapper::kExponential, 2.0, 2.2);
   Image image(17, 5, 3);
   for (std::size_t i = 0; i < image.pixels.size(); ++i) {
     image.pixels[i] = static_cast<float>(i) * 0.013f;
@@ -353,7 +398,7 @@ TEST(Png, RowZeroIsTheTopRow) {
 
 TEST(Png, AlphaIsWrittenAsRoundedCoverage) {
   TempDir dir;
-  const ToneMapping mapping{ToneMapper::kAces, 1.0, 2.2};
+  const ToneMapping mapping = SeedToneMapping(ToneMapper::kAces, 1.0, 2.2);
   Image image(8, 3, 3);
   image.alpha.resize(8 * 3);
   for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>(i) * 0.05f;
@@ -374,7 +419,7 @@ TEST(Png, AlphaIsWrittenAsRoundedCoverage) {
 
 TEST(Png, AlphaOpaqueKeepsColourExact) {
   TempDir dir;
-  const ToneMapping mapping{ToneMapper::kExponential, 10.0, 2.2};
+  const ToneMapping mapping = SeedToneMapping(ToneMapper::kExponential, 10.0, 2.2);
   Image image(5, 5, 3);
   image.alpha.assign(25, 1.0f);
   for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>(i) * 0.004f;
@@ -424,8 +469,7 @@ TEST(ToneMap, NanNegativeAndNegativeInfinityMapToZero) {
 
 TEST(ToneMap, IsMonotonicNonDecreasing) {
   for (ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAces, ToneMapper::kNone}) {
-    for (double gamma : {1.0, 2.2}) {
-      const ToneMapping m{op, 3.0, gamma};
+    for (const ToneMapping& m : {ToneMapping{op, 3.0}, SeedToneMapping(op, 3.0, 1.0), SeedToneMapping(op, 3.0, 2.2)}) {
       float previous = ToneMapValue(0.0f, m);
       for (int i = 1; i <= 20000; ++i) {
         const float x = 1e-6f * std::pow(1.0015f, static_cast<float>(i));  // 1e-6 .. about 1e7
@@ -450,7 +494,7 @@ TEST(ToneMap, TendsToOneForLargeInputs) {
 }
 
 TEST(ToneMap, NoneScalesByExposureAndClampsAtOne) {
-  const ToneMapping m{ToneMapper::kNone, 2.0, 1.0};
+  const ToneMapping m = SeedToneMapping(ToneMapper::kNone, 2.0, 1.0);
   EXPECT_FLOAT_EQ(ToneMapValue(0.25f, m), 0.5f);
   EXPECT_EQ(ToneMapValue(0.5f, m), 1.0f);
   EXPECT_EQ(ToneMapValue(7.0f, m), 1.0f);
@@ -460,16 +504,17 @@ TEST(ToneMap, NoneScalesByExposureAndClampsAtOne) {
 TEST(ToneMap, MatchesTheStatedCurves) {
   // Double-precision formulas of the header, rounded to float: a few ulps of float apart.
   const double x = 0.07, exposure = 10.0, v = exposure * x;
-  EXPECT_NEAR(ToneMapValue(static_cast<float>(x), {ToneMapper::kExponential, exposure, 1.0}), 1.0 - std::exp(-v), 1e-6);
-  EXPECT_NEAR(ToneMapValue(static_cast<float>(x), {ToneMapper::kAces, exposure, 1.0}),
+  EXPECT_NEAR(ToneMapValue(static_cast<float>(x), SeedToneMapping(ToneMapper::kExponential, exposure, 1.0)),
+              1.0 - std::exp(-v), 1e-6);
+  EXPECT_NEAR(ToneMapValue(static_cast<float>(x), SeedToneMapping(ToneMapper::kAces, exposure, 1.0)),
               v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14), 1e-6);
 }
 
 TEST(ToneMap, GammaIsAPowerOfTheLinearResult) {
   for (ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAces, ToneMapper::kNone}) {
     for (float x : {0.001f, 0.01f, 0.05f, 0.08f}) {
-      const float linear = ToneMapValue(x, {op, 10.0, 1.0});
-      const float encoded = ToneMapValue(x, {op, 10.0, 2.2});
+      const float linear = ToneMapValue(x, SeedToneMapping(op, 10.0, 1.0));
+      const float encoded = ToneMapValue(x, SeedToneMapping(op, 10.0, 2.2));
       // Float rounding of the two results: relative 1e-6.
       EXPECT_NEAR(encoded, std::pow(static_cast<double>(linear), 1.0 / 2.2), 1e-6) << "x = " << x;
       EXPECT_GE(encoded, linear);  // values in [0, 1] brighten under 1/gamma
@@ -493,6 +538,473 @@ TEST(ToneMap, ParseRejectsOtherNamesWithAHelpfulMessage) {
       EXPECT_EQ(std::string(e.what()), "unknown tone mapper '" + std::string(name) + "' (use exp, aces or none)");
     }
   }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Exposure
+
+// A w x h image whose every pixel is the linear colour (r, g, b).
+Image Uniform(int width, int height, float r, float g, float b) {
+  Image image(width, height, 3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      image.at(x, y, 0) = r;
+      image.at(x, y, 1) = g;
+      image.at(x, y, 2) = b;
+    }
+  }
+  return image;
+}
+
+// A sky-like image: a bluish gradient whose luminance rises geometrically from `low` at the
+// bottom row to `high` at the top (cd/m^2), so its log-average luminance is sqrt(low * high).
+Image SkyGradient(int width, int height, double low, double high) {
+  Image image(width, height, 3);
+  for (int y = 0; y < height; ++y) {
+    const double t = 1.0 - (y + 0.5) / height;
+    const double luminance = low * std::pow(high / low, t);
+    // Chromaticity of a clear-sky blue, scaled to the luminance.
+    const double r = 0.55, g = 0.8, b = 1.6, scale = luminance / Luminance(r, g, b);
+    for (int x = 0; x < width; ++x) {
+      image.at(x, y, 0) = static_cast<float>(r * scale);
+      image.at(x, y, 1) = static_cast<float>(g * scale);
+      image.at(x, y, 2) = static_cast<float>(b * scale);
+    }
+  }
+  return image;
+}
+
+TEST(Exposure, Ev100FollowsTheSaturationBasedConvention) {
+  // L_max = 1.2 * 2^EV100 maps to 1: EV100 0 -> 1/1.2; every stop halves the exposure.
+  EXPECT_DOUBLE_EQ(ExposureFromEv100(0.0), 1.0 / 1.2);
+  EXPECT_NEAR(1.0 / ExposureFromEv100(15.0), 1.2 * 32768.0, 1e-9);  // sunny day: 39321.6 cd/m^2
+  for (double ev = -6.0; ev <= 18.0; ev += 0.75) {
+    EXPECT_NEAR(ExposureFromEv100(ev + 1.0) / ExposureFromEv100(ev), 0.5, 1e-12) << ev;
+    EXPECT_NEAR(Ev100FromExposure(ExposureFromEv100(ev)), ev, 1e-12) << ev;
+  }
+  EXPECT_TRUE(std::isnan(Ev100FromExposure(0.0)));
+  EXPECT_TRUE(std::isnan(Ev100FromExposure(-1.0)));
+}
+
+TEST(AutoExposure, UniformImageMetersAtLog2OfEightTimesItsLuminance) {
+  // EV100 = log2(L S / K) with S = 100, K = 12.5.
+  for (double luminance : {0.01, 1.0, 3.0, 8000.0, 1.6e9}) {
+    const float v = static_cast<float>(luminance);
+    EXPECT_NEAR(AutoExposureEv100(Uniform(8, 4, v, v, v)), std::log2(8.0 * luminance), 1e-6) << luminance;
+  }
+  // Only the luminance counts, not the colour.
+  const double y = Luminance(2.0, 1.0, 0.5);
+  EXPECT_NEAR(AutoExposureEv100(Uniform(3, 3, 2.0f, 1.0f, 0.5f)), std::log2(8.0 * y), 1e-6);
+}
+
+TEST(AutoExposure, ScalingTheImageShiftsEv100ByLog2OfTheScale) {
+  const Image sky = SkyGradient(16, 64, 1.0, 10.0);
+  Image brighter = sky;
+  for (float& v : brighter.pixels) v *= 1000.0f;
+  EXPECT_NEAR(AutoExposureEv100(brighter) - AutoExposureEv100(sky), std::log2(1000.0), 1e-4);
+  // The gradient's log-average is sqrt(1 * 10): the percentile clamps move it only slightly.
+  EXPECT_NEAR(AutoExposureEv100(sky), std::log2(8.0 * std::sqrt(10.0)), 0.05);
+}
+
+TEST(AutoExposure, TwilightAndNoonSkiesComeOutMidGrey) {
+  // Auto-exposed with the default mapping, a twilight sky (1..10 cd/m^2) and a noon sky
+  // (5000..10000 cd/m^2) both land in the middle of the display range, neither black nor white.
+  for (const auto& [low, high] : {std::pair{1.0, 10.0}, std::pair{5000.0, 10000.0}}) {
+    const Image sky = SkyGradient(4, 128, low, high);
+    ToneMapping mapping;
+    mapping.exposure = ExposureFromEv100(AutoExposureEv100(sky));
+    double sum = 0.0;
+    for (int y = 0; y < sky.height; ++y) {
+      const auto d = ToneMapPixel(sky.at(0, y, 0), sky.at(0, y, 1), sky.at(0, y, 2), mapping);
+      // Display luminance, encoded again: the grey level an observer sees.
+      sum += SrgbEncode(Luminance(SrgbDecode(d[0]), SrgbDecode(d[1]), SrgbDecode(d[2])));
+    }
+    const double mean = sum / sky.height;
+    EXPECT_GT(mean, 0.25) << low << ".." << high;
+    EXPECT_LT(mean, 0.6) << low << ".." << high;
+  }
+}
+
+TEST(AutoExposure, ASmallBrightSunDoesNotSetTheExposure) {
+  // 1.5% of the pixels at the sun's 1.6e9 cd/m^2 in a 8000 cd/m^2 sky: the plain geometric mean
+  // would rise by 0.015 * log2(2e5) = 0.26 stops; clamped to the 98th percentile, not at all.
+  const Image sky = Uniform(100, 100, 8000.0f, 8000.0f, 8000.0f);
+  Image with_sun = sky;
+  for (int y = 0; y < 10; ++y) {
+    for (int x = 0; x < 15; ++x) {
+      for (int c = 0; c < 3; ++c) with_sun.at(x, y, c) = 1.6e9f;
+    }
+  }
+  EXPECT_NEAR(AutoExposureEv100(with_sun), AutoExposureEv100(sky), 1e-9);
+  // A sun that fills a quarter of the frame does count.
+  Image close_up = sky;
+  for (int y = 0; y < 50; ++y) {
+    for (int x = 0; x < 50; ++x) {
+      for (int c = 0; c < 3; ++c) close_up.at(x, y, c) = 1.6e9f;
+    }
+  }
+  EXPECT_GT(AutoExposureEv100(close_up), AutoExposureEv100(sky) + 3.0);
+}
+
+TEST(AutoExposure, SkipsUncoveredAndUnusablePixels) {
+  Image image = Uniform(10, 10, 5.0f, 5.0f, 5.0f);
+  image.alpha.assign(100, 1.0f);
+  for (int x = 0; x < 10; ++x) {
+    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = 1e30f;  // outside the fisheye circle
+    image.alpha[x] = 0.0f;
+  }
+  image.at(0, 1, 0) = std::numeric_limits<float>::quiet_NaN();
+  image.at(1, 1, 1) = std::numeric_limits<float>::infinity();
+  for (int c = 0; c < 3; ++c) image.at(2, 1, c) = 0.0f;
+  for (int c = 0; c < 3; ++c) image.at(3, 1, c) = -4.0f;
+  EXPECT_NEAR(AutoExposureEv100(image), std::log2(8.0 * 5.0), 1e-6);
+}
+
+TEST(AutoExposure, BlackImageGivesZeroAndFewChannelsThrow) {
+  EXPECT_EQ(AutoExposureEv100(Image(4, 4, 3)), 0.0);
+  EXPECT_THROW(AutoExposureEv100(Image(4, 4, 1)), Error);
+  Image broken(4, 4, 3);
+  broken.pixels.pop_back();
+  EXPECT_THROW(AutoExposureEv100(broken), Error);
+  // Monte Carlo images carry R, G, B first, then their standard errors: those are ignored.
+  Image six = Image(2, 2, 6);
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 2; ++x) {
+      for (int c = 0; c < 6; ++c) six.at(x, y, c) = c < 3 ? 2.0f : 1e6f;
+    }
+  }
+  EXPECT_NEAR(AutoExposureEv100(six), std::log2(16.0), 1e-6);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Display: sRGB transfer and tone mapping on luminance
+
+TEST(Srgb, MatchesKnownValues) {
+  EXPECT_EQ(SrgbEncode(0.0), 0.0);
+  EXPECT_EQ(SrgbEncode(1.0), 1.0);
+  EXPECT_NEAR(SrgbEncode(0.5), 0.7354, 5e-5);
+  EXPECT_NEAR(SrgbEncode(0.18), 0.4614, 5e-5);  // photographic mid grey
+  EXPECT_NEAR(SrgbEncode(0.001), 0.01292, 1e-12);  // on the linear toe
+  // The two pieces meet at 0.0031308 (to the standard's 4 digits: within 1e-7), and the curve is
+  // increasing across the joint.
+  const double joint = 0.0031308;
+  EXPECT_NEAR(12.92 * joint, 1.055 * std::pow(joint, 1.0 / 2.4) - 0.055, 1e-7);
+  EXPECT_NEAR(SrgbEncode(std::nextafter(joint, 0.0)), SrgbEncode(std::nextafter(joint, 1.0)), 1e-7);
+  EXPECT_LT(SrgbEncode(joint - 1e-6), SrgbEncode(joint + 1e-6));
+  // Out of range clamps; NaN is 0.
+  EXPECT_EQ(SrgbEncode(-1.0), 0.0);
+  EXPECT_EQ(SrgbEncode(7.0), 1.0);
+  EXPECT_EQ(SrgbEncode(std::numeric_limits<double>::quiet_NaN()), 0.0);
+  // The inverse.
+  for (double x = 0.0; x <= 1.0; x += 1.0 / 1024.0) EXPECT_NEAR(SrgbDecode(SrgbEncode(x)), x, 1e-12) << x;
+  EXPECT_NEAR(SrgbDecode(0.7354), 0.5, 1e-4);
+}
+
+TEST(Srgb, IsTheDefaultAndBareGammaIsAvailable) {
+  const ToneMapping srgb;  // defaults
+  EXPECT_EQ(srgb.transfer, DisplayTransfer::kSrgb);
+  EXPECT_DOUBLE_EQ(EncodeDisplay(0.5, srgb), SrgbEncode(0.5));
+  ToneMapping gamma;
+  gamma.transfer = DisplayTransfer::kGamma;
+  gamma.gamma = 2.2;
+  EXPECT_DOUBLE_EQ(EncodeDisplay(0.5, gamma), std::pow(0.5, 1.0 / 2.2));
+  ToneMapping identity;
+  identity.transfer = DisplayTransfer::kIdentity;
+  EXPECT_EQ(EncodeDisplay(0.5, identity), 0.5);
+  EXPECT_EQ(EncodeDisplay(1.5, identity), 1.0);
+  EXPECT_EQ(SeedToneMapping().transfer, DisplayTransfer::kGamma);
+  EXPECT_EQ(SeedToneMapping().gamma, 2.2);
+  // ToneMapValue ends with the same encoding: the curve of kNone at exposure 1 is the identity.
+  EXPECT_FLOAT_EQ(ToneMapValue(0.5f, {ToneMapper::kNone, 1.0}), static_cast<float>(SrgbEncode(0.5)));
+}
+
+// Linear value of a display value under the default (sRGB) encoding.
+double Linear(float display) { return SrgbDecode(display); }
+
+TEST(ToneMapPixel, SaturatedOrangeStaysOrangeAtEveryExposure) {
+  // The sunrise sun of an EXR: 2881 : 439 : 9. Its linear G/R and B/R survive every exposure and
+  // curve; per channel, the same pixel turns nearly white.
+  const float r = 2881.0f, g = 439.0f, b = 9.0f;
+  for (ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAces, ToneMapper::kNone}) {
+    for (double exposure = 1e-7; exposure < 1e3; exposure *= 3.0) {
+      ToneMapping mapping{op, exposure};
+      const auto d = ToneMapPixel(r, g, b, mapping);
+      ASSERT_GT(d[0], d[1]) << exposure;
+      ASSERT_GT(d[1], d[2]) << exposure;
+      ASSERT_GT(d[2], 0.0f) << exposure;
+      ASSERT_LE(d[0], 1.0f);
+      EXPECT_NEAR(Linear(d[1]) / Linear(d[0]), g / r, 1e-3 * g / r) << exposure;
+      EXPECT_NEAR(Linear(d[2]) / Linear(d[0]), b / r, 1e-3 * b / r) << exposure;
+    }
+  }
+  const auto seed = ToneMapPixel(r, g, b, SeedToneMapping(ToneMapper::kExponential, 10.0, 2.2));
+  EXPECT_GT(seed[1], 0.99f);  // the seed's look: G saturates too, the hue is lost
+}
+
+TEST(ToneMapPixel, OutOfRangeColoursKeepTheirChromaticity) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (int i = 0; i < 2000; ++i) {
+    const float r = unit(rng), g = unit(rng), b = unit(rng);
+    const float scale = std::pow(10.0f, 6.0f * unit(rng) - 2.0f);
+    const auto d = ToneMapPixel(r * scale, g * scale, b * scale, {ToneMapper::kAces, 1.0});
+    const double largest = std::max({r, g, b});
+    const double display_largest = std::max({Linear(d[0]), Linear(d[1]), Linear(d[2])});
+    ASSERT_LE(std::max({d[0], d[1], d[2]}), 1.0f);
+    for (int c = 0; c < 3; ++c) {
+      const double input = c == 0 ? r : (c == 1 ? g : b);
+      // Each channel relative to the largest, as in the input (float rounding: 1e-5).
+      ASSERT_NEAR(Linear(d[c]) / display_largest, input / largest, 1e-5) << i << " channel " << c;
+    }
+  }
+}
+
+TEST(ToneMapPixel, GreyStaysNeutralAndMatchesToneMapValue) {
+  for (ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAces, ToneMapper::kNone}) {
+    for (float v : {0.0f, 1e-5f, 0.01f, 0.3f, 1.0f, 50.0f, 1e9f}) {
+      const ToneMapping mapping{op, 3.0};
+      const auto d = ToneMapPixel(v, v, v, mapping);
+      EXPECT_EQ(d[0], d[1]) << v;
+      EXPECT_EQ(d[1], d[2]) << v;
+      EXPECT_NEAR(d[0], ToneMapValue(v, mapping), 1e-6) << v;  // Y = v: the same curve
+    }
+  }
+}
+
+TEST(ToneMapPixel, EveryChannelIsMonotonicInTheExposure) {
+  const std::vector<std::array<float, 3>> colours = {
+      {2881.0f, 439.0f, 9.0f}, {1.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {0.2f, 3.0f, 0.01f}, {5.0f, 0.0f, 4.0f}};
+  for (ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAces, ToneMapper::kNone}) {
+    for (const auto& rgb : colours) {
+      std::array<float, 3> previous = {0.0f, 0.0f, 0.0f};
+      for (int i = 0; i <= 400; ++i) {
+        const double exposure = 1e-6 * std::pow(10.0, i * 0.025);  // 1e-6 .. 1e4
+        const auto d = ToneMapPixel(rgb[0], rgb[1], rgb[2], {op, exposure});
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_GE(d[c], previous[c]) << "exposure " << exposure << " channel " << c;
+          ASSERT_LE(d[c], 1.0f);
+        }
+        previous = d;
+      }
+    }
+  }
+}
+
+TEST(ToneMapPixel, BadValuesAreBlackOrExtreme) {
+  const ToneMapping mapping;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(ToneMapPixel(nan, nan, nan, mapping), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
+  EXPECT_EQ(ToneMapPixel(-1.0f, -2.0f, -inf, mapping), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
+  EXPECT_EQ(ToneMapPixel(1.0f, 1.0f, 1.0f, {ToneMapper::kExponential, -2.0}), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
+  // +inf in one channel: that channel's primary at full brightness.
+  const auto red = ToneMapPixel(inf, 1.0f, nan, mapping);
+  EXPECT_EQ(red[0], 1.0f);
+  EXPECT_LT(red[1], 1e-30f);  // 1 / the largest float, relative to red
+  EXPECT_EQ(red[2], 0.0f);
+  EXPECT_EQ(ToneMapPixel(inf, inf, inf, mapping), (std::array<float, 3>{1.0f, 1.0f, 1.0f}));
+}
+
+// ------------------------------------------------------------------------------------------------
+// PNG: display encoding, dither, 16 bits, colour chunks
+
+TEST(Png, DefaultMappingIsLuminanceSrgbAndDithered) {
+  const ToneMapping mapping;
+  EXPECT_FALSE(mapping.per_channel);
+  EXPECT_EQ(mapping.transfer, DisplayTransfer::kSrgb);
+  EXPECT_TRUE(mapping.dither);
+  EXPECT_EQ(mapping.bit_depth, 8);
+}
+
+TEST(Png, SunriseOrangeIsOrangeInTheFile) {
+  // Read back without the writer's code: the decoded linear G/R is that of the EXR value, to the
+  // 8-bit rounding (dither off: half a code of G's 8-bit sRGB code, about 1.2% linear).
+  TempDir dir;
+  for (double exposure : {1e-3, 0.1, 10.0, 1e4}) {
+    ToneMapping mapping{ToneMapper::kExponential, exposure};
+    mapping.dither = false;
+    WritePng(dir / "sun.png", Uniform(2, 2, 2881.0f, 439.0f, 9.0f), mapping);
+    int width = 0, height = 0;
+    const std::vector<png_byte> bytes = DecodePng(dir / "sun.png", false, &width, &height);
+    ASSERT_GT(bytes[0], bytes[1]) << exposure;
+    ASSERT_GT(bytes[1], bytes[2]) << exposure;
+    const double ratio = SrgbDecode(bytes[1] / 255.0) / SrgbDecode(bytes[0] / 255.0);
+    EXPECT_NEAR(ratio, 439.0 / 2881.0, 0.03 * 439.0 / 2881.0) << exposure;
+  }
+}
+
+// A w x h grey image whose display value (kNone, exposure 1, bare gamma 1: display = linear)
+// rises linearly across x from `first_code` to `last_code` 8-bit codes.
+Image CodeGradient(int width, int height, double first_code, double last_code) {
+  Image image(width, height, 3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double code = first_code + (last_code - first_code) * (x + 0.5) / width;
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = static_cast<float>(code / 255.0);
+    }
+  }
+  return image;
+}
+
+struct BandingStats {
+  double worst_block_mean_error_codes = 0.0;  // over 32x32 blocks, against the exact values
+  double changes_along_x = 0.0;  // share of horizontal neighbours with different codes
+};
+
+BandingStats MeasureBanding(const Image& image, const std::vector<png_byte>& bytes) {
+  BandingStats stats;
+  constexpr int kBlock = 32;
+  for (int by = 0; by + kBlock <= image.height; by += kBlock) {
+    for (int bx = 0; bx + kBlock <= image.width; bx += kBlock) {
+      for (int c = 0; c < 3; ++c) {
+        double error = 0.0;
+        for (int y = by; y < by + kBlock; ++y) {
+          for (int x = bx; x < bx + kBlock; ++x) {
+            error += bytes[(static_cast<std::size_t>(y) * image.width + x) * 3 + c] - 255.0 * image.at(x, y, c);
+          }
+        }
+        stats.worst_block_mean_error_codes =
+            std::max(stats.worst_block_mean_error_codes, std::abs(error) / (kBlock * kBlock));
+      }
+    }
+  }
+  int changes = 0, pairs = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 1; x < image.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t i = (static_cast<std::size_t>(y) * image.width + x) * 3 + c;
+        changes += bytes[i] != bytes[i - 3];
+        ++pairs;
+      }
+    }
+  }
+  stats.changes_along_x = static_cast<double>(changes) / pairs;
+  return stats;
+}
+
+TEST(Png, DitherRemovesBandsOfASlowGradient) {
+  // 256 pixels across 4 codes. Rounded, each code is a band 64 pixels wide (the code changes
+  // between 3 of 255 neighbours) and a 32x32 block is off by a quarter of a code. Dithered, the
+  // bands dissolve into noise (the code changes between a third of the neighbours) and every
+  // block's mean is the exact mean within 0.1 code: TPDF noise leaves a per-pixel error of 0.5
+  // code rms, so 1/64 code rms for a block's mean.
+  TempDir dir;
+  const Image image = CodeGradient(256, 64, 100.0, 104.0);
+  ToneMapping mapping{ToneMapper::kNone, 1.0, 1.0};
+  mapping.transfer = DisplayTransfer::kGamma;
+  int width = 0, height = 0;
+
+  mapping.dither = false;
+  WritePng(dir / "banded.png", image, mapping);
+  const BandingStats banded = MeasureBanding(image, DecodePng(dir / "banded.png", false, &width, &height));
+  EXPECT_GT(banded.worst_block_mean_error_codes, 0.2);
+  EXPECT_LT(banded.changes_along_x, 0.02);
+
+  mapping.dither = true;
+  WritePng(dir / "dithered.png", image, mapping);
+  const std::vector<png_byte> bytes = DecodePng(dir / "dithered.png", false, &width, &height);
+  const BandingStats dithered = MeasureBanding(image, bytes);
+  EXPECT_LT(dithered.worst_block_mean_error_codes, 0.1);
+  EXPECT_GT(dithered.changes_along_x, 0.3);
+  // +-1 code at most, around the exact value.
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    ASSERT_LE(std::abs(bytes[i] - 255.0 * image.pixels[i]), 1.5) << i;
+  }
+
+  // Deterministic: the same image gives the same file.
+  WritePng(dir / "again.png", image, mapping);
+  EXPECT_EQ(ReadBytes(dir / "again.png"), ReadBytes(dir / "dithered.png"));
+}
+
+TEST(Png, DitherKeepsBlackAndWhiteExact) {
+  TempDir dir;
+  Image image = Uniform(32, 32, 0.0f, 0.0f, 0.0f);
+  for (int y = 16; y < 32; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = 1e6f;
+    }
+  }
+  WritePng(dir / "bw.png", image, ToneMapping{});
+  int width = 0, height = 0;
+  const std::vector<png_byte> bytes = DecodePng(dir / "bw.png", false, &width, &height);
+  for (std::size_t i = 0; i < bytes.size(); ++i) ASSERT_EQ(bytes[i], i < bytes.size() / 2 ? 0 : 255) << i;
+}
+
+TEST(Png, SixteenBitRoundTripsThroughLibpng) {
+  TempDir dir;
+  Image image = CodeGradient(64, 3, 0.0, 255.0);
+  image.alpha.assign(64 * 3, 1.0f);
+  image.alpha[5] = 0.25f;
+  ToneMapping mapping{ToneMapper::kNone, 1.0};
+  mapping.bit_depth = 16;
+  mapping.dither = false;
+  WritePng(dir / "deep.png", image, mapping);
+  const RawPng raw = ReadPngRaw(dir / "deep.png");
+  ASSERT_EQ(raw.bit_depth, 16);
+  ASSERT_EQ(raw.channels, 4);
+  ASSERT_EQ(raw.width, 64);
+  ASSERT_EQ(raw.height, 3);
+  for (std::size_t p = 0; p < image.alpha.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const long expected = std::lround(65535.0 * SrgbEncode(image.pixels[p * 3 + c]));
+      ASSERT_EQ(raw.samples[p * 4 + c], expected) << "pixel " << p << " channel " << c;
+    }
+    ASSERT_EQ(raw.samples[p * 4 + 3], std::lround(65535.0 * image.alpha[p])) << "pixel " << p;
+  }
+
+  // Dithered 16 bits: within a code of the exact values.
+  mapping.dither = true;
+  WritePng(dir / "deep_dithered.png", image, mapping);
+  const RawPng dithered = ReadPngRaw(dir / "deep_dithered.png");
+  for (std::size_t p = 0; p < image.alpha.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_LE(std::abs(dithered.samples[p * 4 + c] - 65535.0 * SrgbEncode(image.pixels[p * 3 + c])), 1.5);
+    }
+  }
+}
+
+TEST(Png, IdentityTransferWritesDisplayValuesAsTheyAreTaggedSrgb) {
+  // What a chart (atmo compare --image) needs: display-referred values, clamped and rounded.
+  TempDir dir;
+  Image image(16, 2, 3);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>(i % 17) / 15.0f;
+  ToneMapping mapping = SeedToneMapping(ToneMapper::kNone, 1.0, 1.0);
+  mapping.transfer = DisplayTransfer::kIdentity;
+  WritePng(dir / "chart.png", image, mapping);
+  const RawPng raw = ReadPngRaw(dir / "chart.png");
+  EXPECT_TRUE(raw.srgb);
+  ASSERT_EQ(raw.samples.size(), image.pixels.size());
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    ASSERT_EQ(raw.samples[i], std::lround(255.0 * std::min(image.pixels[i], 1.0f))) << i;
+  }
+}
+
+TEST(Png, BadBitDepthThrowsAndWritesNothing) {
+  TempDir dir;
+  for (int depth : {0, 1, 12, 32}) {
+    ToneMapping mapping;
+    mapping.bit_depth = depth;
+    EXPECT_THROW(WritePng(dir / "x.png", Image(2, 2, 3), mapping), Error) << depth;
+  }
+  EXPECT_TRUE(dir.Entries().empty());
+}
+
+TEST(Png, CarriesItsColourSpace) {
+  TempDir dir;
+  WritePng(dir / "srgb.png", Image(2, 2, 3), ToneMapping{});
+  const RawPng srgb = ReadPngRaw(dir / "srgb.png");
+  EXPECT_TRUE(srgb.srgb);
+  EXPECT_NEAR(srgb.gamma, 1.0 / 2.2, 1e-4);  // the fallback gAMA of an sRGB file
+
+  WritePng(dir / "gamma.png", Image(2, 2, 3), SeedToneMapping(ToneMapper::kExponential, 10.0, 1.8));
+  const RawPng gamma = ReadPngRaw(dir / "gamma.png");
+  EXPECT_FALSE(gamma.srgb);
+  EXPECT_NEAR(gamma.gamma, 1.0 / 1.8, 1e-4);
+  ASSERT_TRUE(gamma.chrm);
+  EXPECT_NEAR(gamma.white_x, 0.3127, 1e-4);
+  EXPECT_NEAR(gamma.white_y, 0.3290, 1e-4);
+  EXPECT_NEAR(gamma.red_x, 0.64, 1e-4);
+  EXPECT_NEAR(gamma.green_y, 0.60, 1e-4);
+  EXPECT_NEAR(gamma.blue_x, 0.15, 1e-4);
 }
 
 // ------------------------------------------------------------------------------------------------

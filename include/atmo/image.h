@@ -1,16 +1,20 @@
-// HDR images and their files: linear float EXR with metadata, tone-mapped 8-bit PNG.
+// HDR images and their files: linear float EXR with metadata, tone-mapped 8- or 16-bit PNG.
 //
 // To use it:
 //   atmo::Image img(1920, 1080, 3);                  // linear float, row 0 at the top
 //   img.at(x, y, c) = radiance;
 //   atmo::WriteExr("sky.exr", img, {{"atmo:model", "hillaire"}});
 //   atmo::WritePng("sky.png", img, {atmo::ToneMapper::kExponential, /*exposure=*/10.0});
+//   atmo::ToneMapping auto_exposed;                // luminance curve, sRGB, dithered 8 bits
+//   auto_exposed.exposure = atmo::ExposureFromEv100(atmo::AutoExposureEv100(img));
+//   atmo::WritePng("auto.png", img, auto_exposed);
 //
 // Writers never leave a partial or truncated file behind: they write a temporary file beside the
 // target and rename it over the target only when the write succeeded. On failure they throw
 // atmo::Error ("cannot write 'path': reason") and the existing target is untouched.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -55,14 +59,69 @@ enum class ToneMapper {
   kNone,         // exposure * x clamped to [0, 1]
 };
 
-struct ToneMapping {
-  ToneMapper op = ToneMapper::kExponential;
-  double exposure = 10.0;
-  double gamma = 2.2;  // display encoding: value^(1/gamma)
+// Display encoding of a tone-mapped value v in [0, 1].
+enum class DisplayTransfer {
+  kSrgb,   // IEC 61966-2-1: 12.92 v for v <= 0.0031308, else 1.055 v^(1/2.4) - 0.055
+  kGamma,  // the bare power v^(1/gamma) of the seed
+  // None: the values are display-referred sRGB already (charts, false-colour maps), written as
+  // they are and tagged sRGB. With kNone, exposure 1 and per_channel, a plain clamp-and-round.
+  kIdentity,
 };
 
-// Maps one linear value to a display value in [0, 1] (tone map, then gamma).
+// Linear RGB to display values. The linear values are Rec.709/sRGB (D65) primaries; their
+// luminance (Luminance below) is in cd/m^2 for physical presets, relative for the legacy ones: the
+// mapping does not care, `exposure` scales either into the curve's range (see ExposureFromEv100).
+struct ToneMapping {
+  ToneMapper op = ToneMapper::kExponential;
+  double exposure = 10.0;  // multiplier of the linear values before the curve
+  double gamma = 2.2;      // > 0; the power of DisplayTransfer::kGamma (unused by kSrgb)
+  // false: the curve maps the luminance Y and the pixel is scaled by T(Y)/Y, then divided by its
+  // largest channel when that exceeds 1, so hue and saturation survive (ToneMapPixel).
+  // true: the curve maps each channel on its own (the seed's look; bright colours go to white).
+  bool per_channel = false;
+  DisplayTransfer transfer = DisplayTransfer::kSrgb;
+  // PNG only: add a triangular-PDF dither of at most +-1 code before rounding to the code (a
+  // deterministic hash of x, y and channel, so files are reproducible). Removes banding.
+  bool dither = true;
+  int bit_depth = 8;  // PNG only: 8 or 16 bits per channel
+};
+
+// What WritePng did before physical units: per-channel curve, bare gamma, no dither, 8 bits.
+ToneMapping SeedToneMapping(ToneMapper op = ToneMapper::kExponential, double exposure = 10.0, double gamma = 2.2);
+
+// Luminance of linear Rec.709 RGB (ITU-R BT.709, D65): 0.2126 R + 0.7152 G + 0.0722 B.
+double Luminance(double r, double g, double b);
+
+// Exposure value at ISO 100, the photographic convention of Lagarde & de Rousiers 2014 ("Moving
+// Frostbite to PBR", section 5.1). A camera of f-number N, exposure time t and saturation-based
+// sensitivity S saturates at the luminance L_max = 78 / (0.65 S) * N^2 / t cd/m^2; at S = 100,
+// where EV100 = log2(N^2 / t), that is L_max = 1.2 * 2^EV100, and the exposure multiplier that maps
+// L_max to 1 is 1 / (1.2 * 2^EV100). EV100 15 is a sunny day (L_max about 39000 cd/m^2).
+double ExposureFromEv100(double ev100);
+// The inverse: log2(1 / (1.2 * exposure)); NaN for exposure <= 0.
+double Ev100FromExposure(double exposure);
+// EV100 that a reflected-light meter (calibration constant K = 12.5, S = 100) gives for the image:
+// EV100 = log2(L_avg * S / K), L_avg the log-average (geometric mean) luminance of channels 0..2
+// as linear RGB. Pixels with alpha 0, and non-finite or non-positive luminance, are skipped. So that
+// a small, very bright sun disc (or a few black pixels) does not set the exposure, each log2
+// luminance is first clamped to the image's 2nd..98th percentile (a winsorised mean); a sun
+// that fills more than 2% of the frame does count. The average luminance then lands at
+// 1 / 9.6 of L_max. An image with no usable pixel gives 0. Throws atmo::Error for fewer than 3
+// channels or an inconsistent image.
+double AutoExposureEv100(const Image& image);
+
+// sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1] (clamped), and its inverse.
+double SrgbEncode(double linear);
+double SrgbDecode(double encoded);
+// mapping.transfer applied to a value in [0, 1] (clamped; NaN gives 0).
+double EncodeDisplay(double linear, const ToneMapping& mapping);
+
+// Maps one linear value to a display value in [0, 1]: exposure, curve, clamp, display encoding.
+// It is one channel of the per-channel mode, and every channel of a grey pixel in either mode.
 float ToneMapValue(float linear, const ToneMapping& mapping);
+// Maps one linear RGB pixel to display values in [0, 1] as mapping.per_channel says. NaN and
+// negative channels count as 0, +inf as the largest float.
+std::array<float, 3> ToneMapPixel(float r, float g, float b, const ToneMapping& mapping);
 // Parses "exp" / "exponential", "aces", "none"; throws atmo::Error otherwise.
 ToneMapper ParseToneMapper(const std::string& name);
 
@@ -76,7 +135,10 @@ void WriteExr(const std::filesystem::path& path, const Image& image, const Image
 // the first channels P grouped by layer, in the order of P (R.stderr, G.stderr, B.stderr), then
 // the rest by name. channel_names is filled with the names read.
 Image ReadExr(const std::filesystem::path& path, ImageMetadata* metadata = nullptr);
-// PNG: 8-bit RGB (RGBA with alpha), tone-mapped; needs an image with 3 channels.
+// PNG: RGB (RGBA with alpha) of mapping.bit_depth bits, tone-mapped by ToneMapPixel, optionally
+// dithered; alpha is rounded, never dithered. Carries its colour space: an sRGB chunk (with the
+// matching gAMA and cHRM) for DisplayTransfer::kSrgb and kIdentity, for kGamma gAMA 1/gamma and
+// cHRM of the Rec.709 primaries and D65. Needs an image with 3 channels; throws atmo::Error.
 void WritePng(const std::filesystem::path& path, const Image& image, const ToneMapping& mapping);
 
 // Calls write(temporary_path) and renames the temporary file onto `path`. If `write` throws, the

@@ -1,4 +1,5 @@
-// Image files: atomic writes, tone mapping, float EXR (OpenEXR) and 8-bit PNG (libpng).
+// Image files: atomic writes, float EXR (OpenEXR) and 8- or 16-bit PNG (libpng). The tone
+// mapping itself is in display.cc.
 //
 // Contracts (see include/atmo/image.h):
 // - Every writer goes through WriteFileAtomically: the format code writes a temporary file beside
@@ -12,9 +13,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
+#include <csetjmp>
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <map>
@@ -36,6 +42,9 @@
 #include <ImfOutputFile.h>
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
 #include "atmo/image.h"
@@ -109,9 +118,94 @@ std::string ExrChannelName(int channel, int channel_count) {
 // Alpha in [0, 1]; NaN counts as 0 (no coverage).
 float ClampAlpha(float a) { return a > 0.0f ? std::min(a, 1.0f) : 0.0f; }
 
-// 8-bit code of a display value in [0, 1]: round(255 * v).
-png_byte ToByte(float display_value) {
-  return static_cast<png_byte>(std::lround(255.0 * static_cast<double>(display_value)));
+// Lowbias32 (C. Wellons, "Prospecting for hash functions", 2018): a full-avalanche 32-bit mix.
+std::uint32_t Hash32(std::uint32_t x) {
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
+// Triangular-PDF dither of pixel (x, y) channel c, in (-1, 1) codes: the sum of two independent
+// uniforms in [0, 1) minus 1, each from the hash of (x, y, c). With TPDF noise of +-1 code the
+// rounding error's mean and variance no longer depend on the value (Lipshitz, Wannamaker &
+// Vanderkooy 1992): on average the codes equal the exact value, and gradients show no bands.
+double DitherCodes(int x, int y, int c) {
+  const auto u32 = [](int v) { return static_cast<std::uint32_t>(v); };
+  const std::uint32_t seed = Hash32(u32(x) + Hash32(u32(y) + Hash32(u32(c))));
+  constexpr double kTwoTo32 = 4294967296.0;
+  const double u1 = Hash32(seed ^ 0x9e3779b9U) / kTwoTo32;
+  const double u2 = Hash32(seed ^ 0x7f4a7c15U) / kTwoTo32;
+  return u1 + u2 - 1.0;
+}
+
+// Code of a display value in [0, 1] at `max_code` (255 or 65535): round(max_code * v), with the
+// dither `noise` (codes) added first. The noise's amplitude shrinks to the distance from either end
+// of the range, so that black and white stay exact and no clamping skews the mean there.
+std::uint16_t ToCode(double display_value, int max_code, double noise) {
+  if (!(display_value > 0.0)) return 0;
+  if (display_value >= 1.0) return static_cast<std::uint16_t>(max_code);
+  const double scaled = display_value * max_code;
+  const double amplitude = std::min({1.0, scaled, max_code - scaled});
+  const double code = std::floor(scaled + amplitude * noise + 0.5);
+  return static_cast<std::uint16_t>(std::clamp(code, 0.0, static_cast<double>(max_code)));
+}
+
+// libpng reports errors through this callback; it must not return. The message goes into the
+// buffer given as the error pointer, and longjmp leaves through WritePngRows's setjmp.
+constexpr std::size_t kPngMessageSize = 256;
+[[noreturn]] void PngError(png_structp png, png_const_charp message) {
+  char* buffer = static_cast<char*>(png_get_error_ptr(png));
+  std::snprintf(buffer, kPngMessageSize, "libpng: %s", message);
+  png_longjmp(png, 1);
+}
+void PngWarning(png_structp, png_const_charp) {}
+
+// Writes rows of big-endian samples with libpng's full API, which (unlike the simplified one)
+// writes 16-bit samples as display-encoded values and the colour chunks we ask for. Only plain
+// data lives in this frame, since longjmp skips destructors. Returns false with `message` filled.
+bool WritePngRows(const char* path, png_uint_32 width, png_uint_32 height, bool has_alpha, int bit_depth,
+                  DisplayTransfer transfer, double gamma, png_bytep* rows, char* message) {
+  std::FILE* file = std::fopen(path, "wb");
+  if (file == nullptr) {
+    std::snprintf(message, kPngMessageSize, "cannot create '%s': %s", path, std::strerror(errno));
+    return false;
+  }
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, message, PngError, PngWarning);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(file);
+    std::snprintf(message, kPngMessageSize, "libpng: out of memory");
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(file);
+    return false;
+  }
+  png_init_io(png, file);
+  png_set_IHDR(png, info, width, height, bit_depth, has_alpha ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  if (transfer != DisplayTransfer::kGamma) {
+    // sRGB (kSrgb encodes to it, kIdentity's values are in it), plus the gAMA 1/2.2 and cHRM that
+    // readers without sRGB support fall back on.
+    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  } else {
+    // gAMA is the encoding exponent (sample = linear^gAMA); the primaries are Rec.709's, white D65.
+    png_set_gAMA(png, info, 1.0 / gamma);
+    png_set_cHRM(png, info, 0.3127, 0.3290, 0.64, 0.33, 0.30, 0.60, 0.15, 0.06);
+  }
+  png_set_rows(png, info, rows);
+  png_write_png(png, info, PNG_TRANSFORM_IDENTITY, nullptr);
+  png_destroy_write_struct(&png, &info);
+  if (std::fclose(file) != 0) {
+    std::snprintf(message, kPngMessageSize, "error while writing '%s'", path);
+    return false;
+  }
+  return true;
 }
 
 // The channels after the first ones (R, G, B or C0..), in ReadExr's order: names "P.layer" for a
@@ -140,33 +234,7 @@ int Image::ChannelIndex(const std::string& name) const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Tone mapping.
-
-float ToneMapValue(float linear, const ToneMapping& mapping) {
-  // `!(linear > 0)` also catches NaN.
-  if (!(linear > 0.0f)) return 0.0f;
-  const double v = mapping.exposure * static_cast<double>(linear);
-  if (std::isnan(v) || v <= 0.0) return 0.0f;
-  double t = 0.0;
-  switch (mapping.op) {
-    case ToneMapper::kExponential:
-      t = 1.0 - std::exp(-v);
-      break;
-    case ToneMapper::kAces:
-      // Narkowicz 2015, "ACES Filmic Tone Mapping Curve": x(a x + b) / (x(c x + d) + e). It is
-      // increasing for x >= 0 and reaches 1 near x = 7.24; for huge x the ratio is inf/inf, whose
-      // limit 2.51/2.43 > 1 clamps to 1.
-      t = (v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14);
-      if (std::isnan(t)) t = 1.0;
-      break;
-    case ToneMapper::kNone:
-      t = v;
-      break;
-  }
-  t = std::clamp(t, 0.0, 1.0);
-  if (mapping.gamma != 1.0) t = std::pow(t, 1.0 / mapping.gamma);
-  return static_cast<float>(t);
-}
+// Tone mapper names.
 
 ToneMapper ParseToneMapper(const std::string& name) {
   if (name == "exp" || name == "exponential") return ToneMapper::kExponential;
@@ -377,27 +445,50 @@ void WritePng(const fs::path& path, const Image& image, const ToneMapping& mappi
   if (!std::isfinite(mapping.exposure) || !(mapping.gamma > 0.0) || !std::isfinite(mapping.gamma)) {
     throw Error(WriteError(path, "invalid tone mapping (exposure must be finite, gamma > 0)"));
   }
+  if (mapping.bit_depth != 8 && mapping.bit_depth != 16) {
+    throw Error(WriteError(path, "invalid PNG bit depth " + std::to_string(mapping.bit_depth) + " (use 8 or 16)"));
+  }
 
   const bool has_alpha = !image.alpha.empty();
   const int out_channels = has_alpha ? 4 : 3;
-  const std::size_t pixel_count = static_cast<std::size_t>(image.width) * image.height;
-  std::vector<png_byte> bytes(pixel_count * out_channels);
-  for (std::size_t i = 0; i < pixel_count; ++i) {
-    for (int c = 0; c < 3; ++c) bytes[i * out_channels + c] = ToByte(ToneMapValue(image.pixels[i * 3 + c], mapping));
-    if (has_alpha) bytes[i * out_channels + 3] = ToByte(ClampAlpha(image.alpha[i]));
-  }
+  const int bytes_per_sample = mapping.bit_depth / 8;
+  const int max_code = (1 << mapping.bit_depth) - 1;
+  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * out_channels * bytes_per_sample;
+  std::vector<png_byte> bytes(row_bytes * image.height);
+  const auto put = [&](png_byte* at, std::uint16_t code) {
+    if (bytes_per_sample == 2) {
+      at[0] = static_cast<png_byte>(code >> 8);  // PNG samples are big-endian
+      at[1] = static_cast<png_byte>(code & 0xff);
+    } else {
+      at[0] = static_cast<png_byte>(code);
+    }
+  };
+  // Rows in parallel: each pixel's codes depend on that pixel alone (the dither on x, y, c).
+  using Rows = oneapi::tbb::blocked_range<int>;
+  oneapi::tbb::parallel_for(Rows(0, image.height), [&](const Rows& range) {
+    for (int y = range.begin(); y != range.end(); ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * image.width + x;
+        const float* p = image.pixels.data() + i * 3;
+        const std::array<float, 3> display = ToneMapPixel(p[0], p[1], p[2], mapping);
+        png_byte* out = bytes.data() + i * out_channels * bytes_per_sample;
+        for (int c = 0; c < 3; ++c) {
+          const double noise = mapping.dither ? DitherCodes(x, y, c) : 0.0;
+          put(out + c * bytes_per_sample, ToCode(display[c], max_code, noise));
+        }
+        if (has_alpha) put(out + 3 * bytes_per_sample, ToCode(ClampAlpha(image.alpha[i]), max_code, 0.0));
+      }
+    }
+  });
+  std::vector<png_bytep> rows(image.height);
+  for (int y = 0; y < image.height; ++y) rows[y] = bytes.data() + y * row_bytes;
 
   WriteFileAtomically(path, [&](const fs::path& temporary) {
-    png_image png{};
-    png.version = PNG_IMAGE_VERSION;
-    png.width = static_cast<png_uint_32>(image.width);
-    png.height = static_cast<png_uint_32>(image.height);
-    png.format = has_alpha ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB;
-    const int ok = png_image_write_to_file(&png, temporary.c_str(), /*convert_to_8bit=*/0, bytes.data(),
-                                           /*row_stride=*/0, /*colormap=*/nullptr);
-    const std::string message = png.message;
-    png_image_free(&png);
-    if (!ok) throw std::runtime_error("libpng: " + message);
+    char message[kPngMessageSize] = "";
+    if (!WritePngRows(temporary.c_str(), static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height),
+                      has_alpha, mapping.bit_depth, mapping.transfer, mapping.gamma, rows.data(), message)) {
+      throw std::runtime_error(message);
+    }
   });
 }
 

@@ -1,0 +1,185 @@
+// Exposure and display: EV100, auto-exposure, tone curves on luminance or per channel, the sRGB
+// transfer function (see include/atmo/image.h and docs/display.md).
+//
+// Contracts:
+// - Every mapping is monotonic non-decreasing in the linear input and in the exposure, per
+//   channel; its results are in [0, 1].
+// - The luminance mode only ever scales a pixel's RGB by one factor, so the linear chromaticity
+//   (hue and saturation) of the output is that of the input.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "atmo/error.h"
+#include "atmo/image.h"
+
+namespace atmo {
+namespace {
+
+// The tone curve T of an exposed value v >= 0, in [0, 1].
+double ToneCurve(double v, ToneMapper op) {
+  if (std::isnan(v) || v <= 0.0) return 0.0;
+  double t = 0.0;
+  switch (op) {
+    case ToneMapper::kExponential:
+      t = 1.0 - std::exp(-v);
+      break;
+    case ToneMapper::kAces:
+      // Narkowicz 2015, "ACES Filmic Tone Mapping Curve": x(a x + b) / (x(c x + d) + e). It is
+      // increasing for x >= 0 and reaches 1 near x = 7.24; for huge x the ratio is inf/inf, whose
+      // limit 2.51/2.43 > 1 clamps to 1.
+      t = (v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14);
+      if (std::isnan(t)) t = 1.0;
+      break;
+    case ToneMapper::kNone:
+      t = v;
+      break;
+  }
+  return std::clamp(t, 0.0, 1.0);
+}
+
+// A linear channel as ToneMapPixel reads it: NaN and negative values are 0, +inf the largest
+// float (so that a pixel with one infinite channel keeps a finite, if extreme, chromaticity).
+double CleanChannel(float x) {
+  if (!(x > 0.0f)) return 0.0;
+  return std::isinf(x) ? static_cast<double>(std::numeric_limits<float>::max()) : static_cast<double>(x);
+}
+
+}  // namespace
+
+ToneMapping SeedToneMapping(ToneMapper op, double exposure, double gamma) {
+  ToneMapping mapping;
+  mapping.op = op;
+  mapping.exposure = exposure;
+  mapping.gamma = gamma;
+  mapping.per_channel = true;
+  mapping.transfer = DisplayTransfer::kGamma;
+  mapping.dither = false;
+  mapping.bit_depth = 8;
+  return mapping;
+}
+
+double Luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+
+// ---------------------------------------------------------------------------------------------
+// Exposure.
+
+double ExposureFromEv100(double ev100) { return 1.0 / (1.2 * std::exp2(ev100)); }
+
+double Ev100FromExposure(double exposure) {
+  if (!(exposure > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::log2(1.0 / (1.2 * exposure));
+}
+
+double AutoExposureEv100(const Image& image) {
+  if (image.channels < 3) {
+    throw Error("auto-exposure needs an image with at least 3 channels, got " + std::to_string(image.channels));
+  }
+  const std::size_t pixel_count =
+      image.width > 0 && image.height > 0 ? static_cast<std::size_t>(image.width) * image.height : 0;
+  if (pixel_count == 0 || image.pixels.size() != pixel_count * image.channels ||
+      (!image.alpha.empty() && image.alpha.size() != pixel_count)) {
+    throw Error("auto-exposure of an inconsistent image (" + std::to_string(image.width) + "x" +
+                std::to_string(image.height) + "x" + std::to_string(image.channels) + ", " +
+                std::to_string(image.pixels.size()) + " values)");
+  }
+
+  std::vector<double> log_luminance;
+  log_luminance.reserve(pixel_count);
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    if (!image.alpha.empty() && !(image.alpha[i] > 0.0f)) continue;  // outside (NaN too)
+    const float* p = image.pixels.data() + i * image.channels;
+    const double y = Luminance(p[0], p[1], p[2]);
+    if (std::isfinite(y) && y > 0.0) log_luminance.push_back(std::log2(y));
+  }
+  if (log_luminance.empty()) return 0.0;
+
+  // Winsorised mean of log2 L: values below the 2nd or above the 98th percentile count as that
+  // percentile. A sun disc of less than 2% of the pixels, 10^5 times the sky's luminance, would
+  // otherwise add (its share) * 17 stops to the mean; clamped, it counts as the brightest sky.
+  const std::size_t n = log_luminance.size();
+  const std::size_t low_rank = static_cast<std::size_t>(std::floor(0.02 * static_cast<double>(n - 1)));
+  const std::size_t high_rank = static_cast<std::size_t>(std::ceil(0.98 * static_cast<double>(n - 1)));
+  std::nth_element(log_luminance.begin(), log_luminance.begin() + high_rank, log_luminance.end());
+  const double high = log_luminance[high_rank];
+  std::nth_element(log_luminance.begin(), log_luminance.begin() + low_rank, log_luminance.begin() + high_rank + 1);
+  const double low = log_luminance[low_rank];
+  double sum = 0.0;
+  for (double l : log_luminance) sum += std::clamp(l, low, high);
+  const double log2_average = sum / static_cast<double>(n);
+
+  // Reflected-light meter: EV100 = log2(L_avg S / K), S = 100, K = 12.5, so log2(L_avg) + 3.
+  constexpr double kSensitivity = 100.0, kCalibration = 12.5;
+  return log2_average + std::log2(kSensitivity / kCalibration);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Display encoding.
+
+double SrgbEncode(double linear) {
+  if (!(linear > 0.0)) return 0.0;
+  if (linear >= 1.0) return 1.0;
+  // IEC 61966-2-1: the linear toe meets the power segment at 0.0031308, where both give 0.0404499
+  // (to 3e-8; the standard rounds the joint to these digits).
+  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+double SrgbDecode(double encoded) {
+  if (!(encoded > 0.0)) return 0.0;
+  if (encoded >= 1.0) return 1.0;
+  return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
+}
+
+double EncodeDisplay(double linear, const ToneMapping& mapping) {
+  if (!(linear > 0.0)) return 0.0;
+  linear = std::min(linear, 1.0);
+  switch (mapping.transfer) {
+    case DisplayTransfer::kSrgb:
+      return SrgbEncode(linear);
+    case DisplayTransfer::kGamma:
+      return mapping.gamma != 1.0 ? std::pow(linear, 1.0 / mapping.gamma) : linear;
+    case DisplayTransfer::kIdentity:
+      break;
+  }
+  return linear;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tone mapping.
+
+float ToneMapValue(float linear, const ToneMapping& mapping) {
+  // `!(linear > 0)` also catches NaN.
+  if (!(linear > 0.0f)) return 0.0f;
+  const double t = ToneCurve(mapping.exposure * static_cast<double>(linear), mapping.op);
+  return static_cast<float>(EncodeDisplay(t, mapping));
+}
+
+std::array<float, 3> ToneMapPixel(float r, float g, float b, const ToneMapping& mapping) {
+  if (mapping.per_channel) {
+    return {ToneMapValue(r, mapping), ToneMapValue(g, mapping), ToneMapValue(b, mapping)};
+  }
+  std::array<double, 3> v = {CleanChannel(r), CleanChannel(g), CleanChannel(b)};
+  for (double& c : v) c *= mapping.exposure;
+  const double y = Luminance(v[0], v[1], v[2]);
+  if (!(y > 0.0) || !std::isfinite(y)) return {0.0f, 0.0f, 0.0f};  // black, or exposure <= 0
+  // One factor for the three channels: the luminance goes through the curve, T(Y) / Y.
+  const double scale = ToneCurve(y, mapping.op) / y;
+  for (double& c : v) c *= scale;
+  // T(Y) <= 1, but a saturated colour can still have a channel above 1 (pure blue at Y = 1 has
+  // B = 13.9). Dividing by that channel keeps the chromaticity and makes it the brightest colour
+  // of its hue the display has, where clamping each channel would shift the hue towards yellow,
+  // cyan or white. Every channel stays non-decreasing in the exposure: c * min(T(Y)/Y, 1/max).
+  const double largest = std::max({v[0], v[1], v[2]});
+  if (largest > 1.0) {
+    for (double& c : v) c /= largest;
+  }
+  std::array<float, 3> out{};
+  for (int c = 0; c < 3; ++c) out[c] = static_cast<float>(EncodeDisplay(v[c], mapping));
+  return out;
+}
+
+}  // namespace atmo
