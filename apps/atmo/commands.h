@@ -78,9 +78,16 @@ struct RenderCommand {
   double sun_elevation_deg = 10.0;
   double sun_azimuth_deg = 180.0;
   std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
-  std::optional<double> exposure;    // default: parameters.exposure
+  // Display (docs/display.md): a linear exposure multiplier, or EV100, or auto-exposure (the
+  // default for physical units; a relative 3-channel render defaults to parameters.exposure).
+  std::optional<double> exposure;
+  std::optional<double> ev100;
+  bool auto_exposure = false;
   std::string tonemap = "exp";
-  double gamma = 2.2;
+  std::optional<double> gamma;  // given: the bare gamma transfer instead of sRGB
+  bool per_channel = false;     // the curve per channel (the seed's look) instead of on luminance
+  bool no_dither = false;
+  int png_bits = 8;
   bool no_sun_disc = false;
   bool no_ground = false;
   std::string exr_path = "sky.exr";  // empty: no EXR

@@ -714,7 +714,10 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   if (!command.image_path.empty()) {
     const Image image =
         ErrorImage(*model, *reference, command, command.floor, model_text + " VS " + reference_text);
-    WritePng(command.image_path, image, {ToneMapper::kNone, /*exposure=*/1.0, /*gamma=*/1.0});
+    // The chart's values are display values already: written as they are (no curve, no dither).
+    ToneMapping chart = SeedToneMapping(ToneMapper::kNone, /*exposure=*/1.0, /*gamma=*/1.0);
+    chart.transfer = DisplayTransfer::kIdentity;
+    WritePng(command.image_path, image, chart);
   }
 
   if (std::fwrite(report.data(), 1, report.size(), stdout) != report.size() || std::fflush(stdout) != 0) {

@@ -161,13 +161,32 @@ int main(int argc, char** argv) {
   AddNumber(render_app, "--sun-azimuth", render.sun_azimuth_deg, "sun compass azimuth in degrees");
   AddOptionalNumber(render_app, "--altitude", render.altitude_m,
                     "observer altitude in metres [default: the preset's]");
-  AddOptionalNumber(render_app, "--exposure", render.exposure,
-                    "tone-mapping exposure [default: the preset's]")
-      ->check(kPositive);
-  render_app->add_option("--tonemap", render.tonemap, "exp, aces or none")
+  CLI::Option* exposure = AddOptionalNumber(render_app, "--exposure", render.exposure,
+                                            "linear exposure multiplier of the PNG (docs/display.md) [default: "
+                                            "auto-exposure; a relative 3-channel render: the preset's]")
+                              ->check(kPositive);
+  CLI::Option* ev = AddOptionalNumber(render_app, "--ev", render.ev100,
+                                      "exposure as EV100 (photographic; 1/(1.2 2^EV) on cd/m^2), e.g. 15 for "
+                                      "sunny noon, 9 for sunset, 4 for civil twilight")
+                        ->excludes(exposure);
+  render_app->add_flag("--auto-exposure", render.auto_exposure,
+                       "EV100 from the image's log-average luminance (the default for physical units)")
+      ->excludes(exposure)
+      ->excludes(ev);
+  render_app->add_option("--tonemap", render.tonemap, "exp, aces or none (applied to luminance, hue kept)")
       ->check(CLI::IsMember({"exp", "aces", "none"}))
       ->capture_default_str();
-  AddNumber(render_app, "--gamma", render.gamma, "display gamma")->check(RangeOf(0.1, 10.0));
+  render_app->add_option_function<double>(
+                "--gamma", [&render](const double& g) { render.gamma = g; },
+                "a bare display gamma instead of the sRGB transfer function (the seed's curve: 2.2)")
+      ->check(kFinite)
+      ->check(RangeOf(0.1, 10.0));
+  render_app->add_flag("--per-channel", render.per_channel,
+                       "tone-map each channel apart (the seed's look) instead of the luminance");
+  render_app->add_flag("--no-dither", render.no_dither, "8-bit PNG without dithering (shows contour bands)");
+  render_app->add_option("--png-bits", render.png_bits, "PNG bits per sample: 8 or 16")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
   render_app->add_flag("--no-sun-disc", render.no_sun_disc, "leave the sun disc out");
   render_app->add_flag("--no-ground", render.no_ground,
                        "leave the light reflected by the ground out (rays that meet it show only the air in front)");

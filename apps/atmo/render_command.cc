@@ -36,25 +36,6 @@ std::string JoinOptions(const std::vector<std::string>& options) {
   return text;
 }
 
-// A display exposure for a luminance image when none is given: the reflected-light meter of
-// photography on the log-average luminance, EV100 = log2(L_avg S / K) with S = 100, K = 12.5,
-// and exposure 1 / (1.2 2^EV100) (saturation-based speed).
-double AutoExposure(const Image& rgb) {
-  double sum = 0.0;
-  std::size_t count = 0;
-  const std::size_t pixels = static_cast<std::size_t>(rgb.width) * rgb.height;
-  for (std::size_t p = 0; p < pixels; ++p) {
-    if (!rgb.alpha.empty() && rgb.alpha[p] == 0.0f) continue;
-    const double y = 0.2126 * rgb.pixels[3 * p] + 0.7152 * rgb.pixels[3 * p + 1] + 0.0722 * rgb.pixels[3 * p + 2];
-    if (!(y > 0.0) || !std::isfinite(y)) continue;
-    sum += std::log(y);
-    ++count;
-  }
-  const double average = count == 0 ? 1.0 : std::exp(sum / static_cast<double>(count));
-  const double ev100 = std::log2(average * 100.0 / 12.5);
-  return 1.0 / (1.2 * std::exp2(ev100));
-}
-
 std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<double>& solar_irradiance) {
   switch (unit) {
     case RadianceUnit::kLuminance:
@@ -103,7 +84,13 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
 
   ToneMapping mapping;
   mapping.op = ParseToneMapper(command.tonemap);
-  mapping.gamma = command.gamma;
+  if (command.gamma) {
+    mapping.transfer = DisplayTransfer::kGamma;
+    mapping.gamma = *command.gamma;
+  }
+  mapping.per_channel = command.per_channel;
+  mapping.dither = !command.no_dither;
+  mapping.bit_depth = command.png_bits;
 
   // Fail fast, before precomputing anything, when an output cannot be written.
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
@@ -172,7 +159,16 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     if (!command.png_path.empty()) {
       const Image display = legacy_png ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
       ToneMapping png_mapping = mapping;
-      png_mapping.exposure = command.exposure.value_or(legacy_png ? parameters.exposure : AutoExposure(display));
+      if (command.exposure) {
+        png_mapping.exposure = *command.exposure;
+      } else if (command.ev100) {
+        png_mapping.exposure = ExposureFromEv100(*command.ev100);
+      } else if (command.auto_exposure || !legacy_png) {
+        png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
+      } else {
+        png_mapping.exposure = parameters.exposure;
+      }
+      set_metadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
       WritePng(command.png_path, display, png_mapping);
       written.push_back(command.png_path);
     }
