@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <png.h>
 
 #include "atmo/colour.h"
 #include "atmo/image.h"
@@ -379,6 +380,69 @@ TEST_F(CliTest, RenderUnitsAreRecordedAndConsistent) {
   const atmo::Image xyz = atmo::ReadExr(dir_ / "xyz.exr");
   EXPECT_EQ(xyz.colour_space, atmo::ColourSpace::kCieXyz);
   EXPECT_EQ(xyz.channel_names, (std::vector<std::string>{"X", "Y", "Z"}));
+}
+
+// 8-bit RGB samples of a PNG, as stored (the files are sRGB-tagged: no conversion applies).
+std::vector<unsigned char> ReadPngRgb(const fs::path& path, int* width, int* height) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.c_str())) return {};
+  image.format = PNG_FORMAT_RGB;
+  std::vector<unsigned char> rgb(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, rgb.data(), 0, nullptr)) return {};
+  *width = static_cast<int>(image.width);
+  *height = static_cast<int>(image.height);
+  return rgb;
+}
+
+TEST_F(CliTest, SunriseSunStaysOrangeInThePng) {
+  // A 2-degree view centred on a sun 1 degree up: the disc fills the middle. Its EXR colour is a
+  // deep orange; the PNG keeps the hue (tone mapping on luminance, chromaticity kept), where the
+  // per-channel curve turns it almost white.
+  const std::string view = "render --width 64 --height 64 --fov 2 --pitch 1 --sun-elevation 1 --exr sun.exr ";
+  ASSERT_EQ(Run(view + "--png sun.png").exit_code, 0);
+  ASSERT_EQ(Run(view + "--png seed.png --per-channel --gamma 2.2").exit_code, 0);
+  const atmo::Image exr = atmo::ReadExr(dir_ / "sun.exr");
+  const float r = exr.at(32, 32, 0), g = exr.at(32, 32, 1), b = exr.at(32, 32, 2);
+  ASSERT_GT(r, 2.0f * g) << "the sunrise sun is orange in the EXR";
+  int w = 0, h = 0;
+  const std::vector<unsigned char> png = ReadPngRgb(dir_ / "sun.png", &w, &h);
+  ASSERT_EQ(png.size(), 64u * 64u * 3u);
+  const unsigned char* centre = &png[(32 * 64 + 32) * 3];
+  EXPECT_GT(centre[0], centre[1]);
+  EXPECT_GT(centre[1], centre[2]);
+  // sRGB-decoded G/R equals the linear G/R of the EXR within 10 % (8-bit codes and dither).
+  const auto decode = [](unsigned char code) { return atmo::SrgbDecode(code / 255.0); };
+  EXPECT_NEAR(decode(centre[1]) / decode(centre[0]), g / r, 0.1 * g / r);
+  const std::vector<unsigned char> seed = ReadPngRgb(dir_ / "seed.png", &w, &h);
+  const unsigned char* seed_centre = &seed[(32 * 64 + 32) * 3];
+  EXPECT_GT(seed_centre[1], 200) << "the per-channel curve saturates green too: a near-white sun";
+}
+
+TEST_F(CliTest, CivilTwilightIsVisibleWithAutoExposure) {
+  // Sun 4 degrees below the horizon, the all-sky fisheye: at sunny-16 exposure (EV100 15) the sky
+  // is black; auto-exposure shows it (mean sRGB code of the sky well above black).
+  const std::string base = "render --preset earth-spectral --camera fisheye --width 64 --height 64 "
+                           "--sun-elevation -4 --exr '' ";
+  ASSERT_EQ(Run(base + "--ev 15 --png day.png").exit_code, 0);
+  ASSERT_EQ(Run(base + "--auto-exposure --png auto.png").exit_code, 0);
+  const auto mean_code = [&](const char* name) {
+    int w = 0, h = 0;
+    const std::vector<unsigned char> rgb = ReadPngRgb(dir_ / name, &w, &h);
+    double sum = 0.0;
+    int n = 0;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const double dx = x + 0.5 - w / 2.0, dy = y + 0.5 - h / 2.0;
+        if (dx * dx + dy * dy > 0.8 * 0.25 * w * w) continue;  // inside the circle
+        for (int c = 0; c < 3; ++c) sum += rgb[(y * w + x) * 3 + c];
+        n += 3;
+      }
+    }
+    return sum / n;
+  };
+  EXPECT_LT(mean_code("day.png"), 5.0);
+  EXPECT_GT(mean_code("auto.png"), 50.0);
 }
 
 TEST_F(CliTest, SampleUnitsAgree) {
