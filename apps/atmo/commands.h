@@ -17,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/timing.h"
+#include "sun_options.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
 #include "models/elek_model.h"
@@ -84,6 +85,8 @@ struct RenderCommand {
   std::string png_path = "sky.png";  // empty: no PNG
   // Monte Carlo paths per pixel (model reference only; default: its `samples` option).
   std::optional<std::uint64_t> spp;
+  // --date etc.: the sun from a date and place instead of the two angles above; --until: a time-lapse.
+  SunOptions sun;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
 
@@ -94,6 +97,7 @@ struct SampleCommand {
   std::optional<double> sun_zenith_deg;
   std::optional<double> view_zenith_deg;
   std::optional<double> azimuth_deg;
+  SunOptions sun;  // --date: the sun zenith of the single query from a date and place
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
 
@@ -125,6 +129,7 @@ struct BenchCommand {
   bool quick = false;  // repeat 3 times
   int width = 1920;
   int height = 1080;
+  SunOptions sun;  // --date: the frame's sun from a date and place (default: 30 degrees high, south)
 };
 int RunBench(const CommonOptions& common, const BenchCommand& command);
 

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "atmo/error.h"
 #include "atmo/image.h"
@@ -54,6 +55,14 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
   settings.sun_elevation_deg = command.sun_elevation_deg;
   settings.sun_azimuth_deg = command.sun_azimuth_deg;
+  // --date: the sun of that instant and place instead (sun_options.h); a time-lapse starts there.
+  std::optional<SunAtInstant> dated_sun;
+  if (HasDate(command.sun)) {
+    dated_sun = SunAtDate(command.sun);
+    settings.sun_elevation_deg = dated_sun->position.elevation_deg;
+    settings.sun_azimuth_deg = dated_sun->position.azimuth_deg;
+    if (!command.yaw_deg && settings.camera.kind != CameraKind::kFisheye) settings.camera.yaw_deg = settings.sun_azimuth_deg;
+  }
   settings.terms.sun_disc = !command.no_sun_disc;
   settings.terms.ground = !command.no_ground;
   if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
@@ -66,6 +75,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // Fail fast, before precomputing anything, when an output cannot be written.
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
   if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
+  if (IsTimeLapse(command.sun)) TimeLapseInstants(command.sun, command.png_path);  // --until, --step, --mp4
 
   // --spp is the path count of a Monte Carlo model; deterministic models have nothing to sample.
   if (command.spp && common.model != "reference") {
@@ -109,6 +119,9 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     metadata.emplace_back(key, value);
   };
+  if (dated_sun) {
+    for (const auto& [key, value] : SunMetadata(command.sun, *dated_sun)) set_metadata(key, value);
+  }
   // Writes the outputs asked for; `exr_image` may carry more channels than `image` (PNG).
   const auto write = [&](const Image& image, const Image& exr_image, double render_ms) {
     std::vector<std::string> written;
@@ -123,6 +136,55 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     return written;
   };
+
+  // --until: a time-lapse. The model and its tables do not depend on the sun: made once above, each
+  // frame is a new view (model->View: its per-view tables) and its frame pass. On the gl backend
+  // each frame runs every pass (RenderOnGl) in one context.
+  if (IsTimeLapse(command.sun)) {
+#ifdef ATMO_HAVE_GL
+    const std::unique_ptr<gl::Context> context = on_gl ? std::make_unique<gl::Context>() : nullptr;
+#endif
+    const std::string description = Format("%dx%d %s, %s, %s", settings.camera.width, settings.camera.height,
+                                           std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(),
+                                           parameters.name.c_str());
+    const auto render_frame = [&](std::size_t, const SunAtInstant& sun, const std::string& exr_path,
+                                  const std::string& png_path) {
+      RenderSettings frame = settings;
+      frame.sun_elevation_deg = sun.position.elevation_deg;
+      frame.sun_azimuth_deg = sun.position.azimuth_deg;
+      for (const auto& [key, value] : SunMetadata(command.sun, sun)) set_metadata(key, value);
+      set_metadata("atmo:sunElevationDeg", Format("%.10g", frame.sun_elevation_deg));
+      set_metadata("atmo:sunAzimuthDeg", Format("%.10g", frame.sun_azimuth_deg));
+      const auto frame_start = std::chrono::steady_clock::now();
+      Image image;
+      Image with_errors;  // the EXR of a Monte Carlo model: radiance and standard errors
+      if (model != nullptr && IsMonteCarlo(*model)) {
+        ProgressiveSettings progressive;
+        progressive.samples_per_pixel = command.spp.value_or(0);
+        const ProgressiveImage result = RenderProgressive(*model, frame, progressive);
+        set_metadata("atmo:standardErrorChannels", "R.stderr, G.stderr, B.stderr: standard error of R, G, B (same unit)");
+        set_metadata("atmo:samplesPerPixel", std::to_string(result.samples_per_pixel));
+        image = result.radiance;
+        with_errors = WithStandardErrorChannels(result);
+      } else if (model != nullptr) {
+        const std::unique_ptr<SkyView> sky =
+            model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+        image = RenderView(*sky, frame.camera, frame.terms, parameters.solar_irradiance);
+      } else {
+#ifdef ATMO_HAVE_GL
+        image = RenderOnGl(*context, common, parameters, frame);
+#endif
+      }
+      const double frame_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start).count();
+      if (!exr_path.empty()) {
+        set_metadata("atmo:renderTimeMs", Format("%.3f", frame_ms));
+        WriteExr(exr_path, with_errors.width > 0 ? with_errors : image, metadata);
+      }
+      if (!png_path.empty()) WritePng(png_path, image, mapping);
+    };
+    return RunTimeLapse(command.sun, command.exr_path, command.png_path, description, render_frame);
+  }
 
   std::vector<std::string> written;
   Image image;
