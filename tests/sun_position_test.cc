@@ -15,6 +15,8 @@
 
 #include <cmath>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -305,6 +307,26 @@ TEST(ComputeSunPosition, RefractionLiftsTheSunOnlyNearAndAboveTheHorizon) {
   const SunPosition night = ComputeSunPosition(jd - 0.25, 0.0, 0.0, refracted);
   EXPECT_LT(night.geometric_elevation_deg, -60.0);
   EXPECT_EQ(night.elevation_deg, night.geometric_elevation_deg);
+}
+
+TEST(ComputeSunPosition, ConcurrentCallsGiveTheSerialResults) {
+  // libnova caches its last Earth position in globals; four threads asking for different instants
+  // at once must still each get their own.
+  constexpr int kThreads = 4, kPerThread = 300;
+  const double start = ParseIsoDateTime("2026-01-01T00:00Z");
+  const auto instant = [&](int thread, int i) { return start + thread * 91.0 + i * 0.0137; };
+  std::vector<std::vector<double>> serial(kThreads), parallel(kThreads, std::vector<double>(kPerThread));
+  for (int t = 0; t < kThreads; ++t) {
+    for (int i = 0; i < kPerThread; ++i) serial[t].push_back(ComputeSunPosition(instant(t, i), 46.5, 7.9).elevation_deg);
+  }
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < kPerThread; ++i) parallel[t][i] = ComputeSunPosition(instant(t, i), 46.5, 7.9).elevation_deg;
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(parallel, serial);
 }
 
 TEST(ComputeSunPosition, RejectsInvalidInputs) {

@@ -89,7 +89,8 @@ struct SunPosition {
 // The sun at `julian_day_utc` for an observer at `latitude_deg` in [-90, 90] (north positive) and
 // `longitude_deg` in [-180, 360) (east positive; 180..360 wrap to the west). Throws atmo::Error for
 // a non-finite instant, an instant outside the years 0000..9999 that ParseIsoDateTime reads,
-// latitude or longitude out of range, or non-finite options.
+// latitude or longitude out of range, or non-finite options. Safe to call from several threads
+// (the libnova calls, which share caches, take turns).
 SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, double longitude_deg,
                                const SunPositionOptions& options = {});
 

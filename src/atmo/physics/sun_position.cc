@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <string>
 
 #include <libnova/dynamical_time.h>
@@ -146,6 +147,17 @@ double SunLatitudeDeg(double jde) {
                     32.0 * std::cos(4.00 + 1577.34 * tau);
   const double b1 = 9.0 * std::cos(3.90 + 5507.55 * tau) + 6.0 * std::cos(1.73 + 5223.69 * tau);
   return -(b0 + b1 * tau) * 1e-8 / kDegToRad;
+}
+
+// The nutation at exactly `jde`. ln_get_nutation keeps the last one it computed and returns it
+// again for any instant within a fraction of a day of it, so its answer depends on the call
+// before (by up to 0.01", 3e-6 degrees); asking first for an instant days away makes it compute
+// this one. The caller holds the libnova lock.
+ln_nutation NutationAt(double jde) {
+  ln_nutation nutation{};
+  ln_get_nutation(jde + 10.0, &nutation);
+  ln_get_nutation(jde, &nutation);
+  return nutation;
 }
 
 // The Greenwich apparent sidereal time in degrees at `julian_day_utc` (UT): the mean (Meeus eq.
@@ -301,6 +313,11 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
     throw Error("the sun's position needs a finite pressure >= 0, temperature > -273 C and observer height");
   }
 
+  // libnova keeps its last Earth position and nutation in globals (caches without a lock): one
+  // caller at a time, and each result independent of the calls before (NutationAt).
+  static std::mutex libnova_mutex;
+  const std::lock_guard<std::mutex> lock(libnova_mutex);
+
   // The ephemeris runs on Terrestrial Time: JDE = JD(UT) + Delta T (ln_get_jde, Meeus ch. 10).
   const double jde = ln_get_jde(julian_day_utc);
   ln_helio_posn earth{};
@@ -312,8 +329,7 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
   const double theta_deg = EarthLongitudeOfDateDeg(jde, earth.L) + 180.0;
   const double beta_deg = SunLatitudeDeg(jde);
   // Apparent: nutation in longitude, and the aberration of light -20.4898" / R (Meeus eq. 25.10).
-  ln_nutation nutation{};
-  ln_get_nutation(jde, &nutation);
+  const ln_nutation nutation = NutationAt(jde);
   const double lambda_deg = theta_deg + nutation.longitude - 20.4898 / 3600.0 / earth.R;
   const double epsilon_deg = nutation.ecliptic + nutation.obliquity;  // the true obliquity
   // Ecliptic to equatorial (Meeus eqs. 13.3, 13.4).
