@@ -11,13 +11,13 @@
 // Time scales. Instants are UTC Julian days (days since -4712-01-01 12:00, Julian calendar before
 // 1582-10-15 and Gregorian from then on, as ln_get_julian_day and Meeus ch. 7), treated as UT1: UTC
 // never differs from UT1 by more than 0.9 s, in which the sun moves 0.004 degrees along its daily
-// circle. The sun's ephemeris (VSOP87) wants Terrestrial Time: ComputeSunPosition adds libnova's
-// Delta T = TT - UT for it (ln_get_jde), and uses UT for the sidereal time. libnova's Delta T
-// follows the measured values to 2010 (63.8 s in 2000) and then extrapolates too fast (128 s in
-// 2020, when it was 69 s; 258 s in 2100): a minute too much moves the sun 0.0007 degrees along
-// the ecliptic, so the error stays under 0.003 degrees for the next two centuries.
+// circle. The sun's ephemeris (VSOP87) wants Terrestrial Time: ComputeSunPosition adds Delta T =
+// TT - UT for it (DeltaTSeconds), and uses UT for the sidereal time. libnova's own Delta T
+// (ln_get_jde) follows the measured values only to 2000, then extrapolates too fast and jumps by
+// 45 s in mid-2010 (128 s in 2020, when it was 69 s): DeltaTSeconds uses it before 2000 only. A
+// minute of Delta T moves the sun 0.0007 degrees along the ecliptic.
 //
-// What comes from libnova: Delta T, the Earth's VSOP87 longitude and distance
+// What comes from libnova: Delta T before 2000, the Earth's VSOP87 longitude and distance
 // (ln_get_earth_helio_coords), the nutation (ln_get_nutation) and the parallax (ln_get_parallax).
 // What does not, because libnova 0.16 gets it wrong by more than 0.01 degrees or by more than the
 // rest: its Earth longitude is referred to the equinox of J2000, so it is precessed to the equinox
@@ -26,7 +26,7 @@
 // aberration (20.5"); ln_get_hrz_from_equ uses the mean sidereal time and
 // ln_get_apparent_sidereal_time drops a cos(obliquity) (0.0004 degrees). These few steps follow
 // Meeus chs. 12, 13, 21 and 25 in sun_position.cc. Against the NREL SPA example and Meeus Example
-// 25.b the result is within 0.00003 degrees (tests/sun_position_test.cc).
+// 25.b the result is within 0.00002 degrees (tests/sun_position_test.cc).
 //
 // Geometric and apparent. `geometric_elevation_deg` is the topocentric elevation of the sun's
 // centre without the atmosphere: apparent geocentric place (nutation and aberration included),
@@ -61,6 +61,12 @@ std::string FormatIsoDateTimeUtc(double julian_day_utc);
 // `1h30min`, `2d`, `1.5h`); returns seconds, > 0. Throws a one-line atmo::Error naming the text for
 // anything else (no unit, an unknown unit, a zero or non-finite total).
 double ParseDurationS(std::string_view text);
+
+// Delta T = TT - UT in seconds at `julian_day_utc`: libnova's table before 2000, Espenak and
+// Meeus's polynomials (NASA/TP-2006-214141) after; 64.7 s in 2005, 71.6 s in 2020 (measured:
+// 69.4 s). Past years are good to a fraction of a second, future ones are predictions. Throws
+// atmo::Error for a non-finite day.
+double DeltaTSeconds(double julian_day_utc);
 
 struct SunPositionOptions {
   // Adds the air's refraction to `elevation_deg` (see the header comment).

@@ -174,6 +174,28 @@ double ApparentSiderealTimeDeg(double julian_day_utc, const ln_nutation& nutatio
 
 }  // namespace
 
+double DeltaTSeconds(double julian_day_utc) {
+  if (!std::isfinite(julian_day_utc)) throw Error("Delta T needs a finite Julian day");
+  const double year = 2000.0 + (julian_day_utc - 2451545.0) / 365.25;
+  // Before 2000: libnova's table of measured values (ln_get_dynamical_time_diff, Meeus ch. 10, and
+  // its long-term formulas before 1620). After 2000 libnova extrapolates, too fast, and jumps by 45 s
+  // in mid-2010; there Espenak and Meeus's polynomials (Five Millennium Canon of Solar Eclipses,
+  // NASA/TP-2006-214141, "Polynomial expressions for Delta T") take over, continuous with it.
+  if (year < 2000.0) return ln_get_dynamical_time_diff(julian_day_utc);
+  if (year < 2005.0) {
+    const double t = year - 2000.0;
+    return 63.86 + 0.3345 * t - 0.060374 * t * t + 0.0017275 * t * t * t + 0.000651814 * t * t * t * t +
+           0.00002373599 * t * t * t * t * t;
+  }
+  if (year < 2050.0) {
+    const double t = year - 2000.0;
+    return 62.92 + 0.32217 * t + 0.005589 * t * t;
+  }
+  const double u = (year - 1820.0) / 100.0;
+  if (year < 2150.0) return -20.0 + 32.0 * u * u - 0.5628 * (2150.0 - year);
+  return -20.0 + 32.0 * u * u;
+}
+
 double ParseIsoDateTime(std::string_view text) {
   const std::string quoted = Quoted(text);
   const auto malformed = [&](const char* expected) {
@@ -318,8 +340,8 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
   static std::mutex libnova_mutex;
   const std::lock_guard<std::mutex> lock(libnova_mutex);
 
-  // The ephemeris runs on Terrestrial Time: JDE = JD(UT) + Delta T (ln_get_jde, Meeus ch. 10).
-  const double jde = ln_get_jde(julian_day_utc);
+  // The ephemeris runs on Terrestrial Time: JDE = JD(UT) + Delta T.
+  const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
   ln_helio_posn earth{};
   ln_get_earth_helio_coords(jde, &earth);
 
