@@ -11,6 +11,7 @@ PACKAGES=(
   libopenexr-dev libpng-dev
   libcli11-dev nlohmann-json3-dev
   libtbb-dev libglm-dev
+  libnova-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
   libglfw3-dev xvfb xauth

@@ -5,6 +5,7 @@
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
 // repeats of the pass's last duration (PassTimings), plus "all_luts" (the sum of the model's
 // "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here).
+// With --date (sun_options.h) the sun is that of the date and place instead.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -69,6 +70,13 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
   settings.altitude_m = parameters.observer_altitude_m;
   settings.sun_elevation_deg = 30.0;
   settings.sun_azimuth_deg = 180.0;
+  // --date: the sun of that instant and place (sun_options.h), the camera towards it.
+  if (HasDate(command.sun)) {
+    const SunAtInstant sun = SunAtDate(command.sun);
+    settings.sun_elevation_deg = sun.position.elevation_deg;
+    settings.sun_azimuth_deg = sun.position.azimuth_deg;
+    settings.camera.yaw_deg = settings.sun_azimuth_deg;
+  }
 
   const std::string frame_name = Format("frame_%dx%d", command.width, command.height);
   PassSamples samples;
@@ -117,7 +125,7 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       for (const PassTiming& pass : model->timings().entries()) calls_before[pass.name] = pass.calls;
 
       model->Precompute();
-      const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(30.0, 180.0));
+      const std::unique_ptr<SkyView> sky = model->View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
       const auto start = std::chrono::steady_clock::now();
       const Image image = RenderView(*sky, settings.camera, settings.terms, parameters.solar_irradiance);
       const double frame_ms =
@@ -143,6 +151,10 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
               model_name.c_str(), common.backend.c_str(), parameters.name.c_str(), threads, repeat, command.width,
               command.height);
   if (!device.empty()) std::printf("gl device: %s\n", device.c_str());
+  if (HasDate(command.sun)) {
+    std::printf("sun: elevation %.4f deg, azimuth %.4f deg (--date %s)\n", settings.sun_elevation_deg,
+                settings.sun_azimuth_deg, command.sun.date.c_str());
+  }
   std::size_t width = 4;
   for (const auto& [name, values] : samples.passes()) width = std::max(width, name.size());
   std::printf("%-*s  %10s  %10s  %10s\n", static_cast<int>(width), "pass", "median_ms", "min_ms", "max_ms");

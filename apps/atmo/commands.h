@@ -17,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/timing.h"
+#include "sun_options.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
 #include "models/elek_model.h"
@@ -99,6 +100,8 @@ struct RenderCommand {
   // solar_irradiance, as before physical units).
   std::string unit = "luminance";
   bool xyz = false;
+  // --date etc.: the sun from a date and place instead of the two angles above; --until: a time-lapse.
+  SunOptions sun;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
 
@@ -112,6 +115,7 @@ struct SampleCommand {
   // relative (DESIGN.md §4: sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1 per
   // wavelength row) or luminance (one row per point: luminance_cd_m2, stderr).
   std::string unit = "relative";
+  SunOptions sun;  // --date: the sun zenith of the single query from a date and place
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
 
@@ -143,6 +147,7 @@ struct BenchCommand {
   bool quick = false;  // repeat 3 times
   int width = 1920;
   int height = 1080;
+  SunOptions sun;  // --date: the frame's sun from a date and place (default: 30 degrees high, south)
 };
 int RunBench(const CommonOptions& common, const BenchCommand& command);
 

@@ -10,6 +10,8 @@
 //   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json)
 //   atmo illuminance [--sun-elevation E ...] [--altitude A]   (lux on a horizontal plane, CSV)
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
+// render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
+// of that instant and place; render also --until ISO --step DURATION [--mp4 F]: a time-lapse.
 // Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
@@ -127,6 +129,27 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
       ->check(CLI::Range(3, 256));
 }
 
+// --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.
+// A date needs a place and a place a date. Returns the --date option, for the caller's excludes.
+CLI::Option* AddSunOptions(CLI::App* app, atmo::cli::SunOptions& sun) {
+  CLI::Option* date = app->add_option(
+      "--date", sun.date,
+      "ISO 8601 date-time with a zone (2026-06-21T12:00+02:00, 2026-06-21T10:00Z): the sun of that instant "
+      "at --latitude, --longitude");
+  CLI::Option* latitude = AddOptionalNumber(app, "--latitude", sun.latitude_deg,
+                                            "observer latitude in degrees, north positive (with --date)")
+                              ->check(RangeOf(-90.0, 90.0));
+  CLI::Option* longitude = AddOptionalNumber(app, "--longitude", sun.longitude_deg,
+                                             "observer longitude in degrees, east positive (with --date)")
+                               ->check(RangeOf(-180.0, 360.0));
+  CLI::Option* refraction = app->add_flag(
+      "--refraction", sun.refraction,
+      "the apparent (refracted, 1010 mbar, 10 C) sun elevation instead of the geometric one (with --date)");
+  for (CLI::Option* option : {latitude, longitude, refraction}) option->needs(date);
+  date->needs(latitude)->needs(longitude);
+  return date;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -206,6 +229,19 @@ int main(int argc, char** argv) {
           "(model reference only) [default: its samples option]")
       ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
 
+  // The sun from a date (sun_options.h) instead of --sun-elevation and --sun-azimuth, and the time-lapse.
+  CLI::Option* render_date = AddSunOptions(render_app, render.sun);
+  render_date->excludes(render_app->get_option("--sun-elevation"))->excludes(render_app->get_option("--sun-azimuth"));
+  CLI::Option* until = render_app->add_option(
+      "--until", render.sun.until, "time-lapse: frames from --date every --step up to this ISO 8601 date-time");
+  CLI::Option* step = render_app->add_option("--step", render.sun.step, "time-lapse step: 10min, 30s, 1h30min, 2d");
+  CLI::Option* mp4 = render_app->add_option(
+      "--mp4", render.sun.mp4_path, "time-lapse: also assemble the PNG frames into this H.264 MP4 (needs ffmpeg on PATH)");
+  AddNumber(render_app, "--fps", render.sun.fps, "frames per second of the --mp4")->check(RangeOf(0.1, 1000.0))->needs(mp4);
+  until->needs(render_date)->needs(step);
+  step->needs(until);
+  mp4->needs(until);
+
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
   AddCommonOptions(sample_app, common);
@@ -229,6 +265,8 @@ int main(int argc, char** argv) {
                         "azimuth between view and sun in degrees (0: towards the sun)"),
   };
   for (CLI::Option* option : single) grid->excludes(option);
+  // --date gives the single query's sun zenith (sun_options.h).
+  AddSunOptions(sample_app, sample.sun)->excludes(grid)->excludes(single[1]);
   // Monte Carlo settings: they become the model options samples= and target_rel_error= (models
   // that take no such option reject them).
   std::optional<std::uint64_t> sample_paths;
@@ -284,6 +322,7 @@ int main(int argc, char** argv) {
   bench_app->add_option("--height", bench.height, "frame height" + side_help)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
+  AddSunOptions(bench_app, bench.sun);  // the frame's sun from a date (sun_options.h)
 
   atmo::cli::PrecomputeCommand precompute;
   CLI::App* precompute_app =
@@ -314,7 +353,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     if (sample_app->parsed() && sample.grid_path.empty()) {
       for (CLI::Option* option : single) {
-        if (option->count() == 0) {
+        if (option->count() == 0 && !(option == single[1] && !sample.sun.date.empty())) {
           throw CLI::RequiredError(option->get_name() + " (or --grid)");
         }
       }

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "atmo/colour.h"
 #include "atmo/error.h"
@@ -78,6 +79,14 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
   settings.sun_elevation_deg = command.sun_elevation_deg;
   settings.sun_azimuth_deg = command.sun_azimuth_deg;
+  // --date: the sun of that instant and place instead (sun_options.h); a time-lapse starts there.
+  std::optional<SunAtInstant> dated_sun;
+  if (HasDate(command.sun)) {
+    dated_sun = SunAtDate(command.sun);
+    settings.sun_elevation_deg = dated_sun->position.elevation_deg;
+    settings.sun_azimuth_deg = dated_sun->position.azimuth_deg;
+    if (!command.yaw_deg && settings.camera.kind != CameraKind::kFisheye) settings.camera.yaw_deg = settings.sun_azimuth_deg;
+  }
   settings.terms.sun_disc = !command.no_sun_disc;
   settings.terms.ground = !command.no_ground;
   if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
@@ -95,6 +104,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // Fail fast, before precomputing anything, when an output cannot be written.
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
   if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
+  if (IsTimeLapse(command.sun)) TimeLapseInstants(command.sun, command.png_path);  // --until, --step, --mp4
 
   // --spp is the path count of a Monte Carlo model; deterministic models have nothing to sample.
   if (command.spp && common.model != "reference") {
@@ -138,11 +148,15 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     metadata.emplace_back(key, value);
   };
+  if (dated_sun) {
+    for (const auto& [key, value] : SunMetadata(command.sun, *dated_sun)) set_metadata(key, value);
+  }
   // Writes the outputs asked for from the model's image (per channel) and, for a Monte Carlo
   // model, its standard errors (same unit).
-  const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
+  const auto write_to = [&](const std::string& exr_path, const std::string& png_path, const Image& image,
+                            const Image* standard_error, double render_ms) {
     std::vector<std::string> written;
-    if (!command.exr_path.empty()) {
+    if (!exr_path.empty()) {
       set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
       Image exr_image = unit == RadianceUnit::kRelative ? image : ConvertImage(image, convert, exr_colour);
       if (standard_error != nullptr) {
@@ -153,10 +167,10 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         exr_image = WithStandardErrorChannels(with_error);
         exr_image.colour_space = with_error.radiance.colour_space;
       }
-      WriteExr(command.exr_path, exr_image, metadata);
-      written.push_back(command.exr_path);
+      WriteExr(exr_path, exr_image, metadata);
+      written.push_back(exr_path);
     }
-    if (!command.png_path.empty()) {
+    if (!png_path.empty()) {
       const Image display = legacy_png ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
       ToneMapping png_mapping = mapping;
       if (command.exposure) {
@@ -169,11 +183,59 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         png_mapping.exposure = parameters.exposure;
       }
       set_metadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
-      WritePng(command.png_path, display, png_mapping);
-      written.push_back(command.png_path);
+      WritePng(png_path, display, png_mapping);
+      written.push_back(png_path);
     }
     return written;
   };
+  const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
+    return write_to(command.exr_path, command.png_path, image, standard_error, render_ms);
+  };
+
+  // --until: a time-lapse. The model and its tables do not depend on the sun: made once above, each
+  // frame is a new view (model->View: its per-view tables) and its frame pass. On the gl backend
+  // each frame runs every pass (RenderOnGl) in one context.
+  if (IsTimeLapse(command.sun)) {
+#ifdef ATMO_HAVE_GL
+    const std::unique_ptr<gl::Context> context = on_gl ? std::make_unique<gl::Context>() : nullptr;
+#endif
+    const std::string description = Format("%dx%d %s, %s, %s", settings.camera.width, settings.camera.height,
+                                           std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(),
+                                           parameters.name.c_str());
+    const auto render_frame = [&](std::size_t, const SunAtInstant& sun, const std::string& exr_path,
+                                  const std::string& png_path) {
+      RenderSettings frame = settings;
+      frame.sun_elevation_deg = sun.position.elevation_deg;
+      frame.sun_azimuth_deg = sun.position.azimuth_deg;
+      for (const auto& [key, value] : SunMetadata(command.sun, sun)) set_metadata(key, value);
+      set_metadata("atmo:sunElevationDeg", Format("%.10g", frame.sun_elevation_deg));
+      set_metadata("atmo:sunAzimuthDeg", Format("%.10g", frame.sun_azimuth_deg));
+      const auto frame_start = std::chrono::steady_clock::now();
+      Image image;
+      Image standard_error;  // of a Monte Carlo model's radiance
+      if (model != nullptr && IsMonteCarlo(*model)) {
+        ProgressiveSettings progressive;
+        progressive.samples_per_pixel = command.spp.value_or(0);
+        const ProgressiveImage result = RenderProgressive(*model, frame, progressive);
+        set_metadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+        set_metadata("atmo:samplesPerPixel", std::to_string(result.samples_per_pixel));
+        image = result.radiance;
+        standard_error = result.standard_error;
+      } else if (model != nullptr) {
+        const std::unique_ptr<SkyView> sky =
+            model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+        image = RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance);
+      } else {
+#ifdef ATMO_HAVE_GL
+        image = RenderOnGl(*context, common, model_parameters, frame);
+#endif
+      }
+      const double frame_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start).count();
+      write_to(exr_path, png_path, image, standard_error.width > 0 ? &standard_error : nullptr, frame_ms);
+    };
+    return RunTimeLapse(command.sun, command.exr_path, command.png_path, description, render_frame);
+  }
 
   std::vector<std::string> written;
   Image image;

@@ -166,12 +166,17 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
 
   std::vector<SamplePoint> points;
   if (!command.grid_path.empty()) {
+    if (HasDate(command.sun)) throw Error("--date sets the sun of the single query; a --grid gives each row's sun_zenith_deg");
     points = ReadGrid(command.grid_path);
   } else {
-    if (!command.altitude_m || !command.sun_zenith_deg || !command.view_zenith_deg || !command.azimuth_deg) {
+    // --date: the sun zenith (90 - elevation) of that instant and place (sun_options.h); the
+    // azimuth stays the one between the view and the sun.
+    std::optional<double> sun_zenith_deg = command.sun_zenith_deg;
+    if (HasDate(command.sun)) sun_zenith_deg = 90.0 - SunAtDate(command.sun).position.elevation_deg;
+    if (!command.altitude_m || !sun_zenith_deg || !command.view_zenith_deg || !command.azimuth_deg) {
       throw Error("give --grid IN.csv, or all of --altitude, --sun-zenith, --view-zenith and --azimuth");
     }
-    SamplePoint point{*command.altitude_m, *command.sun_zenith_deg, *command.view_zenith_deg,
+    SamplePoint point{*command.altitude_m, *sun_zenith_deg, *command.view_zenith_deg,
                       *command.azimuth_deg, ""};
     CheckPoint(point, "");
     points.push_back(point);
