@@ -81,6 +81,22 @@ class CliFixture : public ::testing::Test {
     return result;
   }
 
+  // Runs `args`, which must fail: a non-zero exit, one `atmo: error:` line on stderr naming
+  // `message_part`, and each of `outputs` (written here with "previous NAME" first) untouched.
+  RunResult ExpectFailureKeepingOutputs(const std::string& args, const std::string& message_part,
+                                        const std::vector<std::string>& outputs) const {
+    for (const std::string& output : outputs) WriteFile(dir_ / output, "previous " + output);
+    const RunResult r = Run(args);
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_EQ(r.err.rfind("atmo: error:", 0), 0u) << r.err;
+    EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(message_part), std::string::npos) << r.err;
+    for (const std::string& output : outputs) {
+      EXPECT_EQ(ReadFile(dir_ / output), "previous " + output) << output;
+    }
+    return r;
+  }
+
   fs::path dir_;
 };
 

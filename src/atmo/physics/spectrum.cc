@@ -223,24 +223,17 @@ AtmosphereParameters MakeSpectral(const AtmosphereParameters& in, int count) {
     }
     target.scattering_per_m.assign(n, 0.0);
     target.absorption_per_m.assign(n, 0.0);
-    if (physical && rayleigh_like) {
-      const double k_s = FitScale(from, source.scattering_per_m, rayleigh_shape);
-      const double k_a = FitScale(from, source.absorption_per_m, rayleigh_shape);
+    // A medium with a known spectral shape: both coefficients scaled to fit the given values.
+    const auto scale_shape = [&](const auto& shape) {
+      const double k_s = FitScale(from, source.scattering_per_m, shape);
+      const double k_a = FitScale(from, source.absorption_per_m, shape);
       for (std::size_t i = 0; i < n; ++i) {
-        target.scattering_per_m[i] = k_s * rayleigh_shape(to[i]);
-        target.absorption_per_m[i] = k_a * rayleigh_shape(to[i]);
+        target.scattering_per_m[i] = k_s * shape(to[i]);
+        target.absorption_per_m[i] = k_a * shape(to[i]);
       }
-      return;
-    }
-    if (physical && ozone_like) {
-      const double k_s = FitScale(from, source.scattering_per_m, OzoneCrossSection);
-      const double k_a = FitScale(from, source.absorption_per_m, OzoneCrossSection);
-      for (std::size_t i = 0; i < n; ++i) {
-        target.scattering_per_m[i] = k_s * OzoneCrossSection(to[i]);
-        target.absorption_per_m[i] = k_a * OzoneCrossSection(to[i]);
-      }
-      return;
-    }
+    };
+    if (physical && rayleigh_like) return scale_shape(rayleigh_shape);
+    if (physical && ozone_like) return scale_shape(OzoneCrossSection);
     const AngstromLaw law = FitAngstrom(from, extinction);
     for (std::size_t i = 0; i < n; ++i) {
       const double e = law(to[i]);
