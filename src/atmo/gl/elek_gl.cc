@@ -31,7 +31,7 @@ const ComputeProgram& ElekProgram(const Context& context, const std::string& mai
   double ms = 0.0;
   const ComputeProgram& program =
       context.Program({"definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl",
-                       "multiple_scattering.glsl", "sky.glsl", "camera.glsl", "elek.glsl"},
+                       "multiple_scattering.glsl", "sun.glsl", "sky.glsl", "camera.glsl", "elek.glsl"},
                       main_source, name, &ms);
   compile_ms += ms;
   return program;

@@ -24,7 +24,8 @@ constexpr std::string_view kMultipleScatteringFiles[] = {"definitions.glsl", "ge
 constexpr std::string_view kSkyFiles[] = {"definitions.glsl",   "geometry.glsl",
                                           "medium.glsl",        "phase.glsl",
                                           "transmittance.glsl", "multiple_scattering.glsl",
-                                          "sky.glsl",           "camera.glsl"};
+                                          "sun.glsl",           "sky.glsl",
+                                          "camera.glsl"};
 
 // The declarations every table pass shares: one rgba32f output image (unit 0), the atmosphere.
 constexpr std::string_view kTablePassHeader = R"glsl(
