@@ -19,6 +19,7 @@
 #include "atmo/render.h"
 #include "cpu/camera.h"
 #include "cpu/path_tracer.h"
+#include "cpu/sun_disc.h"
 #include "models/reference_model.h"
 
 namespace atmo {
@@ -85,16 +86,10 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   const std::size_t pixel_count = views.size();
   const std::vector<double>& irradiance = model.parameters().solar_irradiance;
 
-  // The sun disc is deterministic: once per pixel.
-  std::vector<double> disc(pixel_count * 3, 0.0);
-  if (settings.terms.sun_disc) {
-    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, pixel_count),
-                              [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
-                                for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                                  if (!IsZero(views[i])) sky.SunDiscRadiance(views[i], std::span(&disc[3 * i], 3));
-                                }
-                              });
-  }
+  // The sun disc is deterministic: integrated over the pixels once (cpu/sun_disc.h), in the
+  // image's unit (times the solar irradiance).
+  Image disc(width, height, 3);
+  if (settings.terms.sun_disc) AddSunDisc(sky, settings.camera, irradiance, disc);
 
   std::vector<double> sum(pixel_count * 3, 0.0);
   std::vector<double> sum_sq(pixel_count * 3, 0.0);
@@ -144,7 +139,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
       for (std::size_t c = 0; c < 3; ++c) {
         const double mean = sum[3 * i + c] / n;
         const double variance = std::max(0.0, (sum_sq[3 * i + c] - n * mean * mean) / (n - 1.0));
-        result.radiance.pixels[3 * i + c] = static_cast<float>((mean + disc[3 * i + c]) * irradiance[c]);
+        result.radiance.pixels[3 * i + c] = static_cast<float>(mean * irradiance[c] + disc.pixels[3 * i + c]);
         result.standard_error.pixels[3 * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
       }
     }

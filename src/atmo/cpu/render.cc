@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "cpu/camera.h"
+#include "cpu/sun_disc.h"
 
 namespace atmo {
 namespace {
@@ -103,6 +104,10 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
   const float irradiance[3] = {static_cast<float>(solar_irradiance[0]), static_cast<float>(solar_irradiance[1]),
                                static_cast<float>(solar_irradiance[2])};
+  // The sun disc is integrated over the pixels by its own pass (cpu/sun_disc.h), not sampled at
+  // their centres.
+  RadianceTerms sky_terms = terms;
+  sky_terms.sun_disc = false;
 
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
@@ -118,12 +123,13 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
         }
       }
       float* row = &image.pixels[static_cast<std::size_t>(y) * width * 3];
-      sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * 3));
+      sky.RadianceBatch(views, sky_terms, std::span<float>(row, static_cast<std::size_t>(width) * 3));
       for (int x = 0; x < width; ++x) {
         for (int c = 0; c < 3; ++c) row[3 * x + c] *= irradiance[c];
       }
     }
   });
+  if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
   return image;
 }
 

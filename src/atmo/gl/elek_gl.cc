@@ -478,7 +478,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
   program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
   program.SetVec3("sun_direction", sun);
-  program.SetInt("sun_disc", render.terms.sun_disc ? 1 : 0);
+  program.SetInt("sun_disc", 0);  // added on the host, integrated over the pixels (AddSunDiscOnHost)
   program.SetVec3("solar_irradiance", shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
                                                    parameters.solar_irradiance[2]));
   BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
@@ -497,6 +497,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
     for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
     if (has_alpha) image.alpha[i] = rgba[4 * i + 3];
   }
+  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, tables.transmittance.Download2D(), render, image);
   return image;
 }
 
