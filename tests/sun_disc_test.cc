@@ -212,10 +212,11 @@ class SunDiscImage : public ::testing::Test {
 };
 
 // The disc integrates to the transmitted direct irradiance within 1 % from 256 pixels across, at
-// every elevation and wherever the disc falls between pixel centres. (Sampled at pixel centres
+// every elevation (at 0.1 degrees the ground hides the disc's lower part) and wherever the disc
+// falls between pixel centres. (Sampled at pixel centres
 // the error was -100 % at 256 and 512 px and +75 % at 1024 px.)
 TEST_F(SunDiscImage, EnergyIsTheTransmittedIrradianceAtAnyResolution) {
-  for (const double elevation : {30.0, 2.0, 0.3, 61.7}) {
+  for (const double elevation : {30.0, 2.0, 0.3, 0.1, 61.7}) {
     for (const double azimuth : {180.0, 137.31}) {
       const auto sky = model_->View(0.0, SunDirection(elevation, azimuth));
       const std::vector<double> expected = DiscIrradiance(*sky);
