@@ -229,8 +229,10 @@ void main() {
 }
 )glsl";
 
-// The frame: what RenderView asks of ElekModel's SkyView (Radiance + SunDiscRadiance; no
-// ground), with the same cosine clamps, times the solar irradiance.
+// The frame: what RenderView asks of ElekModel's SkyView (Radiance; no ground), with the same
+// cosine clamps, times the solar irradiance. The per-pixel SunDiscRadiance term (uniform
+// sun_disc) stays for interactive use; RenderElekGl sets it off and adds the disc on the host,
+// integrated over the pixels (AddSunDiscOnHost).
 constexpr const char* kFrameMain = R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
