@@ -57,7 +57,8 @@ class SkyView {
                                 std::span<double> standard_error) const;
   // Transmittance along `view` to the top of the atmosphere; 0 where the ray meets the ground.
   virtual void Transmittance(const glm::dvec3& view, std::span<double> out) const = 0;
-  // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance.
+  // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance: the
+  // disc of unit irradiance, limb darkened per channel (src/atmo/shared/sun.glsl).
   virtual void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const = 0;
 
   // Radiance reflected by the ground towards the observer along `view` (0 where the ray misses
