@@ -12,6 +12,7 @@
 #include "atmo/model.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"
+#include "shared/shared.h"
 
 namespace atmo {
 namespace {
@@ -120,8 +121,11 @@ TEST_F(HillaireEarth, SunDiscRadianceIsTheAttenuatedSolarDisc) {
   sky->SunDiscRadiance(DirectionFromZenithAzimuth(glm::radians(40.0) + 2.0 * alpha, 0.0), outside);
   const auto t = Transmittance(*sky, 40.0, 0.0);
   for (int c = 0; c < 3; ++c) {
-    // A uniform disc whose irradiance at the top of the atmosphere is 1.
-    EXPECT_NEAR(disc[c], t[c] / (2.0 * M_PI * (1.0 - std::cos(alpha))), 1e-9 * disc[c]);
+    // The limb-darkened disc whose irradiance at the top of the atmosphere is 1 (shared/sun.glsl),
+    // at its centre.
+    const double centre =
+        shared::GetSunDiscCentreRadiance(Preset("earth").wavelengths_nm[c], alpha, /*limb_darkening=*/true);
+    EXPECT_NEAR(disc[c], t[c] * centre, 1e-9 * disc[c]);
     EXPECT_EQ(outside[c], 0.0);
   }
   // A sun below the horizon has no disc.

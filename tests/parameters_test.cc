@@ -313,7 +313,7 @@ TEST(ParametersJson, WritesEveryKeyWithTwoSpaceIndent) {
         "\"ozone\"", "\"scattering_per_m\"", "\"absorption_per_m\"", "\"phase_function\"",
         "\"phase_g\"", "\"density\"", "\"lower\"", "\"upper\"", "\"width_m\"", "\"exp_term\"",
         "\"exp_scale_per_m\"", "\"linear_term_per_m\"", "\"constant_term\"", "\"ground_albedo\"",
-        "\"sun_angular_radius_rad\"", "\"solar_irradiance\"", "\"exposure\"",
+        "\"sun_angular_radius_rad\"", "\"sun_limb_darkening\"", "\"solar_irradiance\"", "\"exposure\"",
         "\"observer_altitude_m\"", "\"cornette_shanks\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }

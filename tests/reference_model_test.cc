@@ -357,11 +357,15 @@ TEST(ReferenceModel, InterfaceQueries) {
     EXPECT_GT(se[c], 0.0);
     EXPECT_EQ(t[c], 0.0);
   }
-  // The sun disc: transmittance over the disc's solid angle, 0 off the disc.
+  // The sun disc: at its centre the transmittance times the limb-darkened disc's centre radiance
+  // (shared/sun.glsl: irradiance 1), 0 off the disc.
   sky->SunDiscRadiance(Direction(40.0, 0.0), l);
   sky->Transmittance(Direction(40.0, 0.0), t);
-  const double solid_angle = 2.0 * kPi * (1.0 - std::cos(model->parameters().sun_angular_radius_rad));
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(l[c], t[c] / solid_angle, 1e-9 * l[c]);
+  const AtmosphereParameters& p = model->parameters();
+  for (int c = 0; c < 3; ++c) {
+    const double centre = shared::GetSunDiscCentreRadiance(p.wavelengths_nm[c], p.sun_angular_radius_rad, true);
+    EXPECT_NEAR(l[c], t[c] * centre, 1e-9 * l[c]);
+  }
   sky->SunDiscRadiance(Direction(50.0, 0.0), l);
   for (int c = 0; c < 3; ++c) EXPECT_EQ(l[c], 0.0);
   // Above the atmosphere: a ray that misses it sees nothing and is not attenuated.

@@ -463,7 +463,13 @@ TEST_F(SimplePreset, FiniteAndNonNegativeEverywhere) {
 
 TEST_F(SimplePreset, SunDiscIsTheAttenuatedUnitIrradianceDisc) {
   const double alpha = model_->parameters().sun_angular_radius_rad;
-  const double solid_angle = 2.0 * kPi * (1.0 - std::cos(alpha));
+  // The limb-darkened disc of unit irradiance (shared/sun.glsl): centre radiance L_c = 1 / (solid
+  // angle x the disc's mean limb darkening), so L_c x solid angle x mean = 1.
+  std::vector<double> solid_angle(3);
+  for (int c = 0; c < 3; ++c) {
+    solid_angle[c] = 2.0 * kPi * (1.0 - std::cos(alpha)) *
+                     shared::GetSunDiscMeanLimbDarkening(model_->parameters().wavelengths_nm[c], alpha, true);
+  }
   const auto sky = model_->View(-0.3, Sun(30.0));
   const auto disc = Query(&SkyView::SunDiscRadiance, *sky, Sun(30.0));
   const auto transmittance = Query(&SkyView::Transmittance, *sky, Sun(30.0));
@@ -473,14 +479,17 @@ TEST_F(SimplePreset, SunDiscIsTheAttenuatedUnitIrradianceDisc) {
                               DirectionFromZenithAzimuth(glm::radians(30.0) + 1.01 * alpha, 0.0));
   for (int c = 0; c < 3; ++c) {
     // Solid angle times radiance is the irradiance 1, attenuated by T(l(p, s)) = exp(-sigma 0.3 / cos 30).
-    EXPECT_NEAR(disc[c] * solid_angle, transmittance[c], 1e-9);
+    EXPECT_NEAR(disc[c] * solid_angle[c], transmittance[c], 1e-9);
     EXPECT_NEAR(transmittance[c], std::exp(-kSeedSigma[c] * 0.3 / std::cos(glm::radians(30.0))), 1e-14);
-    EXPECT_NEAR(edge_in[c], disc[c], 1e-3 * disc[c]);  // the view transmittance barely changes
+    // At 0.99 alpha the limb darkening at mu = sqrt(1 - 0.99^2) (the view transmittance barely changes).
+    const double f = shared::GetSunLimbDarkening(model_->parameters().wavelengths_nm[c], std::sqrt(1.0 - 0.99 * 0.99));
+    EXPECT_NEAR(edge_in[c], f * disc[c], 2e-3 * disc[c]);
     EXPECT_EQ(edge_out[c], 0.0);
   }
   // From above the plane the disc is unattenuated; a sun below the plane seen from inside is not seen.
   const auto above = model_->View(1.0, Sun(30.0));
-  for (double v : Query(&SkyView::SunDiscRadiance, *above, Sun(30.0))) EXPECT_NEAR(v * solid_angle, 1.0, 1e-9);
+  const auto unattenuated = Query(&SkyView::SunDiscRadiance, *above, Sun(30.0));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(unattenuated[c] * solid_angle[c], 1.0, 1e-9);
   const auto night = model_->View(-0.3, Sun(120.0));
   for (double v : Query(&SkyView::SunDiscRadiance, *night, Sun(120.0))) EXPECT_EQ(v, 0.0);
 }

@@ -33,6 +33,11 @@ inline shared::AtmosphereParameters EarthLike() {
   a.absorption_extinction = shared::vec3(0.65e-6, 1.881e-6, 0.085e-6);
   a.ground_albedo = shared::vec3(0.3);
   a.sun_angular_radius = 0.004675;
+  a.wavelength = shared::vec3(680.0, 550.0, 440.0);
+  a.sun_limb_darkening = 1;
+  for (int i = 0; i < 3; ++i) {
+    a.sun_centre_radiance[i] = shared::GetSunDiscCentreRadiance(a.wavelength[i], a.sun_angular_radius, true);
+  }
   return a;
 }
 
@@ -50,6 +55,11 @@ inline shared::AtmosphereParameters SmallHomogeneous() {
   a.mie_g = 0.5;
   a.ground_albedo = shared::vec3(0.0);
   a.sun_angular_radius = 0.004675;
+  a.wavelength = shared::vec3(680.0, 550.0, 440.0);
+  a.sun_limb_darkening = 1;
+  for (int i = 0; i < 3; ++i) {
+    a.sun_centre_radiance[i] = shared::GetSunDiscCentreRadiance(a.wavelength[i], a.sun_angular_radius, true);
+  }
   return a;
 }
 

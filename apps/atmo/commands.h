@@ -90,6 +90,7 @@ struct RenderCommand {
   bool no_dither = false;
   int png_bits = 8;
   bool no_sun_disc = false;
+  std::optional<double> sun_size_deg;  // the sun's angular diameter; default: 2 x sun_angular_radius_rad
   bool no_ground = false;
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG

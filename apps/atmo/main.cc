@@ -211,6 +211,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({8, 16}))
       ->capture_default_str();
   render_app->add_flag("--no-sun-disc", render.no_sun_disc, "leave the sun disc out");
+  AddOptionalNumber(render_app, "--sun-size", render.sun_size_deg,
+                    "angular diameter of the sun disc in degrees, in (0, 20] [default: the preset's]");
   render_app->add_flag("--no-ground", render.no_ground,
                        "leave the light reflected by the ground out (rays that meet it show only the air in front)");
   render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();

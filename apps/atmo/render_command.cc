@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <optional>
 
 #include "atmo/colour.h"
@@ -52,7 +53,12 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
   const bool on_gl = common.backend == "gl";
-  const AtmosphereParameters parameters = LoadParameters(common);
+  AtmosphereParameters parameters = LoadParameters(common);
+  if (command.sun_size_deg) {
+    const double d = *command.sun_size_deg;
+    if (!(d > 0.0 && d <= 20.0)) throw Error("--sun-size must be in (0, 20] degrees (got " + Format("%g", d) + ")");
+    parameters.sun_angular_radius_rad = 0.5 * d * std::numbers::pi / 180.0;
+  }
   const RadianceUnit unit = ParseRadianceUnit(command.unit);
   if (command.xyz && unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
   // The models answer per unit solar irradiance; in physical units the colour conversion brings
@@ -137,6 +143,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
       {"atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg)},
       {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
+      {"atmo:sunAngularDiameterDeg", Format("%.10g", 2.0 * parameters.sun_angular_radius_rad * 180.0 / std::numbers::pi)},
       {"atmo:modelOptions", JoinOptions(common.options)},
   };
   const auto set_metadata = [&](const std::string& key, const std::string& value) {

@@ -13,6 +13,7 @@
 // ground, the ground's own reflected light.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -56,7 +57,8 @@ class SkyView {
                                 std::span<double> standard_error) const;
   // Transmittance along `view` to the top of the atmosphere; 0 where the ray meets the ground.
   virtual void Transmittance(const glm::dvec3& view, std::span<double> out) const = 0;
-  // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance.
+  // Radiance of the sun disc along `view` (0 off the disc), attenuated by the transmittance: the
+  // disc of unit irradiance, limb darkened per channel (src/atmo/shared/sun.glsl).
   virtual void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const = 0;
 
   // Radiance reflected by the ground towards the observer along `view` (0 where the ray misses
@@ -77,15 +79,23 @@ class SkyView {
   double altitude_m() const { return altitude_m_; }
   const glm::dvec3& sun_direction() const { return sun_direction_; }
   std::size_t channel_count() const { return channel_count_; }
+  // The angular radius of the sun disc that SunDiscRadiance draws (radians); NaN for a view that
+  // was made without it (the renderers' disc pass then throws atmo::Error).
+  double sun_angular_radius_rad() const { return sun_angular_radius_rad_; }
 
  protected:
-  SkyView(double altitude_m, const glm::dvec3& sun_direction, std::size_t channel_count)
-      : altitude_m_(altitude_m), sun_direction_(sun_direction), channel_count_(channel_count) {}
+  SkyView(double altitude_m, const glm::dvec3& sun_direction, std::size_t channel_count,
+          double sun_angular_radius_rad = std::numeric_limits<double>::quiet_NaN())
+      : altitude_m_(altitude_m),
+        sun_direction_(sun_direction),
+        channel_count_(channel_count),
+        sun_angular_radius_rad_(sun_angular_radius_rad) {}
 
  private:
   double altitude_m_;
   glm::dvec3 sun_direction_;
   std::size_t channel_count_;
+  double sun_angular_radius_rad_;
 };
 
 class Model {

@@ -87,6 +87,9 @@ struct AtmosphereParameters {
   Medium ozone;
   std::vector<double> ground_albedo;  // per channel, in [0, 1]
   double sun_angular_radius_rad = 0.004675;
+  // The sun disc's limb darkening: Neckel and Labs 1994's per-wavelength centre-to-limb law
+  // (src/atmo/shared/sun.glsl); false: a uniform disc. Either way the disc's irradiance is 1.
+  bool sun_limb_darkening = true;
   // Per channel: the solar irradiance that rendered images multiply the model's radiance (per
   // unit irradiance) by. 1 gives images in sr^-1 per unit solar irradiance.
   std::vector<double> solar_irradiance;

@@ -53,8 +53,11 @@ constexpr int kMaxImageSide = 16384;
 Image Render(const Model& model, const RenderSettings& settings);
 
 // Renders a prepared view (its per-view tables already built) through a camera: the frame pass
-// alone. Radiance is multiplied per channel by `solar_irradiance` (one value per channel). Same
-// errors as Render for the camera; `solar_irradiance` has one value per channel of the view.
+// alone. Radiance is multiplied per channel by `solar_irradiance` (one value per channel). With
+// terms.sun_disc the disc is not sampled at pixel centres but integrated over each pixel by its
+// own pass (src/atmo/cpu/sun_disc.h), so that its energy in the image is the transmitted
+// irradiance at any resolution and it is round. Same errors as Render for the camera;
+// `solar_irradiance` has one value per channel of the view.
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance);
 
@@ -62,7 +65,7 @@ Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& 
 // `samples_per_pixel` paths (per channel) in passes, the first of `first_pass_samples` paths and
 // each later one doubling the total (4, 8, 16, ... up to the total). With terms.ground each path
 // also scores the light reflected at the view ray's first ground hit, so pixels on the ground show
-// it; the sun disc is deterministic (standard error 0). Pixel (x, y) depends only on the model's
+// it; the sun disc is deterministic (standard error 0), integrated over the pixels as in RenderView. Pixel (x, y) depends only on the model's
 // seed, its view direction and the path count: the image is the same for any thread count, and
 // its pass k is a prefix of the final estimate.
 //

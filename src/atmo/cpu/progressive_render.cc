@@ -19,6 +19,7 @@
 #include "atmo/render.h"
 #include "cpu/camera.h"
 #include "cpu/path_tracer.h"
+#include "cpu/sun_disc.h"
 #include "models/reference_model.h"
 
 namespace atmo {
@@ -82,16 +83,10 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   const std::size_t pixel_count = views.size();
   const std::vector<double>& irradiance = model.parameters().solar_irradiance;
 
-  // The sun disc is deterministic: once per pixel.
-  std::vector<double> disc(pixel_count * nc, 0.0);
-  if (settings.terms.sun_disc) {
-    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, pixel_count),
-                              [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
-                                for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                                  if (!IsZero(views[i])) sky.SunDiscRadiance(views[i], std::span(&disc[nc * i], nc));
-                                }
-                              });
-  }
+  // The sun disc is deterministic: integrated over the pixels once (cpu/sun_disc.h), in the
+  // image's unit (times the solar irradiance).
+  Image disc(width, height, static_cast<int>(nc));
+  if (settings.terms.sun_disc) AddSunDisc(sky, settings.camera, irradiance, disc);
 
   std::vector<double> sum(pixel_count * nc, 0.0);
   std::vector<double> sum_sq(pixel_count * nc, 0.0);
@@ -141,7 +136,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
       for (std::size_t c = 0; c < nc; ++c) {
         const double mean = sum[nc * i + c] / n;
         const double variance = std::max(0.0, (sum_sq[nc * i + c] - n * mean * mean) / (n - 1.0));
-        result.radiance.pixels[nc * i + c] = static_cast<float>((mean + disc[nc * i + c]) * irradiance[c]);
+        result.radiance.pixels[nc * i + c] = static_cast<float>(mean * irradiance[c] + disc.pixels[nc * i + c]);
         result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
       }
     }

@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "cpu/camera.h"
+#include "cpu/sun_disc.h"
 
 namespace atmo {
 namespace {
@@ -100,6 +101,10 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
   const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
   const std::vector<float> irradiance(solar_irradiance.begin(), solar_irradiance.end());
+  // The sun disc is integrated over the pixels by its own pass (cpu/sun_disc.h), not sampled at
+  // their centres.
+  RadianceTerms sky_terms = terms;
+  sky_terms.sun_disc = false;
 
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
@@ -115,12 +120,13 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
         }
       }
       float* row = &image.pixels[static_cast<std::size_t>(y) * width * n];
-      sky.RadianceBatch(views, terms, std::span<float>(row, static_cast<std::size_t>(width) * n));
+      sky.RadianceBatch(views, sky_terms, std::span<float>(row, static_cast<std::size_t>(width) * n));
       for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
         for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
       }
     }
   });
+  if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
   return image;
 }
 

@@ -31,7 +31,7 @@ const ComputeProgram& ElekProgram(const Context& context, const std::string& mai
   double ms = 0.0;
   const ComputeProgram& program =
       context.Program({"definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl",
-                       "multiple_scattering.glsl", "sky.glsl", "camera.glsl", "elek.glsl"},
+                       "multiple_scattering.glsl", "sun.glsl", "sky.glsl", "camera.glsl", "elek.glsl"},
                       main_source, name, &ms);
   compile_ms += ms;
   return program;
@@ -229,8 +229,10 @@ void main() {
 }
 )glsl";
 
-// The frame: what RenderView asks of ElekModel's SkyView (Radiance + SunDiscRadiance; no
-// ground), with the same cosine clamps, times the solar irradiance.
+// The frame: what RenderView asks of ElekModel's SkyView (Radiance; no ground), with the same
+// cosine clamps, times the solar irradiance. The per-pixel SunDiscRadiance term (uniform
+// sun_disc) stays for interactive use; RenderElekGl sets it off and adds the disc on the host,
+// integrated over the pixels (AddSunDiscOnHost).
 constexpr const char* kFrameMain = R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
@@ -478,7 +480,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
   program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
   program.SetVec3("sun_direction", sun);
-  program.SetInt("sun_disc", render.terms.sun_disc ? 1 : 0);
+  program.SetInt("sun_disc", 0);  // added on the host, integrated over the pixels (AddSunDiscOnHost)
   program.SetVec3("solar_irradiance", shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
                                                    parameters.solar_irradiance[2]));
   BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
@@ -497,6 +499,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
     for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
     if (has_alpha) image.alpha[i] = rgba[4 * i + 3];
   }
+  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, tables.transmittance.Download2D(), render, image);
   return image;
 }
 

@@ -64,8 +64,9 @@ shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_
 void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* timings = nullptr);
 
 // The tables on GL, then the frame pass: per pixel the camera ray (GetCameraRayDirection),
-// GetElekRadiance (what ElekModel's SkyView answers) plus GetSunDiscRadiance when
-// render.terms.sun_disc, times the solar irradiance; alpha (0 outside the circle) for a fisheye
+// GetElekRadiance (what ElekModel's SkyView answers) times the solar irradiance, and the sun disc
+// when render.terms.sun_disc, added on the host integrated over the pixels (AddSunDiscOnHost,
+// gl/hillaire_gl.h); alpha (0 outside the circle) for a fisheye
 // camera, as atmo::Render. Elek has no lit ground, so terms.ground adds nothing, as on the CPU.
 // The frame pass is timed as frame_WxH.
 Image RenderElekGl(const Context& context, const AtmosphereParameters& parameters, const ElekSettings& settings,

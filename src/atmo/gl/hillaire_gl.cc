@@ -9,6 +9,7 @@
 
 #include "atmo/error.h"
 #include "cpu/camera.h"
+#include "cpu/sun_disc.h"
 #include "gl/program.h"
 #include "physics/shared_parameters.h"
 
@@ -24,7 +25,8 @@ constexpr std::string_view kMultipleScatteringFiles[] = {"definitions.glsl", "ge
 constexpr std::string_view kSkyFiles[] = {"definitions.glsl",   "geometry.glsl",
                                           "medium.glsl",        "phase.glsl",
                                           "transmittance.glsl", "multiple_scattering.glsl",
-                                          "sky.glsl",           "camera.glsl"};
+                                          "sun.glsl",           "sky.glsl",
+                                          "camera.glsl"};
 
 // The declarations every table pass shares: one rgba32f output image (unit 0), the atmosphere.
 constexpr std::string_view kTablePassHeader = R"glsl(
@@ -544,6 +546,21 @@ void main() {
                                  rgb(aerial_transmittance_.DownloadRgba()));
 }
 
+void AddSunDiscOnHost(const AtmosphereParameters& parameters, const shared::Texture2D& transmittance_km,
+                      const RenderSettings& render, Image& image) {
+  const shared::AtmosphereParameters km = ToSharedParameters(parameters, 0, 1000.0);
+  const double r_km = (parameters.ground_radius_m + render.altitude_m) / 1000.0;
+  const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
+  AddSunDisc(
+      render.camera, sun, parameters.sun_angular_radius_rad,
+      [&](const glm::dvec3& view, std::span<double> out) {
+        const shared::vec3 l = shared::GetSunDiscRadiance(km, transmittance_km, r_km, shared::ClampCosine(view.z),
+                                                          glm::dot(view, sun));
+        for (int c = 0; c < 3; ++c) out[c] = l[c];
+      },
+      parameters.solar_irradiance, image);
+}
+
 Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
                        const HillaireSettings& settings, const RenderSettings& render, PassTimings* timings) {
   ValidateCamera(render.camera);
@@ -554,8 +571,13 @@ Image RenderHillaireGl(const Context& context, const AtmosphereParameters& param
   sky.Precompute(timings);
   sky.SetView(render.altitude_m, SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg), render.terms.ground,
               timings);
-  sky.RenderFrame(ToSharedCamera(render.camera), render.terms, timings);
-  return sky.ReadFrame();
+  // The frame without the disc; the host adds it integrated over the pixels (AddSunDiscOnHost).
+  RadianceTerms frame_terms = render.terms;
+  frame_terms.sun_disc = false;
+  sky.RenderFrame(ToSharedCamera(render.camera), frame_terms, timings);
+  Image image = sky.ReadFrame();
+  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, sky.ReadTransmittance(), render, image);
+  return image;
 }
 
 }  // namespace atmo::gl

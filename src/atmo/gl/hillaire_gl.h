@@ -136,8 +136,17 @@ class HillaireGl {
   bool frame_has_alpha_ = false;
 };
 
-// Renders one frame of model hillaire on the GL backend (a HillaireGl through all passes):
-// what atmo::Render gives on the CPU. Throws atmo::Error (one line) for what atmo::Render rejects.
+// The images' sun disc on the GL backend: the frame pass leaves it out and the host adds it after
+// read-back with the CPU's pass (cpu/sun_disc.h: integrated over each pixel, the same strata as
+// on the CPU), evaluating shared::GetSunDiscRadiance in double on the GPU's transmittance table
+// (read back, km units). The disc needs up to ~10^5 radiances in the few pixels it covers, so
+// this costs far less than a read-back; it keeps one disc pass for both backends.
+// (RenderFrame with terms.sun_disc still draws a per-pixel disc on the GPU, for interactive use.)
+void AddSunDiscOnHost(const AtmosphereParameters& parameters, const shared::Texture2D& transmittance_km,
+                      const RenderSettings& render, Image& image);
+
+// Renders one frame of model hillaire on the GL backend (a HillaireGl through all passes, the sun
+// disc by AddSunDiscOnHost): what atmo::Render gives on the CPU. Throws atmo::Error (one line) for what atmo::Render rejects.
 Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
                        const HillaireSettings& settings, const RenderSettings& render,
                        PassTimings* timings = nullptr);

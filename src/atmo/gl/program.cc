@@ -104,6 +104,9 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   program.SetVec3(p + "absorption_extinction", a.absorption_extinction);
   program.SetVec3(p + "ground_albedo", a.ground_albedo);
   program.SetFloat(p + "sun_angular_radius", a.sun_angular_radius);
+  program.SetVec3(p + "wavelength", a.wavelength);
+  program.SetInt(p + "sun_limb_darkening", a.sun_limb_darkening);
+  program.SetVec3(p + "sun_centre_radiance", a.sun_centre_radiance);
 }
 
 // Every member of CameraParameters in definitions.glsl, in its order.

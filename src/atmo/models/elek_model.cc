@@ -235,7 +235,7 @@ shared::vec3 ElekModel::BatchRadiance(const Batch& batch, double r, double mu, d
 class ElekSkyView final : public SkyView {
  public:
   ElekSkyView(const ElekModel& model, double altitude_m, const glm::dvec3& sun)
-      : SkyView(altitude_m, sun, model.channel_count()),
+      : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
         model_(model),
         r_(model.parameters().ground_radius_m + altitude_m),
         mu_s_(shared::ClampCosine(sun.z)) {}

@@ -144,7 +144,7 @@ shared::Texture2D HillaireModel::ComputeSkyViewLut(const Batch& batch, double r,
 class HillaireSkyView final : public SkyView {
  public:
   HillaireSkyView(const HillaireModel& model, double altitude_m, const glm::dvec3& sun)
-      : SkyView(altitude_m, sun, model.channel_count()),
+      : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
         model_(model),
         r_(model.parameters().ground_radius_m + altitude_m),
         mu_s_(shared::ClampCosine(sun.z)) {

@@ -23,7 +23,8 @@
 //   ground_irradiance_lut=32          sky irradiance of the ground vs sun zenith cosine (images)
 //   ground_irradiance_directions=64   hemisphere directions per texel
 //   ground_irradiance_samples=16      ray-march steps per direction
-// The sun disc is evaluated per pixel at full resolution, attenuated by the view transmittance.
+// The sun disc (SunDiscRadiance) is the limb-darkened disc of shared/sun.glsl attenuated by the
+// view transmittance, at full resolution; images integrate it over the pixels (cpu/sun_disc.h).
 // For images the ground is a Lambertian surface lit by the attenuated sun and the sky; each view
 // keeps a copy of its sky-view table with that light added below the horizon.
 // Channels are computed three at a time: a preset with N channels keeps ceil(N/3) sets of tables.

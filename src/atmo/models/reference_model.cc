@@ -7,6 +7,7 @@
 
 #include "atmo/error.h"
 #include "models/model_options.h"
+#include "shared/shared.h"
 
 namespace atmo {
 namespace {
@@ -75,7 +76,7 @@ std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec
 }
 
 ReferenceSkyView::ReferenceSkyView(const ReferenceModel& model, double altitude_m, const glm::dvec3& sun)
-    : SkyView(altitude_m, sun, model.channel_count()),
+    : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
       model_(model),
       origin_(model.tracer().ObserverPosition(altitude_m)) {}
 
@@ -184,15 +185,20 @@ void ReferenceSkyView::Transmittance(const glm::dvec3& view, std::span<double> o
 }
 
 void ReferenceSkyView::SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const {
-  // A uniform disc of unit irradiance: radiance 1 / solid angle, attenuated along the view.
-  const double cos_alpha = std::cos(model_.parameters().sun_angular_radius_rad);
+  // The limb-darkened disc of unit irradiance (shared/sun.glsl), attenuated along the view.
+  const AtmosphereParameters& p = model_.parameters();
   const glm::dvec3 v = glm::normalize(view);
-  if (glm::dot(v, sun_direction()) < cos_alpha) {
+  const double mu = shared::GetSunDiscSurfaceCosine(glm::dot(v, sun_direction()), p.sun_angular_radius_rad);
+  if (mu < 0.0) {
     std::fill(out.begin(), out.end(), 0.0);
     return;
   }
   Transmittance(v, out);
-  for (double& value : out) value /= 2.0 * 3.14159265358979323846 * (1.0 - cos_alpha);
+  for (std::size_t c = 0; c < out.size(); ++c) {
+    const double wavelength_nm = p.wavelengths_nm[c];
+    out[c] *= shared::GetSunDiscCentreRadiance(wavelength_nm, p.sun_angular_radius_rad, p.sun_limb_darkening) *
+              (p.sun_limb_darkening ? shared::GetSunLimbDarkening(wavelength_nm, mu) : 1.0);
+  }
 }
 
 }  // namespace atmo

@@ -13,7 +13,8 @@
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
-// is computed by quadrature; the sun disc radiance is the transmittance over the disc's solid angle.
+// is computed by quadrature; the sun disc radiance is the limb-darkened disc of unit irradiance
+// (shared/sun.glsl) times the transmittance.
 // GroundRadiance is a Monte Carlo estimate too (`samples` paths that start with the view ray's
 // first ground hit: the Lambertian ground lit by the attenuated sun and by the sky, all orders),
 // so images through the generic renderer show the ground; RenderProgressive (atmo/render.h) traces

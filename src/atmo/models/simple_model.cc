@@ -61,6 +61,7 @@ SimpleModel::SimpleModel(const AtmosphereParameters& parameters, const ModelOpti
   for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
     Batch batch;
     batch.extinction = shared::vec3(0.0);
+    batch.sun = ToSharedParameters(parameters, b);
     for (const auto& [medium, key] : media) {
       if (!medium->present()) continue;
       const double density = ConstantDensityBelowPlane(medium->density, key);
@@ -79,10 +80,9 @@ SimpleModel::SimpleModel(const AtmosphereParameters& parameters, const ModelOpti
 class SimpleSkyView final : public SkyView {
  public:
   SimpleSkyView(const SimpleModel& model, double altitude_m, const glm::dvec3& sun)
-      : SkyView(altitude_m, sun, model.channel_count()),
+      : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
         model_(model),
-        observer_(0.0, 0.0, altitude_m),
-        sun_angular_radius_(model.parameters().sun_angular_radius_rad) {}
+        observer_(0.0, 0.0, altitude_m) {}
 
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
     ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
@@ -102,8 +102,7 @@ class SimpleSkyView final : public SkyView {
   void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
     ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
       const SimpleModel::Batch& batch = model_.batches()[b];
-      return shared::GetSimpleSunDiscRadiance(kUp, observer_, view, sun_direction(), batch.extinction,
-                                              sun_angular_radius_);
+      return shared::GetSimpleSunDiscRadiance(kUp, observer_, view, sun_direction(), batch.extinction, batch.sun);
     });
   }
 
@@ -135,7 +134,6 @@ class SimpleSkyView final : public SkyView {
 
   const SimpleModel& model_;
   shared::vec3 observer_;  // p: the altitude is the signed height above the boundary plane
-  double sun_angular_radius_;
 };
 
 std::unique_ptr<SkyView> SimpleModel::View(double altitude_m, const glm::dvec3& sun_direction) const {

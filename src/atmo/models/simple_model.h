@@ -42,6 +42,7 @@ class SimpleModel final : public Model {
   struct Batch {
     shared::vec3 extinction;     // sigma_t: sum over media of scattering + absorption
     std::vector<ScatteringMedium> media;  // the scattering media (absent ones left out)
+    shared::AtmosphereParameters sun;     // the sun disc's members (wavelengths, centre radiance)
   };
   const std::vector<Batch>& batches() const { return batches_; }
 

@@ -191,6 +191,7 @@ std::string ToJson(const AtmosphereParameters& p) {
   j["ozone"] = MediumToJson(p.ozone);
   j["ground_albedo"] = p.ground_albedo;
   j["sun_angular_radius_rad"] = p.sun_angular_radius_rad;
+  j["sun_limb_darkening"] = p.sun_limb_darkening;
   j["solar_irradiance"] = p.solar_irradiance;
   j["exposure"] = p.exposure;
   j["observer_altitude_m"] = p.observer_altitude_m;
@@ -207,7 +208,7 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   if (!root.is_object()) Fail("the parameters must be a JSON object");
   CheckKeys(root, "",
             {"preset", "geometry", "ground_radius_m", "top_radius_m", "wavelengths_nm", "rayleigh",
-             "mie", "ozone", "ground_albedo", "sun_angular_radius_rad", "solar_irradiance",
+             "mie", "ozone", "ground_albedo", "sun_angular_radius_rad", "sun_limb_darkening", "solar_irradiance",
              "exposure", "observer_altitude_m"});
 
   std::string preset_name(kDefaultPreset);
@@ -238,6 +239,10 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   }
   ReadPerChannel(root, "", "ground_albedo", channel_count, p.ground_albedo);
   ReadNumber(root, "", "sun_angular_radius_rad", p.sun_angular_radius_rad);
+  if (const auto it = root.find("sun_limb_darkening"); it != root.end()) {
+    if (!it->is_boolean()) Fail("sun_limb_darkening must be true or false");
+    p.sun_limb_darkening = it->get<bool>();
+  }
   ReadPerChannel(root, "", "solar_irradiance", channel_count, p.solar_irradiance);
   ReadNumber(root, "", "exposure", p.exposure);
   ReadNumber(root, "", "observer_altitude_m", p.observer_altitude_m);

@@ -65,6 +65,14 @@ shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, s
   a.absorption_extinction = Batch(p.ozone.absorption_per_m, first, unit);
   a.ground_albedo = Batch(p.ground_albedo, first, 1.0);
   a.sun_angular_radius = p.sun_angular_radius_rad;
+  // The sun's limb darkening is evaluated from each channel's wavelength (sun.glsl), and its
+  // centre radiance, an integral over the disc, once here.
+  a.wavelength = Batch(p.wavelengths_nm, first, 1.0);
+  a.sun_limb_darkening = p.sun_limb_darkening ? 1 : 0;
+  for (int i = 0; i < 3; ++i) {
+    a.sun_centre_radiance[i] =
+        shared::GetSunDiscCentreRadiance(a.wavelength[i], a.sun_angular_radius, p.sun_limb_darkening);
+  }
   return a;
 }
 

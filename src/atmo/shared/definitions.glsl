@@ -45,6 +45,9 @@ struct AtmosphereParameters {
   vec3 absorption_extinction;     // ozone absorption per length, at density 1
   vec3 ground_albedo;             // Lambertian, unitless
   Number sun_angular_radius;      // radians
+  vec3 wavelength;                // nm, per channel (the sun's limb darkening, sun.glsl)
+  int sun_limb_darkening;         // 1: Neckel and Labs 1994's limb darkening; 0: a uniform disc
+  vec3 sun_centre_radiance;       // sr^-1 per unit irradiance: GetSunDiscCentreRadiance per channel
 };
 
 // Cameras (camera.glsl turns a pixel into a view direction).

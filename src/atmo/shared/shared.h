@@ -19,6 +19,7 @@ namespace {
 #include "phase.glsl"
 #include "transmittance.glsl"
 #include "multiple_scattering.glsl"
+#include "sun.glsl"
 #include "sky.glsl"
 #include "camera.glsl"
 #include "elek.glsl"

@@ -156,13 +156,14 @@ vec3 GetSimpleViewTransmittance(IN(vec3) u, IN(vec3) p, IN(vec3) d, IN(vec3) sig
 }
 
 // The seed's direct light S(d) T(l(p, d)) for a sun disc of angular radius alpha and unit
-// irradiance: a uniform disc has radiance 1 / (solid angle) = 1 / (2 pi (1 - cos alpha)), written
-// 1 / (4 pi sin^2(alpha / 2)) to avoid the cancellation of 1 - cos alpha for small alpha.
+// irradiance: the limb-darkened disc of sun.glsl (a uniform one, radiance 1 / (solid angle), with
+// the atmosphere's sun_limb_darkening = 0), with the per-channel wavelengths and centre radiance
+// of `sun` (its other members are not used).
 vec3 GetSimpleSunDiscRadiance(IN(vec3) u, IN(vec3) p, IN(vec3) d, IN(vec3) s, IN(vec3) sigma_t,
-    Number sun_angular_radius) {
-  if (dot(d, s) < cos(sun_angular_radius)) {
+    IN(AtmosphereParameters) sun) {
+  vec3 radiance = GetSunDiscUnattenuatedRadiance(sun, dot(d, s));
+  if (radiance == vec3(0.0)) {
     return vec3(0.0);
   }
-  Number half_sin = sin(0.5 * sun_angular_radius);
-  return GetSimpleViewTransmittance(u, p, d, sigma_t) / (4.0 * kPi * half_sin * half_sin);
+  return GetSimpleViewTransmittance(u, p, d, sigma_t) * radiance;
 }

@@ -96,18 +96,16 @@ vec3 GetViewTransmittance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceT
   return GetTransmittanceToTopAtmosphereBoundary(atmosphere, transmittance_texture, r, mu);
 }
 
-// Radiance of the sun disc seen along the view ray: a uniform disc of angular radius alpha whose
-// irradiance at the top of the atmosphere is 1, i.e. radiance 1 / (2 pi (1 - cos alpha)),
-// attenuated by the view transmittance. Zero outside the disc.
+// Radiance of the sun disc seen along the view ray: the limb-darkened disc of angular radius
+// alpha whose irradiance at the top of the atmosphere is 1 (sun.glsl), attenuated by the view
+// transmittance. Zero outside the disc.
 vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     Number r, Number mu, Number nu) {
-  Number cos_alpha = cos(atmosphere.sun_angular_radius);
-  if (nu < cos_alpha) {
+  vec3 radiance = GetSunDiscUnattenuatedRadiance(atmosphere, nu);
+  if (radiance == vec3(0.0)) {
     return vec3(0.0);
   }
-  // 1 - cos(alpha) = 2 sin^2(alpha / 2): without the cancellation that costs float 0.2 % here.
-  Number sin_half_alpha = sin(0.5 * atmosphere.sun_angular_radius);
-  return GetViewTransmittance(atmosphere, transmittance_texture, r, mu) / (4.0 * kPi * sin_half_alpha * sin_half_alpha);
+  return GetViewTransmittance(atmosphere, transmittance_texture, r, mu) * radiance;
 }
 
 // The sky-view table (Hillaire 2020, section 5.3) for one observer radius: x is the azimuth from

@@ -1,0 +1,191 @@
+#include "cpu/sun_disc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "cpu/camera.h"
+
+namespace atmo {
+namespace {
+
+constexpr double kStrataAcrossDisc = 96.0;  // strata per disc diameter (see sun_disc.h)
+constexpr int kMinStrata = 4;
+constexpr int kMaxStrata = 1024;
+constexpr double kSmoothDiscPixels = 16.0;  // above this diameter, pixels inside take 2 x 2 strata
+constexpr int kBoundaryPoints = 64;         // points of the disc's outline projected for its footprint
+
+// splitmix64's finaliser: a well-mixed 64-bit hash.
+std::uint64_t Mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ull;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+double UnitInterval(std::uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
+
+// The pixels that can see part of the disc: rows y0..y1 and columns x0..x1 (inclusive; taken
+// modulo the width when `wrap`, for an equirect disc across its left and right edges).
+struct Footprint {
+  int x0 = 0, x1 = -1, y0 = 0, y1 = -1;
+  bool wrap = false;
+};
+
+// Projects the disc's centre and a circle just outside its edge through the camera and bounds
+// them, one pixel of margin on each side. False: the camera cannot see the disc.
+bool FindFootprint(const shared::CameraParameters& camera, const glm::dvec3& sun, double alpha, Footprint& f) {
+  const int w = camera.width;
+  const int h = camera.height;
+  const glm::dvec3 e1 = glm::normalize(glm::cross(sun, std::abs(sun.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+  const glm::dvec3 e2 = glm::cross(sun, e1);
+  const double a = std::min(alpha * 1.01 + 1e-9, 0.5 * shared::kPi);
+  shared::vec2 centre;
+  const bool centre_seen = shared::GetCameraFragCoordFromDirection(camera, sun, centre);
+  double min_x = centre.x, max_x = centre.x, min_y = centre.y, max_y = centre.y;
+  int behind = centre_seen ? 0 : 1;
+  for (int i = 0; i < kBoundaryPoints; ++i) {
+    const double phi = 2.0 * shared::kPi * i / kBoundaryPoints;
+    const glm::dvec3 d = std::cos(a) * sun + std::sin(a) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+    shared::vec2 p;
+    if (!shared::GetCameraFragCoordFromDirection(camera, d, p) && camera.kind == shared::kCameraPerspective) {
+      ++behind;
+      continue;
+    }
+    if (camera.kind == shared::kCameraEquirect) p.x += w * std::round((centre.x - p.x) / w);  // unwrap
+    min_x = std::min(min_x, p.x);
+    max_x = std::max(max_x, p.x);
+    min_y = std::min(min_y, p.y);
+    max_y = std::max(max_y, p.y);
+  }
+  if (behind == kBoundaryPoints + 1) return false;  // the whole cap behind a perspective camera
+  f.x0 = static_cast<int>(std::floor(min_x)) - 1;
+  f.x1 = static_cast<int>(std::floor(max_x)) + 1;
+  f.y0 = static_cast<int>(std::floor(min_y)) - 1;
+  f.y1 = static_cast<int>(std::floor(max_y)) + 1;
+  if (behind > 0) f = {0, w - 1, 0, h - 1, false};  // partly behind: look everywhere (fov < 180)
+  if (camera.kind == shared::kCameraEquirect) {
+    // A disc over a pole covers every column down to its far edge.
+    if (sun.z >= std::cos(a)) f = {0, w - 1, 0, f.y1, false};
+    if (-sun.z >= std::cos(a)) f = {0, w - 1, f.y0, h - 1, false};
+    if (f.x1 - f.x0 + 1 >= w) {
+      f.x0 = 0;
+      f.x1 = w - 1;
+    } else {
+      f.wrap = true;
+    }
+  } else {
+    f.x0 = std::max(f.x0, 0);
+    f.x1 = std::min(f.x1, w - 1);
+  }
+  f.y0 = std::max(f.y0, 0);
+  f.y1 = std::min(f.y1, h - 1);
+  return f.x0 <= f.x1 && f.y0 <= f.y1;
+}
+
+// An upper bound of the angle between a pixel's centre direction and any point of the pixel.
+double PixelAngularRadius(const shared::CameraParameters& camera) {
+  const double w = camera.width;
+  const double h = camera.height;
+  if (camera.kind == shared::kCameraEquirect) {
+    return 0.5 * std::hypot(shared::kPi / h, 2.0 * shared::kPi / w);
+  }
+  // The largest angle per pixel: at the fisheye's rim (radially) and the perspective's centre.
+  const double step = camera.kind == shared::kCameraFisheye ? 0.5 * shared::kPi / (0.5 * std::min(w, h))
+                                                            : 2.0 * camera.tan_half_fov / w;
+  return 0.5 * std::sqrt(2.0) * step;
+}
+
+}  // namespace
+
+void AddSunDisc(const Camera& camera_settings, const glm::dvec3& sun_direction, double sun_angular_radius_rad,
+                const SunDiscRadianceFunction& radiance, std::span<const double> solar_irradiance, Image& image) {
+  ValidateCamera(camera_settings);
+  if (!(sun_angular_radius_rad > 0.0 && sun_angular_radius_rad < 0.5 * shared::kPi)) {
+    throw Error("the sun disc pass needs a sun angular radius in (0, pi/2) rad");
+  }
+  const std::size_t nc = solar_irradiance.size();
+  if (nc == 0 || static_cast<std::size_t>(image.channels) != nc || image.width != camera_settings.width ||
+      image.height != camera_settings.height) {
+    throw Error("the sun disc pass needs an image of the camera's size with one channel per solar irradiance");
+  }
+  const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const glm::dvec3 sun = glm::normalize(sun_direction);
+  const double alpha = sun_angular_radius_rad;
+  const double cos_alpha = std::cos(alpha);
+  Footprint footprint;
+  if (!FindFootprint(camera, sun, alpha, footprint)) return;
+
+  // The disc's diameter in pixels where it is, from the solid angle per square pixel there.
+  shared::vec2 centre;
+  double density = 0.0;
+  if (shared::GetCameraFragCoordFromDirection(camera, sun, centre)) {
+    density = shared::GetCameraSolidAngleDensity(camera, centre);
+  }
+  const double diameter_px = density > 0.0 ? 2.0 * alpha / std::sqrt(density)
+                                            : std::max(footprint.x1 - footprint.x0, footprint.y1 - footprint.y0);
+  const int strata = std::clamp(static_cast<int>(std::ceil(kStrataAcrossDisc / std::max(diameter_px, 1e-6))),
+                                kMinStrata, kMaxStrata);
+  const bool smooth_inside = diameter_px > kSmoothDiscPixels;
+  const double pixel_radius = 1.05 * PixelAngularRadius(camera);
+  const int width = camera_settings.width;
+
+  oneapi::tbb::parallel_for(
+      oneapi::tbb::blocked_range<int>(footprint.y0, footprint.y1 + 1), [&](const oneapi::tbb::blocked_range<int>& rows) {
+        std::vector<double> l(nc);
+        std::vector<double> sum(nc);
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+          for (int column = footprint.x0; column <= footprint.x1; ++column) {
+            const int x = footprint.wrap ? (column % width + width) % width : column;
+            // A fisheye pixel whose centre is outside the circle still holds the part of the disc
+            // inside it (the pixel's solid angle is that of the part inside): its strata decide.
+            shared::vec3 view;
+            const bool centre_seen = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), view);
+            const double theta = centre_seen ? std::acos(std::clamp(glm::dot(view, sun), -1.0, 1.0)) : alpha;
+            if (theta - pixel_radius > alpha) continue;
+            // Inside a large disc the radiance is smooth: 2 x 2 strata at their centres (the
+            // midpoint rule, second order); on its edge k x k jittered strata find the coverage.
+            const bool inside = smooth_inside && centre_seen && theta + pixel_radius < alpha;
+            const int n = inside ? 2 : strata;
+            const std::uint64_t pixel_key = Mix(static_cast<std::uint64_t>(y) * width + x);
+            std::fill(sum.begin(), sum.end(), 0.0);
+            bool any = false;
+            for (int j = 0; j < n; ++j) {
+              for (int i = 0; i < n; ++i) {
+                const std::uint64_t key = Mix(pixel_key ^ (static_cast<std::uint64_t>(j) * n + i));
+                const shared::vec2 frag(x + (i + (inside ? 0.5 : UnitInterval(key))) / n,
+                                        y + (j + (inside ? 0.5 : UnitInterval(Mix(key)))) / n);
+                shared::vec3 d;
+                if (!shared::GetCameraRayDirection(camera, frag, d) || glm::dot(d, sun) < cos_alpha) continue;
+                radiance(d, l);
+                const double j_density = shared::GetCameraSolidAngleDensity(camera, frag);
+                for (std::size_t c = 0; c < nc; ++c) sum[c] += l[c] * j_density;
+                any = true;
+              }
+            }
+            if (!any) continue;
+            // The pixel's mean radiance: its integral over the pixel divided by its solid angle.
+            const double scale = 1.0 / (static_cast<double>(n) * n * shared::GetCameraPixelSolidAngle(camera, shared::ivec2(x, y)));
+            float* pixel = &image.pixels[(static_cast<std::size_t>(y) * width + x) * nc];
+            for (std::size_t c = 0; c < nc; ++c) pixel[c] += static_cast<float>(sum[c] * scale * solar_irradiance[c]);
+          }
+        }
+      });
+}
+
+void AddSunDisc(const SkyView& sky, const Camera& camera, std::span<const double> solar_irradiance, Image& image) {
+  if (!std::isfinite(sky.sun_angular_radius_rad())) {
+    throw Error("this model's view does not give the sun's angular radius, which the sun disc pass needs");
+  }
+  AddSunDisc(
+      camera, sky.sun_direction(), sky.sun_angular_radius_rad(),
+      [&sky](const glm::dvec3& view, std::span<double> out) { sky.SunDiscRadiance(view, out); }, solar_irradiance,
+      image);
+}
+
+}  // namespace atmo
