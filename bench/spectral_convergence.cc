@@ -77,7 +77,7 @@ int main() {
         std::printf("earth (680/550/440 nm), 3, %.0f, %.2f, %.2f, %.2f, %.2f\n", elevation, e.delta_e_median,
                     e.delta_e_p95, 100.0 * e.luminance_median, 100.0 * e.luminance_p95);
       }
-      for (int n : {4, 6, 8, 12, 16, 24, 32, 48}) {
+      for (int n : {4, 6, 8, 12, 15, 16, 18, 24, 32, 48}) {
         const Errors e = Compare(RenderXyz(make(n), elevation), reference);
         std::printf("%s, %d, %.0f, %.2f, %.2f, %.2f, %.2f\n", name, n, elevation, e.delta_e_median, e.delta_e_p95,
                     100.0 * e.luminance_median, 100.0 * e.luminance_p95);

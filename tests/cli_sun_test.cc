@@ -2,10 +2,12 @@
 // --latitude, --longitude, --refraction for render, sample and bench) and of the render
 // time-lapse (--until, --step, --mp4): the sun each command uses is the library's
 // (ComputeSunPosition), and every misuse fails in one line before any output is written.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -220,5 +222,34 @@ const SunFailureCase kSunFailureCases[] = {
 
 INSTANTIATE_TEST_SUITE_P(CliSun, CliSunFailureTest, ::testing::ValuesIn(kSunFailureCases),
                          [](const ::testing::TestParamInfo<SunFailureCase>& info) { return info.param.name; });
+
+}  // namespace
+
+namespace {
+
+// The spectral issue's closing check: a spectral sky for 46.5 N, 7.9 E at the June solstice's noon
+// (2026-06-21T12:00+02:00: 10:00 UTC, 1.5 h before the local solar noon at 7.9 E, the sun ~61 degrees
+// up, below the day's 66.9 degree maximum) in cd/m^2 has a zenith luminance in the range
+// published for clear skies: Karayel et al. 1984's L_z = (1.376 T - 1.81) tan(alpha) + 0.38 kcd/m^2
+// for Linke turbidity T = 2 (very clean) to 3.5.
+TEST_F(CliSunTest, SolsticeNoonZenithLuminanceIsInThePublishedClearSkyRange) {
+  const RunResult r = Run("render --preset earth-spectral --camera fisheye --width 33 --height 33 "
+                          "--date 2026-06-21T12:00+02:00 --latitude 46.5 --longitude 7.9 --exr noon.exr --png ''");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  atmo::ImageMetadata metadata;
+  const atmo::Image image = atmo::ReadExr(dir_ / "noon.exr", &metadata);
+  std::map<std::string, std::string> values(metadata.begin(), metadata.end());
+  EXPECT_EQ(values["atmo:unit"], "luminance");
+  const double elevation = std::stod(values["atmo:sunElevationDeg"]);
+  EXPECT_GT(elevation, 55.0);
+  EXPECT_LT(elevation, 66.9);
+  // The centre pixel of the fisheye looks at the zenith; Y of linear sRGB is the luminance.
+  const double luminance = 0.2126 * image.at(16, 16, 0) + 0.7152 * image.at(16, 16, 1) + 0.0722 * image.at(16, 16, 2);
+  const auto karayel = [&](double t) {
+    return ((1.376 * t - 1.81) * std::tan(elevation * std::numbers::pi / 180.0) + 0.38) * 1e3;
+  };
+  EXPECT_GT(luminance, karayel(2.0));
+  EXPECT_LT(luminance, karayel(3.5));
+}
 
 }  // namespace

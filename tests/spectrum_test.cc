@@ -65,7 +65,7 @@ TEST(Spectrum, CieTablesHaveTheirKnownValues) {
 
 TEST(Spectrum, EarthSpectralIsPhysicalAndMatchesEarthWhereItShould) {
   const AtmosphereParameters p = EarthSpectral();
-  ASSERT_EQ(p.channel_count(), 16u);
+  ASSERT_EQ(p.channel_count(), 15u);
   EXPECT_DOUBLE_EQ(p.wavelengths_nm.front(), 360.0);
   EXPECT_DOUBLE_EQ(p.wavelengths_nm.back(), 830.0);
   const AtmosphereParameters earth = Preset("earth");

@@ -4,7 +4,10 @@
 // Each repeat runs model->Precompute(), builds the view for a sun at 30 degrees elevation, and
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
 // repeats of the pass's last duration (PassTimings), plus "all_luts" (the sum of the model's
-// "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here).
+// "*_lut" passes of a repeat) and "frame_WxH" (the Render call, timed here). On the CPU also
+// "colour_frame_WxH": the frame folded into linear sRGB while it is rendered (RenderViewFolded),
+// what `atmo render` does in its default unit; for a spectral atmosphere it costs about what a
+// 3-channel frame does, where frame_WxH renders every wavelength.
 // With --date (sun_options.h) the sun is that of the date and place instead.
 #include <algorithm>
 #include <chrono>
@@ -15,6 +18,7 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/render.h"
 #include "commands.h"
@@ -119,6 +123,9 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
   } else {
     const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
     model_name = std::string(model->name());
+    const std::string colour_frame_name = "colour_" + frame_name;
+    const std::vector<glm::vec3> srgb_weights =
+        ColourWeights(SpectralConversion(parameters.wavelengths_nm), ImageColour::kLinearSrgb);
     for (int r = 0; r < repeat; ++r) {
       // Passes run during this repeat are those whose call count grows.
       std::map<std::string, int> calls_before;
@@ -130,6 +137,10 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       const Image image = RenderView(*sky, settings.camera, settings.terms, parameters.solar_irradiance);
       const double frame_ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      const auto colour_start = std::chrono::steady_clock::now();
+      const Image colour = RenderViewFolded(*sky, settings.camera, settings.terms, srgb_weights);
+      const double colour_frame_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - colour_start).count();
 
       double all_luts_ms = 0.0;
       for (const PassTiming& pass : model->timings().entries()) {
@@ -140,6 +151,7 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       }
       samples.Add("all_luts", all_luts_ms);
       samples.Add(frame_name, frame_ms);
+      samples.Add(colour_frame_name, colour_frame_ms);
     }
   }
 

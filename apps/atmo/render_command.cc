@@ -38,6 +38,19 @@ std::string JoinOptions(const std::vector<std::string>& options) {
   return text;
 }
 
+// CIE XYZ of a linear sRGB image (per pixel, the inverse of the sRGB matrix).
+Image LinearSrgbImageToXyz(const Image& rgb) {
+  Image xyz = rgb;
+  const std::size_t pixels = static_cast<std::size_t>(rgb.width) * rgb.height;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const glm::dvec3 v = LinearSrgbToXyz(glm::dvec3(rgb.pixels[3 * p], rgb.pixels[3 * p + 1], rgb.pixels[3 * p + 2]));
+    for (int k = 0; k < 3; ++k) xyz.pixels[3 * p + k] = static_cast<float>(v[k]);
+  }
+  xyz.channel_names = {"X", "Y", "Z"};
+  xyz.colour_space = ColourSpace::kCieXyz;
+  return xyz;
+}
+
 std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<double>& solar_irradiance) {
   switch (unit) {
     case RadianceUnit::kLuminance:
@@ -160,12 +173,17 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   }
   // Writes the outputs asked for from the model's image (per channel) and, for a Monte Carlo
   // model, its standard errors (same unit).
+  // `image` is either per channel (relative radiance x solar_irradiance) or already linear sRGB in
+  // cd/m^2 (colour_space kLinearSrgb: a folded CPU frame).
   const auto write_to = [&](const std::string& exr_path, const std::string& png_path, const Image& image,
                             const Image* standard_error, double render_ms) {
+    const bool is_colour = image.colour_space == ColourSpace::kLinearSrgb;
     std::vector<std::string> written;
     if (!exr_path.empty()) {
       set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
-      Image exr_image = unit == RadianceUnit::kRelative ? image : ConvertImage(image, convert, exr_colour);
+      Image exr_image = is_colour ? (command.xyz ? LinearSrgbImageToXyz(image) : image)
+                        : unit == RadianceUnit::kRelative ? image
+                                                          : ConvertImage(image, convert, exr_colour);
       if (standard_error != nullptr) {
         ProgressiveImage with_error;
         with_error.radiance = exr_image;
@@ -178,7 +196,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       written.push_back(exr_path);
     }
     if (!png_path.empty()) {
-      const Image display = legacy_png ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
+      const Image display = legacy_png || is_colour ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
       ToneMapping png_mapping = mapping;
       if (command.exposure) {
         png_mapping.exposure = *command.exposure;
@@ -197,6 +215,19 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   };
   const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
     return write_to(command.exr_path, command.png_path, image, standard_error, render_ms);
+  };
+  // A frame of a deterministic CPU model. In luminance the channels are folded into linear sRGB
+  // while the frame is rendered (RenderViewFolded): a spectral frame costs about a 3-channel one.
+  const std::vector<glm::vec3> srgb_weights = ColourWeights(convert, ImageColour::kLinearSrgb);
+  const auto render_cpu = [&](const RenderSettings& frame) {
+    const std::unique_ptr<SkyView> sky =
+        model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+    if (unit != RadianceUnit::kLuminance) {
+      return RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance);
+    }
+    Image folded = RenderViewFolded(*sky, frame.camera, frame.terms, srgb_weights);
+    folded.colour_space = ColourSpace::kLinearSrgb;
+    return folded;
   };
 
   // --until: a time-lapse. The model and its tables do not depend on the sun: made once above, each
@@ -229,9 +260,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         image = result.radiance;
         standard_error = result.standard_error;
       } else if (model != nullptr) {
-        const std::unique_ptr<SkyView> sky =
-            model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
-        image = RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance);
+        image = render_cpu(frame);
       } else {
 #ifdef ATMO_HAVE_GL
         image = RenderOnGl(*context, common, model_parameters, frame);
@@ -266,10 +295,10 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       const gl::Context context;
       image = RenderOnGl(context, common, model_parameters, settings);
     } else {
-      image = Render(*model, settings);
+      image = render_cpu(settings);
     }
 #else
-    image = Render(*model, settings);
+    image = render_cpu(settings);
 #endif
     render_ms = elapsed_ms();
     written = write(image, nullptr, render_ms);

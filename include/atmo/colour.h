@@ -80,6 +80,10 @@ enum class ImageColour {
   kSpectral,    // one channel per wavelength, W m^-2 sr^-1 nm^-1
 };
 
+// The per-channel weights of ConvertImage for kLinearSrgb or kXyz (Y in cd/m^2): output k of a
+// pixel is sum_c weights[c][k] r_c. Throws atmo::Error for kSpectral.
+std::vector<glm::vec3> ColourWeights(const SpectralConversion& convert, ImageColour colour);
+
 // Converts an image whose channels hold the model's relative radiance (sr^-1 per unit solar
 // irradiance, one per wavelength of `convert`) into `colour`; alpha is kept and the colour space
 // is recorded in Image::colour_space. Throws atmo::Error for a channel-count mismatch.

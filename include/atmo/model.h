@@ -69,6 +69,13 @@ class SkyView {
   // channel_count() values per direction. The default loops over the single queries; models
   // override it with a faster path. Directions of length 0 are skipped (left at 0).
   virtual void RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms, std::span<float> out) const;
+  // RadianceBatch folded into three values per direction: out[3 i + k] = sum over channels c of
+  // weights[c][k] L_c (for example the colour weights of atmo::ColourWeights, which give linear
+  // sRGB). A spectral image costs about a 3-channel one this way when the model folds its tables
+  // (hillaire folds its sky-view tables). weights has channel_count() entries. The default calls
+  // RadianceBatch and folds.
+  virtual void RadianceBatchFolded(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                                   std::span<const glm::vec3> weights, std::span<float> out) const;
 
   // Aerial perspective: the radiance scattered towards the observer between it and the point at
   // `distance_m` along `view`, and the transmittance over that segment. Throws atmo::Error for a

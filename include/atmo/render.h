@@ -61,6 +61,14 @@ Image Render(const Model& model, const RenderSettings& settings);
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance);
 
+// RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
+// (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the
+// colour weights of atmo::ColourWeights (atmo/colour.h) this is ConvertImage(RenderView(...)) at
+// about the cost of a 3-channel frame, whatever the channel count. Throws as RenderView, and for
+// `weights` without one entry per channel of the view.
+Image RenderViewFolded(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
+                       std::span<const glm::vec3> weights);
+
 // Progressive rendering of a Monte Carlo model (model `reference`): every pixel gets
 // `samples_per_pixel` paths (per channel) in passes, the first of `first_pass_samples` paths and
 // each later one doubling the total (4, 8, 16, ... up to the total). With terms.ground each path

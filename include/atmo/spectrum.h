@@ -53,7 +53,7 @@ std::vector<double> SpectralWavelengths(int count);
 
 // The knobs of the physically built Earth atmosphere (preset earth-spectral).
 struct SpectralEarthSettings {
-  int wavelength_count = 16;
+  int wavelength_count = 15;  // measured: docs/spectral.md
   double co2_ppm = 360.0;
   double ozone_column_du = 300.0;  // total ozone, Dobson units (300 DU: a mid-latitude average)
   // Aerosols: extinction optical depth at 550 nm (the turbidity knob) and Angstrom exponent alpha:

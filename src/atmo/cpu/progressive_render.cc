@@ -152,7 +152,11 @@ Image WithStandardErrorChannels(const ProgressiveImage& image) {
   // R, G, B for three channels (or the image's own names), C0..Cn-1 otherwise; then NAME.stderr.
   std::vector<std::string> names = radiance.channel_names;
   if (names.empty()) {
-    for (std::size_t c = 0; c < nc; ++c) names.push_back(nc == 3 ? std::string(1, "RGB"[c]) : "C" + std::to_string(c));
+    for (std::size_t c = 0; c < nc; ++c) {
+      std::string name(1, nc == 3 ? "RGB"[c] : 'C');
+      if (nc != 3) name += std::to_string(c);
+      names.push_back(std::move(name));
+    }
   }
   for (std::size_t c = 0; c < nc; ++c) names.push_back(names[c] + ".stderr");
   out.channel_names = names;

@@ -89,23 +89,18 @@ Image Render(const Model& model, const RenderSettings& settings) {
   return RenderView(*sky, settings.camera, settings.terms, model.parameters().solar_irradiance);
 }
 
-Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
-                 std::span<const double> solar_irradiance) {
-  ValidateCamera(camera_settings);
-  const std::size_t n = sky.channel_count();
-  CheckChannels(n);
-  if (solar_irradiance.size() != n) throw Error("solar_irradiance must have one value per channel");
+namespace {
+
+// The frame loop shared by RenderView and RenderViewFolded: camera rays per row (rows in
+// parallel), `evaluate(views, row)` writes `channels` values per pixel of the row.
+template <typename Evaluate>
+Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& evaluate) {
   const shared::CameraParameters camera = ToSharedCamera(camera_settings);
   const int width = camera_settings.width;
-  Image image(width, camera_settings.height, static_cast<int>(n));
+  const std::size_t nc = static_cast<std::size_t>(channels);
+  Image image(width, camera_settings.height, channels);
   const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
-  const std::vector<float> irradiance(solar_irradiance.begin(), solar_irradiance.end());
-  // The sun disc is integrated over the pixels by its own pass (cpu/sun_disc.h), not sampled at
-  // their centres.
-  RadianceTerms sky_terms = terms;
-  sky_terms.sun_disc = false;
-
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
     for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -119,14 +114,65 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
           if (has_alpha) image.alpha[static_cast<std::size_t>(y) * width + x] = seen ? 1.0f : 0.0f;
         }
       }
-      float* row = &image.pixels[static_cast<std::size_t>(y) * width * n];
-      sky.RadianceBatch(views, sky_terms, std::span<float>(row, static_cast<std::size_t>(width) * n));
-      for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
-        for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
-      }
+      evaluate(views, std::span<float>(&image.pixels[static_cast<std::size_t>(y) * width * nc],
+                                       static_cast<std::size_t>(width) * nc));
+    }
+  });
+  return image;
+}
+
+}  // namespace
+
+Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
+                 std::span<const double> solar_irradiance) {
+  ValidateCamera(camera_settings);
+  const std::size_t n = sky.channel_count();
+  CheckChannels(n);
+  if (solar_irradiance.size() != n) throw Error("solar_irradiance must have one value per channel");
+  const std::vector<float> irradiance(solar_irradiance.begin(), solar_irradiance.end());
+  // The sun disc is integrated over the pixels by its own pass (cpu/sun_disc.h), not sampled at
+  // their centres.
+  RadianceTerms sky_terms = terms;
+  sky_terms.sun_disc = false;
+  Image image = RenderRows(camera_settings, static_cast<int>(n), [&](std::span<const glm::dvec3> views, std::span<float> row) {
+    sky.RadianceBatch(views, sky_terms, row);
+    for (std::size_t x = 0; x < views.size(); ++x) {
+      for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
     }
   });
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
+  return image;
+}
+
+Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
+                       std::span<const glm::vec3> weights) {
+  ValidateCamera(camera_settings);
+  const std::size_t n = sky.channel_count();
+  CheckChannels(n);
+  if (weights.size() != n) throw Error("RenderViewFolded needs one weight per channel");
+  RadianceTerms sky_terms = terms;
+  sky_terms.sun_disc = false;
+  Image image = RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
+    sky.RadianceBatchFolded(views, sky_terms, weights, row);
+  });
+  if (terms.sun_disc) {
+    // The disc pass with the disc's radiance folded by the same weights (solar irradiance 1: the
+    // weights carry the units).
+    const std::vector<double> ones(3, 1.0);
+    AddSunDisc(
+        camera_settings, sky.sun_direction(), sky.sun_angular_radius_rad(),
+        [&](const glm::dvec3& view, std::span<double> out) {
+          thread_local std::vector<double> disc;
+          disc.resize(n);
+          sky.SunDiscRadiance(view, disc);
+          for (int k = 0; k < 3; ++k) {
+            double sum = 0.0;
+            for (std::size_t c = 0; c < n; ++c) sum += weights[c][k] * disc[c];
+            out[k] = sum;
+          }
+        },
+        ones, image);
+  }
   return image;
 }
 

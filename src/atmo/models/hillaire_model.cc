@@ -1,6 +1,8 @@
 #include "models/hillaire_model.h"
 
+#include <algorithm>
 #include <chrono>
+#include <mutex>
 #include <cmath>
 #include <string>
 
@@ -273,7 +275,70 @@ class HillaireSkyView final : public SkyView {
     }
   }
 
+  // The sky-view tables of every batch folded into one three-channel table per weight set: a
+  // spectral frame then costs one lookup per pixel, as a 3-channel one. The folded lookups are
+  // made on first use and kept for the last weights asked for.
+  void RadianceBatchFolded(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                           std::span<const glm::vec3> weights, std::span<float> out) const override {
+    if (sky_view_.empty()) {
+      SkyView::RadianceBatchFolded(views, terms, weights, out);
+      return;
+    }
+    const std::size_t n = channel_count();
+    if (weights.size() != n) throw Error("RadianceBatchFolded needs one weight per channel");
+    const cpu::SkyViewLookup* lookup = nullptr;
+    {
+      std::lock_guard<std::mutex> lock(folded_mutex_);
+      if (!std::equal(weights.begin(), weights.end(), folded_weights_.begin(), folded_weights_.end())) {
+        folded_weights_.assign(weights.begin(), weights.end());
+        folded_sky_ = cpu::MakeSkyViewLookup(Fold(sky_view_, weights), horizon_nadir_angle_, sun_direction());
+        folded_sky_and_ground_ =
+            cpu::MakeSkyViewLookup(Fold(sky_and_ground_view_, weights), horizon_nadir_angle_, sun_direction());
+      }
+      lookup = terms.ground ? &folded_sky_and_ground_ : &folded_sky_;
+    }
+    constexpr std::size_t kChunk = 256;
+    float x[kChunk], y[kChunk], z[kChunk];
+    for (std::size_t first = 0; first < views.size(); first += kChunk) {
+      const std::size_t count = std::min(kChunk, views.size() - first);
+      for (std::size_t i = 0; i < count; ++i) {
+        x[i] = static_cast<float>(views[first + i].x);
+        y[i] = static_cast<float>(views[first + i].y);
+        z[i] = static_cast<float>(views[first + i].z);
+      }
+      cpu::LookupSkyViewRow(*lookup, x, y, z, static_cast<int>(count), &out[3 * first]);
+    }
+    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
+    std::vector<double> disc(n);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const glm::dvec3& view = views[i];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+        for (int k = 0; k < 3; ++k) out[3 * i + k] = 0.0f;
+        continue;
+      }
+      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
+        SunDiscRadiance(view, disc);
+        for (std::size_t c = 0; c < n; ++c) {
+          for (int k = 0; k < 3; ++k) out[3 * i + k] += weights[c][k] * static_cast<float>(disc[c]);
+        }
+      }
+    }
+  }
+
  private:
+  // sum over channels of weights[c] x table_b(c): the per-batch tables as one folded table.
+  static shared::Texture2D Fold(const std::vector<shared::Texture2D>& tables, std::span<const glm::vec3> weights) {
+    shared::Texture2D folded(tables.front().width, tables.front().height, tables.front().repeat_u);
+    for (std::size_t b = 0; b < tables.size(); ++b) {
+      for (std::size_t t = 0; t < folded.texels.size(); ++t) {
+        const glm::vec3& l = tables[b].texels[t];
+        for (std::size_t c = 0; c < 3 && 3 * b + c < weights.size(); ++c) {
+          folded.texels[t] += weights[3 * b + c] * l[static_cast<int>(c)];
+        }
+      }
+    }
+    return folded;
+  }
 
   const HillaireModel& model_;
   double r_;
@@ -283,6 +348,10 @@ class HillaireSkyView final : public SkyView {
   std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
   cpu::SkyViewLookup sky_lookup_;             // float frame-kernel copies (three channels only)
   cpu::SkyViewLookup sky_and_ground_lookup_;
+  mutable std::mutex folded_mutex_;  // guards the folded lookups below
+  mutable std::vector<glm::vec3> folded_weights_;
+  mutable cpu::SkyViewLookup folded_sky_;
+  mutable cpu::SkyViewLookup folded_sky_and_ground_;
 };
 
 std::unique_ptr<SkyView> HillaireModel::View(double altitude_m, const glm::dvec3& sun_direction) const {

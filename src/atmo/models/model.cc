@@ -46,6 +46,19 @@ void SkyView::RadianceBatch(std::span<const glm::dvec3> views, const RadianceTer
   }
 }
 
+void SkyView::RadianceBatchFolded(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                                  std::span<const glm::vec3> weights, std::span<float> out) const {
+  const std::size_t n = channel_count();
+  if (weights.size() != n) throw Error("RadianceBatchFolded needs one weight per channel");
+  std::vector<float> channels(views.size() * n);
+  RadianceBatch(views, terms, channels);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    glm::vec3 sum(0.0f);
+    for (std::size_t c = 0; c < n; ++c) sum += weights[c] * channels[i * n + c];
+    for (int k = 0; k < 3; ++k) out[3 * i + k] = sum[k];
+  }
+}
+
 void SkyView::ScatteringAlongSegment(const glm::dvec3&, double, std::span<double>, std::span<double>) const {
   throw Error("this model does not provide aerial perspective");
 }

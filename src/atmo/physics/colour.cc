@@ -124,10 +124,8 @@ double SpectralConversion::SpectralRadiance(std::size_t channel, double relative
 glm::dvec3 XyzToLinearSrgb(const glm::dvec3& xyz) { return kXyzToSrgb * xyz; }
 glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb) { return glm::inverse(kXyzToSrgb) * rgb; }
 
-namespace {
-
-// The per-channel weights of output channels k = 0..2 (linear sRGB or XYZ, Y in cd/m^2).
-std::vector<glm::vec3> OutputWeights(const SpectralConversion& convert, ImageColour colour) {
+std::vector<glm::vec3> ColourWeights(const SpectralConversion& convert, ImageColour colour) {
+  if (colour == ImageColour::kSpectral) throw Error("spectral images have no colour weights");
   std::vector<glm::vec3> weights(convert.channel_count());
   for (std::size_t c = 0; c < weights.size(); ++c) {
     const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.xyz_weights()[c];
@@ -135,6 +133,8 @@ std::vector<glm::vec3> OutputWeights(const SpectralConversion& convert, ImageCol
   }
   return weights;
 }
+
+namespace {
 
 void NameChannels(Image& image, ImageColour colour) {
   if (colour == ImageColour::kXyz) {
@@ -154,7 +154,7 @@ Image ConvertStandardError(const Image& standard_error, const SpectralConversion
                 std::to_string(n));
   }
   if (colour == ImageColour::kSpectral) return ConvertImage(standard_error, convert, colour);
-  const std::vector<glm::vec3> weights = OutputWeights(convert, colour);
+  const std::vector<glm::vec3> weights = ColourWeights(convert, colour);
   Image out(standard_error.width, standard_error.height, 3);
   const std::size_t pixels = static_cast<std::size_t>(standard_error.width) * standard_error.height;
   for (std::size_t p = 0; p < pixels; ++p) {
@@ -191,7 +191,7 @@ Image ConvertImage(const Image& relative, const SpectralConversion& convert, Ima
   Image out(relative.width, relative.height, 3);
   out.alpha = relative.alpha;
   // Single-precision weights per output channel, folded with the XYZ -> sRGB matrix when asked.
-  const std::vector<glm::vec3> weights = OutputWeights(convert, colour);
+  const std::vector<glm::vec3> weights = ColourWeights(convert, colour);
   for (std::size_t p = 0; p < pixels; ++p) {
     glm::vec3 sum(0.0f);
     for (std::size_t c = 0; c < n; ++c) sum += weights[c] * relative.pixels[p * n + c];
