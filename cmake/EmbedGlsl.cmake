@@ -3,7 +3,7 @@
 #   cmake -DGLSL_DIR=<dir> -DGLSL_FILES=a.glsl,b.glsl -DOUTPUT=<file.cc> -P EmbedGlsl.cmake
 #
 # Writes a table { file name, source } that gl/shader_sources.cc looks files up in, so the GL
-# backend compiles exactly the text the CPU includes as C++ (DESIGN.md §1): no formula twice.
+# backend compiles exactly the text the CPU includes as C++ (docs/design.md §1): no formula twice.
 string(REPLACE "," ";" files "${GLSL_FILES}")
 set(delimiter "atmo_glsl")
 set(body "")

@@ -1,4 +1,4 @@
-// End-to-end tests of the `atmo` command line (DESIGN.md §4): each test runs the program in a
+// End-to-end tests of the `atmo` command line (docs/design.md §4): each test runs the program in a
 // fresh temporary folder, capturing stdout and stderr to files, with tiny images so the whole
 // file stays fast.
 #include <sys/wait.h>

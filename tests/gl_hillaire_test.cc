@@ -510,7 +510,7 @@ TEST_F(GlCliTest, BenchReportsTheGlPasses) {
 }
 
 
-// The radiance column of an `atmo sample` CSV (DESIGN.md section 4), row by row.
+// The radiance column of an `atmo sample` CSV (docs/design.md section 4), row by row.
 std::vector<double> RadianceColumn(const std::string& csv) {
   std::vector<double> radiance;
   const std::vector<std::string> lines = atmo::testing::Lines(csv);

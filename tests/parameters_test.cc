@@ -1,4 +1,4 @@
-// Tests of atmosphere parameters: presets against DESIGN.md §3, validation messages, JSON round
+// Tests of atmosphere parameters: presets against docs/design.md §3, validation messages, JSON round
 // trips and merges, the parameter hash, and density profiles against their closed forms.
 #include <gtest/gtest.h>
 

@@ -13,7 +13,7 @@ inline shared::DensityProfile ExponentialProfile(double scale_height) {
   return p;
 }
 
-// Earth-like values of the `earth` preset (DESIGN.md §3), in metres.
+// Earth-like values of the `earth` preset (docs/design.md §3), in metres.
 inline shared::AtmosphereParameters EarthLike() {
   shared::AtmosphereParameters a{};
   a.bottom_radius = 6360e3;

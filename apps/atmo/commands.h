@@ -26,7 +26,7 @@
 
 namespace atmo::cli {
 
-// The flags every subcommand takes (DESIGN.md §4).
+// The flags every subcommand takes (docs/design.md §4).
 struct CommonOptions {
   std::string model = "hillaire";
   std::string preset = "earth";
@@ -113,7 +113,7 @@ struct SampleCommand {
   std::optional<double> sun_zenith_deg;
   std::optional<double> view_zenith_deg;
   std::optional<double> azimuth_deg;
-  // relative (DESIGN.md §4: sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1 per
+  // relative (docs/design.md §4: sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1 per
   // wavelength row) or luminance (one row per point: luminance_cd_m2, stderr).
   std::string unit = "relative";
   SunOptions sun;  // --date: the sun zenith of the single query from a date and place

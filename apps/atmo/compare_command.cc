@@ -1,4 +1,4 @@
-// `atmo compare`: a model against a reference model on a grid of configurations (DESIGN.md §5).
+// `atmo compare`: a model against a reference model on a grid of configurations (docs/design.md §5).
 //
 // Both models are made from the same parameters (--preset / --config), each with its own options
 // (--option for the model under test M, --against-option for the reference R; --seed for both).
@@ -42,7 +42,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // ---------------------------------------------------------------------------------------------
-// The standard grid (DESIGN.md §5): every combination of these values, 5 x 7 x 27 x 5 = 4725
+// The standard grid (docs/design.md §5): every combination of these values, 5 x 7 x 27 x 5 = 4725
 // configurations. View zeniths are dense around the horizontal (90°); the planet's horizon dips
 // below it with altitude (by acos(r_ground / r_observer): 3.2° at 10 km, 7.1° at 50 km, 10.1° at
 // 100 km on `earth`), where 95° and 100° sample it. At view zenith 0 and 180 (and sun zenith 0)

@@ -1,4 +1,4 @@
-// Grids of query configurations, shared by `atmo sample` and `atmo compare` (DESIGN.md §4):
+// Grids of query configurations, shared by `atmo sample` and `atmo compare` (docs/design.md §4):
 //
 //   IN.csv : altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg          (header line first)
 //

@@ -1,4 +1,4 @@
-// atmo: the command line of the atmo sky library (DESIGN.md §4).
+// atmo: the command line of the atmo sky library (docs/design.md §4).
 //
 //   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [--exr F] [--png F]
 //   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv | --altitude --sun-zenith

@@ -9,7 +9,7 @@ namespace atmo::cli {
 
 namespace {
 
-// Where each preset comes from (DESIGN.md §3); the physical summary is derived from its values.
+// Where each preset comes from (docs/design.md §3); the physical summary is derived from its values.
 std::string PresetSource(const std::string& name) {
   static const std::map<std::string, std::string> kSources = {
       {"earth", "Earth, after Hillaire 2020 / Bruneton 2017"},

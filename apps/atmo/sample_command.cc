@@ -1,4 +1,4 @@
-// `atmo sample`: the machine-readable model query of DESIGN.md §4.
+// `atmo sample`: the machine-readable model query of docs/design.md §4.
 //
 //   IN.csv : altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg          (header line first)
 //   OUT.csv: altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,

@@ -1,4 +1,4 @@
-// The model interface that every sky model implements (DESIGN.md §1).
+// The model interface that every sky model implements (docs/design.md §1).
 //
 // To use it:
 //   auto model = atmo::CreateModel("hillaire", atmo::Preset("earth"));   // precomputes its tables
@@ -8,7 +8,7 @@
 //   sky->Radiance(atmo::DirectionFromZenithAzimuth(glm::radians(80.0), glm::radians(90.0)), L);
 //
 // Frame: the observer's local frame, x = east, y = north, z = up; directions are unit vectors.
-// Units (DESIGN.md §2): radiance per unit solar irradiance at the top of the atmosphere (sr^-1),
+// Units (docs/design.md §2): radiance per unit solar irradiance at the top of the atmosphere (sr^-1),
 // per channel; transmittance unitless. Radiance excludes the sun disc and, for rays that meet the
 // ground, the ground's own reflected light.
 #pragma once

@@ -6,7 +6,7 @@
 //   atmo::Validate(p);                                        // throws atmo::Error, one line
 //   std::string json = atmo::ToJson(p);                       // FromJson(json) gives p back
 //
-// Units: lengths in metres, coefficients per metre, angles in radians (DESIGN.md §2). For the
+// Units: lengths in metres, coefficients per metre, angles in radians (docs/design.md §2). For the
 // half-space geometry of the `simple` preset, lengths are in the preset's own length unit and
 // coefficients per that unit. Every per-channel vector has one value per wavelength.
 #pragma once
@@ -106,7 +106,7 @@ struct AtmosphereParameters {
 // vector of the wrong length, a non-positive wavelength or sun radius, ...
 void Validate(const AtmosphereParameters& parameters);
 
-// Presets of DESIGN.md §3: "earth", "atmosphere-plus", "simple". Throws atmo::Error for an
+// Presets of docs/design.md §3: "earth", "atmosphere-plus", "simple". Throws atmo::Error for an
 // unknown name, listing the known ones.
 AtmosphereParameters Preset(std::string_view name);
 std::vector<std::string> PresetNames();

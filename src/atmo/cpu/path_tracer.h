@@ -15,7 +15,7 @@
 //     a tentative collision is real with probability sigma_t / sigma_bar, and a real one scatters
 //     with weight sigma_s / sigma_t (ozone and Mie absorption only lower the weight);
 //   - optionally (on by default) the first tentative collision of a segment whose end contributes
-//     nothing (escape to space, or the first hit of the view ray on the ground, which DESIGN.md §4
+//     nothing (escape to space, or the first hit of the view ray on the ground, which docs/design.md §4
 //     leaves out) is forced into the segment: sampled from the truncated exponential, weight
 //     1 - exp(-sigma_bar L). The event it removes (no tentative collision at all) scores 0, so the
 //     expectation is unchanged; thin atmospheres then get a sample on every path;
@@ -28,7 +28,7 @@
 //     bounce with weight albedo (not at the view ray's own first hit, unless asked for;
 //     TraceQuery::ground_only scores that hit alone);
 //   - unlimited orders; Russian roulette from order 3 on with survival min(weight, 0.95).
-// Direction convention (DESIGN.md §2): paths run from the observer outwards; at a vertex reached
+// Direction convention (docs/design.md §2): paths run from the observer outwards; at a vertex reached
 // along direction d, light that arrives from direction d' (travelling along -d') and leaves along
 // -d is scattered by the angle whose cosine is dot(-d', -d) = dot(d, d'). That cosine is the nu of
 // the phase functions: for the sun, d' = sun and nu = dot(view, sun). So phase sampling draws
@@ -86,7 +86,7 @@ struct TraceQuery {
   glm::dvec3 sun;     // unit, towards the sun
   glm::dvec3 view;    // unit, from the observer outwards
   // Whether the view ray's own first hit on the ground reflects light (the flux estimator needs
-  // it; radiance queries of DESIGN.md §4 leave it out).
+  // it; radiance queries of docs/design.md §4 leave it out).
   bool include_first_ground_hit = false;
   // Whether to score only the light that the ground reflects at the view ray's first hit (the
   // ground term of images, SkyView::GroundRadiance): the view segment is not scattered in but

@@ -1,7 +1,7 @@
 // GLSL source for the GL backend, assembled from the shared GLSL/C++ common subset (private).
 //
 // The files of src/atmo/shared are embedded at build time (cmake/EmbedGlsl.cmake), so a shader
-// runs exactly the text that the CPU includes as C++ (DESIGN.md §1). A GLSL prelude gives the
+// runs exactly the text that the CPU includes as C++ (docs/design.md §1). A GLSL prelude gives the
 // subset's names their GLSL meaning, as glsl_cpp.h does for C++: Number is float, IN/OUT/INOUT
 // are parameter qualifiers, and the table types are sampler2D.
 //

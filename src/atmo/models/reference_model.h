@@ -1,5 +1,5 @@
 // Model `reference`: a Monte Carlo volumetric path tracer (cpu/path_tracer.h), the model every
-// other model is judged by (DESIGN.md §5). It uses no table: every query traces paths through
+// other model is judged by (docs/design.md §5). It uses no table: every query traces paths through
 // the shared media and phase functions, and carries its standard error.
 //
 // Options (`--option key=value`; docs/models/reference.md):

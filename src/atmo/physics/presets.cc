@@ -1,4 +1,4 @@
-// The presets of DESIGN.md §3. Each value says where it comes from; coefficients are per metre
+// The presets of docs/design.md §3. Each value says where it comes from; coefficients are per metre
 // (per the preset's own length unit for the half-space `simple`) at density 1.
 #include <numbers>
 #include <string>
@@ -68,7 +68,7 @@ AtmosphereParameters AtmospherePlus() {
   p.rayleigh.phase = PhaseFunction::kRayleigh;
 
   // Mie extinction = scattering / 0.9 (single-scattering albedo 0.9). The seed's g = -0.85 with
-  // its "+2g cos" convention is g = +0.85 here (DESIGN.md §2).
+  // its "+2g cos" convention is g = +0.85 here (docs/design.md §2).
   constexpr double kMieScattering = 2e-6;
   constexpr double kMieExtinction = kMieScattering / 0.9;
   p.mie.scattering_per_m = PerChannel(kMieScattering, 3);

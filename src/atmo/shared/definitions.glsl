@@ -6,7 +6,7 @@
 
 const Number kPi = 3.14159265358979323846;
 
-// Phase-function identifiers (DESIGN.md §2). All are normalised to 1 over the sphere and take
+// Phase-function identifiers (docs/design.md §2). All are normalised to 1 over the sphere and take
 // nu = cos(angle between the view direction and the sun direction).
 const int kPhaseIsotropic = 0;
 const int kPhaseRayleigh = 1;           // 3/(16 pi) (1 + nu^2)

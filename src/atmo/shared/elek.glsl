@@ -2,7 +2,7 @@
 // Parametrizable Planetary Atmospheres with Multiple Scattering in Real-Time"): a 3D table
 // I(h, cos phi, cos delta) over altitude, view zenith and sun zenith that holds the *factored*
 // scattered light, Rayleigh per channel and Mie, so that the renderer applies the phase function
-// of nu = cos(view, sun) (DESIGN.md §2) and the sun's irradiance itself:
+// of nu = cos(view, sun) (docs/design.md §2) and the sun's irradiance itself:
 //   L(h, mu, mu_s, nu) = p_R(nu) I_R(h, mu, mu_s) + p_M(nu) I_M(h, mu, mu_s).
 // With phase functions normalised to 1 (ours), the seed's F beta / (4 pi) is p beta, so
 //   I^(1)_c(P0, V) = int_Pa^Pb sigma_c(P) T(P, Pc) T(P, Pa) ds                (c = R, M)

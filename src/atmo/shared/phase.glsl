@@ -1,6 +1,6 @@
 // Phase functions, normalised to 1 over the sphere (the Atmosphere Plus seed writes them x 4 pi).
 // nu is the cosine of the angle between the view direction and the sun direction, so for g > 0
-// the forward peak is seen when looking towards the sun (DESIGN.md §2).
+// the forward peak is seen when looking towards the sun (docs/design.md §2).
 
 Number IsotropicPhaseFunction() {
   return 1.0 / (4.0 * kPi);
@@ -12,7 +12,7 @@ Number RayleighPhaseFunction(Number nu) {
 
 // Atmosphere Plus's "modified Rayleigh" has the shape 1.4 + 0.5 nu^2. The seed's 0.8 (1.4 + 0.5 nu^2)
 // (over 4 pi) integrates over the sphere to 0.8 * 47/30 = 1.2533, not 1, and every phase function
-// here is normalised (DESIGN.md §2), so the shape is kept and divided by its integral, 47/30 * 4 pi.
+// here is normalised (docs/design.md §2), so the shape is kept and divided by its integral, 47/30 * 4 pi.
 Number ModifiedRayleighPhaseFunction(Number nu) {
   return (1.4 + 0.5 * nu * nu) / (47.0 / 30.0 * 4.0 * kPi);
 }

@@ -142,7 +142,7 @@ vec3 ComputeSimpleScatteredRadiance(IN(vec3) u, IN(vec3) p, IN(vec3) d, IN(vec3)
 // Transmittance along the view ray out of the medium, T(l(p, d)): 1 for a ray that never meets the
 // medium, and 0 for a ray with an infinite path (<u, d> <= 0 inside the medium, or entering it
 // from above): such a ray never leaves the atmosphere, the half-space's analogue of a ray that
-// meets the ground in the sample contract (DESIGN.md §4).
+// meets the ground in the sample contract (docs/design.md §4).
 vec3 GetSimpleViewTransmittance(IN(vec3) u, IN(vec3) p, IN(vec3) d, IN(vec3) sigma_t) {
   vec3 entry;
   Number entry_distance;

@@ -186,7 +186,7 @@ vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTe
 }
 
 
-// Ground lighting, for images (DESIGN.md's radiance excludes it; renderers add it). The ground is
+// Ground lighting, for images (docs/design.md's radiance excludes it; renderers add it). The ground is
 // Lambertian with the atmosphere's albedo, lit by the attenuated sun and by the sky.
 //
 // The sky irradiance of a horizontal ground patch as a function of the sun zenith cosine there,
