@@ -179,6 +179,22 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                             const Image* standard_error, double render_ms) {
     const bool is_colour = image.colour_space == ColourSpace::kLinearSrgb;
     std::vector<std::string> written;
+    // The PNG's display image and exposure first, so that the EXR records the exposure too.
+    Image display;
+    ToneMapping png_mapping = mapping;
+    if (!png_path.empty()) {
+      display = legacy_png || is_colour ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
+      if (command.exposure) {
+        png_mapping.exposure = *command.exposure;
+      } else if (command.ev100) {
+        png_mapping.exposure = ExposureFromEv100(*command.ev100);
+      } else if (command.auto_exposure || !legacy_png) {
+        png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
+      } else {
+        png_mapping.exposure = parameters.exposure;
+      }
+      set_metadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
+    }
     if (!exr_path.empty()) {
       set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
       Image exr_image = is_colour ? (command.xyz ? LinearSrgbImageToXyz(image) : image)
@@ -196,18 +212,6 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       written.push_back(exr_path);
     }
     if (!png_path.empty()) {
-      const Image display = legacy_png || is_colour ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
-      ToneMapping png_mapping = mapping;
-      if (command.exposure) {
-        png_mapping.exposure = *command.exposure;
-      } else if (command.ev100) {
-        png_mapping.exposure = ExposureFromEv100(*command.ev100);
-      } else if (command.auto_exposure || !legacy_png) {
-        png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
-      } else {
-        png_mapping.exposure = parameters.exposure;
-      }
-      set_metadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
       WritePng(png_path, display, png_mapping);
       written.push_back(png_path);
     }
