@@ -516,7 +516,8 @@ TEST(GlHillaireSpectral, TablesMatchCpuInEveryBatch) {
     Texture2D cpu_view = model.ComputeSkyViewLut(cpu, r_m, mu_s);
     model.AddGroundView(cpu, r_m, mu_s, cpu_view);
     // The two rows at the split: the tangent horizon ray from 1 km (GlHillaire.GroundViewMatchesCpu).
-    const Difference v = Compare(sky.ReadSkyAndGroundView(b), cpu_view, cpu_view.height / 2 - 1, cpu_view.height / 2 + 1);
+    const int half = cpu_view.height / 2;
+    const Difference v = Compare(sky.ReadSkyAndGroundView(b), cpu_view, half - 1, half + 1);
     std::printf("spectral 7, batch %zu: GL vs CPU transmittance max abs %.3g max rel %.3g; multiple scattering "
                 "max rel %.3g; ground irradiance max rel %.3g; sky + ground view max rel %.3g\n",
                 b, t.max_abs, t.max_rel, m.max_rel, g.max_rel, v.max_rel);
@@ -823,7 +824,8 @@ TEST_F(GlCliTest, SpectralPrecomputeOnGlWritesATableTheCpuLoads) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(atmo::testing::ReadFile(dir_ / "table.json").find("\"batches\": 2"), std::string::npos);
   atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
-  const atmo::testing::RunResult loaded = Run("sample " + elek + " --option table=table --grid grid.csv --out loaded.csv");
+  const atmo::testing::RunResult loaded =
+      Run("sample " + elek + " --option table=table --grid grid.csv --out loaded.csv");
   const atmo::testing::RunResult cpu = Run("sample " + elek + " --grid grid.csv --out cpu.csv");
   ASSERT_EQ(loaded.exit_code, 0) << loaded.err;
   ASSERT_EQ(cpu.exit_code, 0) << cpu.err;

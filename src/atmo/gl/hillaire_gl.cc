@@ -574,8 +574,8 @@ void main() {
   for (std::size_t b = 0; b < batches_.size(); ++b) {
     const Batch& batch = batches_[b];
     SetAtmosphereUniforms(program, "atmosphere", batch.km);
-    BindSamplers(program,
-                 {{"transmittance_texture", &batch.transmittance}, {"multiple_scattering_texture", &batch.multiple_scattering}});
+    BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
+                           {"multiple_scattering_texture", &batch.multiple_scattering}});
     {
       GpuPassTimer timer(timings);
       DispatchCompute3D(program, size);

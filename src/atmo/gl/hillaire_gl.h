@@ -120,7 +120,9 @@ class HillaireGl {
 
   // Read-backs of the tables of batch `batch` (shared::Texture2D layout: channels 3 batch ..
   // 3 batch + 2 in rgb). Throws std::out_of_range for a batch >= batch_count().
-  shared::Texture2D ReadTransmittance(std::size_t batch = 0) const { return batches_.at(batch).transmittance.Download2D(); }
+  shared::Texture2D ReadTransmittance(std::size_t batch = 0) const {
+    return batches_.at(batch).transmittance.Download2D();
+  }
   shared::Texture2D ReadMultipleScattering(std::size_t batch = 0) const {
     return batches_.at(batch).multiple_scattering.Download2D();
   }
