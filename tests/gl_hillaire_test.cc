@@ -6,13 +6,18 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "atmo/aerial_perspective.h"
 #include "atmo/error.h"
+#include "atmo/image.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"
+#include "atmo/spectrum.h"
 #include "cli_fixture.h"
 #include "cpu/hillaire_tables.h"
 #include "gl/context.h"
@@ -257,10 +262,11 @@ struct FrameDifference {
   double max_rel = 0.0;   // over pixels whose CPU value is above the floor (CompareFrames)
   double mean_rel = 0.0;  // same pixels
   double max_abs_alpha = 0.0;
+  std::size_t worst = 0;  // the value (pixel x channels + channel) of max_rel
 };
 
-// Over the sky and ground pixels: the sun disc pixel `skip_pixel` (if any) is checked apart, and
-// values below 1e-2 of the median (the black outside a fisheye) are left out.
+// Over the sky and ground pixels, every channel: the sun disc pixel `skip_pixel` (if any) is
+// checked apart, and values below 1e-2 of the median (the black outside a fisheye) are left out.
 FrameDifference CompareFrames(const Image& gl, const Image& cpu, std::size_t skip_pixel) {
   FrameDifference d;
   std::vector<float> sorted = cpu.pixels;
@@ -269,9 +275,12 @@ FrameDifference CompareFrames(const Image& gl, const Image& cpu, std::size_t ski
   double sum = 0.0;
   int count = 0;
   for (std::size_t i = 0; i < cpu.pixels.size(); ++i) {
-    if (cpu.pixels[i] <= floor || i / 3 == skip_pixel) continue;
+    if (cpu.pixels[i] <= floor || i / static_cast<std::size_t>(cpu.channels) == skip_pixel) continue;
     const double rel = std::abs(double(gl.pixels[i]) - cpu.pixels[i]) / cpu.pixels[i];
-    d.max_rel = std::max(d.max_rel, rel);
+    if (rel > d.max_rel) {
+      d.max_rel = rel;
+      d.worst = i;
+    }
     sum += rel;
     ++count;
   }
@@ -407,7 +416,7 @@ TEST(GlHillaire, SampleMatchesCpu) {
     const glm::dvec3 sun = SunDirection(25.0, 0.0);
     sky.SetView(altitude_m, sun, false);
     EXPECT_EQ(sky.uses_sky_view(), altitude_m < 100e3);
-    std::vector<glm::dvec3> radiance, transmittance;
+    std::vector<double> radiance, transmittance;  // 3 values per view
     sky.Sample(views, radiance, transmittance);
     const std::unique_ptr<SkyView> view = model.View(altitude_m, sun);
     double max_rel = 0.0;
@@ -417,8 +426,8 @@ TEST(GlHillaire, SampleMatchesCpu) {
       view->Radiance(views[i], l);
       view->Transmittance(views[i], t);
       for (int c = 0; c < 3; ++c) {
-        if (l[c] > 1e-4) max_rel = std::max(max_rel, std::abs(radiance[i][c] - l[c]) / l[c]);
-        max_abs_t = std::max(max_abs_t, std::abs(transmittance[i][c] - t[c]));
+        if (l[c] > 1e-4) max_rel = std::max(max_rel, std::abs(radiance[3 * i + c] - l[c]) / l[c]);
+        max_abs_t = std::max(max_abs_t, std::abs(transmittance[3 * i + c] - t[c]));
       }
     }
     std::printf("sample at %.0f m, %zu directions: GL vs CPU radiance max rel %.3g, transmittance max abs %.3g\n",
@@ -476,6 +485,178 @@ TEST(GlHillaire, AerialPerspectiveMatchesCpu) {
     EXPECT_GT(cpu.RadianceAt(8, 4, 15, 2), 0.0) << "the far slices should hold in-scattered light";
   }
   EXPECT_THROW(sky.ComputeAerialPerspective(Camera{}, AerialPerspectiveSettings{0, 8, 8, 1000.0}), Error);
+}
+
+// Spectral atmospheres: the channels in batches of three, each batch with its own GPU tables.
+// MakeSpectral(earth, 7) is three batches, the last with one channel (repeated), so every path
+// through the batch loop is taken. Its 360 nm channel has ~5x the Rayleigh optical depth of
+// earth's blue (440 nm): the float-vs-double differences of the RGB tests are those of the
+// kernels, and the bounds below are measured on this atmosphere.
+AtmosphereParameters SpectralEarth(int channel_count) { return MakeSpectral(Preset("earth"), channel_count); }
+
+TEST(GlHillaireSpectral, TablesMatchCpuInEveryBatch) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters spectral = SpectralEarth(7);
+  HillaireModel model(spectral, HillaireSettings{});
+  model.Precompute();
+  HillaireGl sky(context, spectral, HillaireSettings{});
+  EXPECT_EQ(sky.channel_count(), 7u);
+  ASSERT_EQ(sky.batch_count(), 3u);
+  ASSERT_EQ(model.batches().size(), 3u);
+  PassTimings timings;
+  sky.Precompute(&timings);
+  sky.SetView(1000.0, SunDirection(15.0, 180.0), /*ground=*/true, &timings);
+  const double r_m = model.batches()[0].atmosphere.bottom_radius + 1000.0;
+  const double mu_s = std::sin(glm::radians(15.0));
+  for (std::size_t b = 0; b < 3; ++b) {
+    const HillaireModel::Batch& cpu = model.batches()[b];
+    const Difference t = Compare(sky.ReadTransmittance(b), cpu.transmittance);
+    const Difference m = Compare(sky.ReadMultipleScattering(b), cpu.multiple_scattering);
+    const Difference g = Compare(sky.ReadGroundIrradiance(b), cpu.ground_irradiance);
+    Texture2D cpu_view = model.ComputeSkyViewLut(cpu, r_m, mu_s);
+    model.AddGroundView(cpu, r_m, mu_s, cpu_view);
+    // The two rows at the split: the tangent horizon ray from 1 km (GlHillaire.GroundViewMatchesCpu).
+    const int half = cpu_view.height / 2;
+    const Difference v = Compare(sky.ReadSkyAndGroundView(b), cpu_view, half - 1, half + 1);
+    std::printf("spectral 7, batch %zu: GL vs CPU transmittance max abs %.3g max rel %.3g; multiple scattering "
+                "max rel %.3g; ground irradiance max rel %.3g; sky + ground view max rel %.3g\n",
+                b, t.max_abs, t.max_rel, m.max_rel, g.max_rel, v.max_rel);
+    // Tolerances: the RGB tests' (transmittance 5e-4 relative; multiple scattering 2e-4 and
+    // ground irradiance 1e-3 from a shared CPU transmittance table; sky and ground view 5e-4),
+    // each table now also inheriting the GL transmittance table's difference (<= 2.5e-4
+    // relative) through the tables it reads. The absolute transmittance bound is twice the RGB
+    // test's 3e-5: the float altitude error is relative to the optical depth, which at 360 nm is
+    // ~5x that at 440 nm, so dT = T d(tau) is larger. Measured on llvmpipe, over the three
+    // batches: transmittance max abs 2.7e-5, max rel 2.5e-4; multiple scattering max rel 6.5e-5;
+    // ground irradiance 1.9e-5; sky + ground view 3.9e-4.
+    EXPECT_LT(t.max_abs, 6e-5) << b;
+    EXPECT_LT(t.max_rel, 5e-4) << b;
+    EXPECT_LT(m.max_rel, SamplerSlack(context) * 1e-3) << b;
+    EXPECT_LT(g.max_rel, SamplerSlack(context) * 2e-3) << b;
+    EXPECT_LT(v.max_rel, SamplerSlack(context) * 1e-3) << b;
+  }
+  // Each pass ran once per batch, timed as one pass (the sum of its batches).
+  for (const char* pass : {"transmittance_lut", "multiple_scattering_lut", "ground_irradiance_lut", "sky_view_lut",
+                           "ground_view_lut"}) {
+    EXPECT_GE(timings.LastMs(pass), 0.0) << pass;
+  }
+  EXPECT_THROW(sky.ReadTransmittance(3), std::out_of_range);
+}
+
+// The frame, one channel per wavelength, against the CPU's N-channel render, for each camera;
+// the perspective camera's centre pixel looks at the sun, whose disc the host adds per channel.
+// The cameras are GlHillaire.FrameMatchesCpuForEachCamera's (65 x 33), whose pixel centres keep
+// off the horizon rows: at 63 x 31 one perspective pixel centre lies at the horizon, where the
+// ground-view table steps from sky to ground, and differs by 1.1e-2 (830 nm; measured).
+TEST(GlHillaireSpectral, FrameMatchesCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters spectral = SpectralEarth(5);
+  HillaireModel model(spectral, HillaireSettings{});
+  model.Precompute();
+  for (const CameraKind kind : {CameraKind::kPerspective, CameraKind::kFisheye, CameraKind::kEquirect}) {
+    RenderSettings render;
+    render.camera = {kind, 65, 33, 90.0, 180.0, 10.0};
+    render.altitude_m = 500.0;
+    render.sun_elevation_deg = 10.0;
+    render.sun_azimuth_deg = 180.0;
+    render.terms = RadianceTerms{true, true};
+    PassTimings timings;
+    const auto [gl, cpu] = RenderOnBothBackends(context, spectral, model, render, timings);
+    ASSERT_EQ(gl.channels, 5);
+    ASSERT_EQ(cpu.channels, 5);
+    ASSERT_EQ(gl.pixels.size(), cpu.pixels.size());
+    const std::size_t sun_pixel = 16 * 65 + 32;
+    const FrameDifference d =
+        CompareFrames(gl, cpu, kind == CameraKind::kPerspective ? sun_pixel : cpu.pixels.size());
+    std::printf("spectral 5 frame %s 65x33: GL vs CPU max rel %.3g (pixel (%zu, %zu), channel %zu: GL %.6g, CPU "
+                "%.6g), mean rel %.3g, alpha max diff %.3g\n",
+                std::string(ToString(kind)).c_str(), d.max_rel, d.worst / 5 % 65, d.worst / 5 / 65, d.worst % 5,
+                gl.pixels[d.worst], cpu.pixels[d.worst], d.mean_rel, d.max_abs_alpha);
+    if (kind == CameraKind::kPerspective) {
+      double worst = 0.0;
+      for (std::size_t c = 0; c < 5; ++c) {
+        const std::size_t i = sun_pixel * 5 + c;
+        EXPECT_GT(cpu.pixels[i], 100.0f * cpu.pixels[c]) << "the centre pixel should see the sun disc, channel " << c;
+        worst = std::max(worst, std::abs(double(gl.pixels[i]) / cpu.pixels[i] - 1.0));
+      }
+      std::printf("spectral 5 sun disc pixel: GL / CPU - 1 at most %.3g over the channels\n", worst);
+      // Tolerance: as GlHillaire.FrameMatchesCpuForEachCamera's disc pixel (the same host pass,
+      // on each batch's GL transmittance table). Measured on llvmpipe: 1.6e-5.
+      EXPECT_LT(worst, SamplerSlack(context) * 3e-4);
+    }
+    // Tolerance: GlHillaire.FrameMatchesCpuForEachCamera's (2e-3 max, 5e-4 mean), per channel.
+    // Measured on llvmpipe: max rel 1.2e-3 / 1.3e-3 / 1.2e-3 (perspective / fisheye / equirect,
+    // all at 830 nm), mean rel 2.2e-4 / 1.7e-4 / 6.7e-5: those of the RGB frames.
+    EXPECT_LT(d.max_rel, SamplerSlack(context) * 2e-3);
+    EXPECT_LT(d.mean_rel, SamplerSlack(context) * 5e-4);
+    EXPECT_EQ(d.max_abs_alpha, 0.0);
+  }
+}
+
+// `atmo sample` and the aerial perspective on GL with 5 channels: every channel of every
+// direction against the CPU view, by the sky-view table (ground) and by ray march (300 km).
+TEST(GlHillaireSpectral, SampleAndAerialPerspectiveMatchCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters spectral = SpectralEarth(5);
+  HillaireModel model(spectral, HillaireSettings{});
+  model.Precompute();
+  HillaireGl sky(context, spectral, HillaireSettings{});
+  sky.Precompute();
+  std::vector<glm::dvec3> views;
+  for (double zenith_deg = 2.0; zenith_deg < 180.0; zenith_deg += 11.0) {
+    for (double azimuth_deg = 0.0; azimuth_deg < 360.0; azimuth_deg += 45.0) {
+      const double theta = glm::radians(zenith_deg);
+      const double phi = glm::radians(azimuth_deg);
+      views.emplace_back(std::sin(theta) * std::sin(phi), std::sin(theta) * std::cos(phi), std::cos(theta));
+    }
+  }
+  const glm::dvec3 sun = SunDirection(25.0, 0.0);
+  for (const double altitude_m : {0.0, 300e3}) {
+    sky.SetView(altitude_m, sun, false);
+    std::vector<double> radiance, transmittance;
+    sky.Sample(views, radiance, transmittance);
+    ASSERT_EQ(radiance.size(), 5 * views.size());
+    ASSERT_EQ(transmittance.size(), 5 * views.size());
+    const std::unique_ptr<SkyView> view = model.View(altitude_m, sun);
+    double max_rel = 0.0;
+    double max_abs_t = 0.0;
+    std::vector<double> l(5), t(5);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      view->Radiance(views[i], l);
+      view->Transmittance(views[i], t);
+      for (std::size_t c = 0; c < 5; ++c) {
+        if (l[c] > 1e-4) max_rel = std::max(max_rel, std::abs(radiance[5 * i + c] - l[c]) / l[c]);
+        max_abs_t = std::max(max_abs_t, std::abs(transmittance[5 * i + c] - t[c]));
+      }
+    }
+    std::printf("spectral 5 sample at %.0f m: GL vs CPU radiance max rel %.3g, transmittance max abs %.3g\n",
+                altitude_m, max_rel, max_abs_t);
+    // Tolerance: GlHillaire.SampleMatchesCpu's (2e-3, 5e-5), per channel. Measured on llvmpipe:
+    // radiance max rel 5.8e-4 (0 m) and 4.3e-5 (300 km), transmittance max abs 6.5e-6.
+    EXPECT_LT(max_rel, SamplerSlack(context) * 2e-3);
+    EXPECT_LT(max_abs_t, SamplerSlack(context) * 5e-5);
+  }
+  // The aerial perspective, 5 values per froxel.
+  sky.SetView(500.0, sun, false);
+  const Camera camera{CameraKind::kPerspective, 320, 180, 90.0, 150.0, -5.0};
+  const AerialPerspectiveSettings settings{8, 4, 8, 32000.0};
+  const AerialPerspectiveVolume gl = sky.ComputeAerialPerspective(camera, settings);
+  const AerialPerspectiveVolume cpu = ComputeAerialPerspectiveVolume(*model.View(500.0, sun), camera, settings);
+  ASSERT_EQ(gl.channel_count(), 5u);
+  double max_rel_l = 0.0;
+  for (int z = 0; z < settings.depth; ++z) {
+    for (int y = 0; y < settings.height; ++y) {
+      for (int x = 0; x < settings.width; ++x) {
+        for (std::size_t c = 0; c < 5; ++c) {
+          const double l = cpu.RadianceAt(x, y, z, c);
+          if (l > 1e-4) max_rel_l = std::max(max_rel_l, std::abs(gl.RadianceAt(x, y, z, c) - l) / l);
+        }
+      }
+    }
+  }
+  std::printf("spectral 5 aerial perspective: GL vs CPU radiance max rel %.3g\n", max_rel_l);
+  // Tolerance: GlHillaire.AerialPerspectiveMatchesCpu's (1e-3). Measured on llvmpipe: 2.0e-4.
+  EXPECT_LT(max_rel_l, SamplerSlack(context) * 1e-3);
 }
 
 TEST(GlHillaire, RejectsWhatItCannotRender) {
@@ -568,6 +749,105 @@ TEST_F(GlCliTest, PrecomputeOnGlWritesATableTheCpuLoads) {
   std::printf("elek table precomputed on gl, loaded on the cpu: max rel %.3g against the cpu table\n", worst);
   // As SampleMatchesTheCpuBackend (measured 2.3e-5).
   EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3);
+}
+
+// `atmo render --spectral 5 --unit luminance` on GL: the five channels rendered in two batches and
+// converted to luminance (linear sRGB, Y in cd/m^2) exactly as on the CPU.
+TEST_F(GlCliTest, SpectralRenderMatchesTheCpuBackend) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  const std::string render = "render --spectral 5 --unit luminance --width 64 --height 32 --sun-elevation 12 --png '' ";
+  const atmo::testing::RunResult cpu = Run(render + "--exr cpu.exr");
+  const atmo::testing::RunResult gl = Run(render + "--backend gl --exr gl.exr");
+  ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+  ASSERT_EQ(gl.exit_code, 0) << gl.err;
+  const Image a = ReadExr(dir_ / "cpu.exr");
+  const Image b = ReadExr(dir_ / "gl.exr");
+  ASSERT_EQ(a.channels, 3);
+  ASSERT_EQ(b.channels, 3);
+  ASSERT_EQ(a.pixels.size(), b.pixels.size());
+  // The sun disc (pixels above 100x the median) is compared apart, as its few pixels hold ~10^4
+  // times the sky's luminance.
+  std::vector<float> sorted = a.pixels;
+  std::sort(sorted.begin(), sorted.end());
+  const float median = sorted[sorted.size() / 2];
+  double sky_max_rel = 0.0, disc_max_rel = 0.0;
+  int disc_values = 0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+    if (a.pixels[i] <= 1e-2f * median) continue;
+    const double rel = std::abs(double(b.pixels[i]) - a.pixels[i]) / a.pixels[i];
+    const bool disc = a.pixels[i] > 100.0f * median;
+    disc_values += disc;
+    double& worst = disc ? disc_max_rel : sky_max_rel;
+    worst = std::max(worst, rel);
+  }
+  std::printf("render --spectral 5 --unit luminance: gl vs cpu max rel %.3g (sky), %.3g (sun disc, %d values)\n",
+              sky_max_rel, disc_max_rel, disc_values);
+  // Tolerance: the frames' (GlHillaireSpectral.FrameMatchesCpu: 2e-3 per channel), through the
+  // same linear conversion (a weighted sum of the channels, all positive weights for Y, so a
+  // relative bound per channel bounds Y; the R, G, B of the matrix mix signs, but the sky's
+  // values are far from 0). The disc's pixels (12 values) are the host pass on the GL
+  // transmittance tables: 1e-3, a factor of 2 over the transmittance's 5e-4. Measured on
+  // llvmpipe: 1.0e-3 (sky), 3.7e-6 (disc).
+  const double slack = SamplerSlack(*GetSharedContext().context);
+  EXPECT_GT(disc_values, 0) << "the camera should see the sun disc";
+  EXPECT_LT(sky_max_rel, slack * 2e-3);
+  EXPECT_LT(disc_max_rel, slack * 1e-3);
+}
+
+// `atmo sample --spectral 5` on GL: all five rows of every point, as the CPU's.
+TEST_F(GlCliTest, SpectralSampleMatchesTheCpuBackend) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
+  for (const char* model : {"--model hillaire", "--model elek --option size=16x64x16"}) {
+    const std::string sample = std::string("sample --spectral 5 ") + model + " --grid grid.csv ";
+    const atmo::testing::RunResult cpu = Run(sample + "--out cpu.csv");
+    const atmo::testing::RunResult gl = Run(sample + "--backend gl --out gl.csv");
+    ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+    ASSERT_EQ(gl.exit_code, 0) << gl.err;
+    const std::vector<double> a = RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv"));
+    const std::vector<double> b = RadianceColumn(atmo::testing::ReadFile(dir_ / "gl.csv"));
+    ASSERT_EQ(a.size(), 8u * 5u);
+    const double worst = MaxRelativeDifference(a, b, 1e-6);
+    std::printf("atmo sample --spectral 5 %s: gl vs cpu max rel %.3g\n", model, worst);
+    // Tolerance: SampleMatchesTheCpuBackend's (2e-3). Measured on llvmpipe: 6.8e-4 (hillaire),
+    // 4.0e-5 (elek).
+    EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3) << model;
+  }
+}
+
+// The elek table of a 5-channel atmosphere precomputed on GL: both batches exported (the format's
+// one table per batch, include/atmo/elek.h), loaded by the CPU, and answering as the CPU's table.
+TEST_F(GlCliTest, SpectralPrecomputeOnGlWritesATableTheCpuLoads) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  const std::string elek = "--model elek --spectral 5 --option size=8x32x8 --option orders=2";
+  const atmo::testing::RunResult r = Run("precompute --backend gl " + elek + " --out table");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(atmo::testing::ReadFile(dir_ / "table.json").find("\"batches\": 2"), std::string::npos);
+  atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
+  const atmo::testing::RunResult loaded =
+      Run("sample " + elek + " --option table=table --grid grid.csv --out loaded.csv");
+  const atmo::testing::RunResult cpu = Run("sample " + elek + " --grid grid.csv --out cpu.csv");
+  ASSERT_EQ(loaded.exit_code, 0) << loaded.err;
+  ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+  const std::vector<double> a = RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv"));
+  ASSERT_EQ(a.size(), 8u * 5u);
+  const double worst = MaxRelativeDifference(a, RadianceColumn(atmo::testing::ReadFile(dir_ / "loaded.csv")), 1e-6);
+  std::printf("spectral elek table precomputed on gl, loaded on the cpu: max rel %.3g against the cpu table\n", worst);
+  // As PrecomputeOnGlWritesATableTheCpuLoads (2e-3). Measured on llvmpipe: 1.8e-5.
+  EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3);
+}
+
+// `atmo bench --backend gl` with 4 channels (two batches): the passes under their usual names.
+TEST_F(GlCliTest, BenchRunsSpectralOnGl) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  for (const char* model : {"--model hillaire", "--model elek --option size=8x32x8 --option orders=2"}) {
+    const atmo::testing::RunResult r =
+        Run(std::string("bench --backend gl --spectral 4 --repeat 1 --width 32 --height 16 ") + model);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    for (const char* pass : {"_lut", "all_luts", "frame_32x16"}) {
+      EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
+    }
+  }
 }
 
 TEST_F(GlCliTest, BenchRunsElekOnGl) {

@@ -9,6 +9,7 @@
 #include "atmo/error.h"
 #include "atmo/parameters.h"
 #include "atmo/spectrum.h"
+#include "physics/shared_parameters.h"
 
 namespace atmo {
 namespace {
@@ -206,6 +207,18 @@ TEST(Colour, ConvertImageRecordsTheColourSpace) {
   const double y = 0.2126 * rgb.at(0, 0, 0) + 0.7152 * rgb.at(0, 0, 1) + 0.0722 * rgb.at(0, 0, 2);
   EXPECT_NEAR(y / xyz.at(0, 0, 1), 1.0, 2e-3);
   EXPECT_THROW(ConvertImage(Image(2, 1, 4), convert, ImageColour::kXyz), Error);
+}
+
+// The values of one batch of three channels (the GL backend's solar irradiance per batch): a
+// last batch with fewer channels repeats its last one, as ToSharedParameters does.
+TEST(Spectrum, BatchValuesRepeatTheLastChannel) {
+  const std::vector<double> values = {1.0, 2.0, 3.0, 4.0, 5.0};
+  EXPECT_EQ(BatchValues(values, 0), glm::dvec3(1.0, 2.0, 3.0));
+  EXPECT_EQ(BatchValues(values, 1), glm::dvec3(4.0, 5.0, 5.0));
+  const AtmosphereParameters p = MakeSpectral(Preset("earth"), 7);
+  EXPECT_EQ(BatchValues(p.wavelengths_nm, 2), ToSharedParameters(p, 2).wavelength);
+  EXPECT_EQ(ChannelBatchCount(7), 3u);
+  EXPECT_THROW(BatchValues(std::vector<double>{}, 0), Error);
 }
 
 }  // namespace

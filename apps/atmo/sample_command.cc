@@ -146,12 +146,15 @@ GroupEvaluator ModelEvaluator(const Model& model) {
 GroupEvaluator HillaireGlEvaluator(gl::HillaireGl& sky) {
   return [&sky](const PointGroup& group, std::vector<SampleResult>& results) {
     sky.SetView(group.altitude_m, SunOf(group), /*ground=*/false);
-    std::vector<glm::dvec3> radiance, transmittance;
+    std::vector<double> radiance, transmittance;  // channel_count values per view
     sky.Sample(group.views, radiance, transmittance);
+    const std::size_t nc = sky.channel_count();
     for (std::size_t k = 0; k < group.indices.size(); ++k) {
-      const glm::dvec3& l = radiance[k];
-      const glm::dvec3& t = transmittance[k];
-      results[group.indices[k]] = {{l.x, l.y, l.z}, {t.x, t.y, t.z}, {0.0, 0.0, 0.0}};
+      const auto channels = [&](const std::vector<double>& values) {
+        return std::vector<double>(values.begin() + static_cast<std::ptrdiff_t>(nc * k),
+                                   values.begin() + static_cast<std::ptrdiff_t>(nc * (k + 1)));
+      };
+      results[group.indices[k]] = {channels(radiance), channels(transmittance), std::vector<double>(nc, 0.0)};
     }
   };
 }

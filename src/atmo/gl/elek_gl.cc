@@ -459,47 +459,54 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   for (const double value : {render.altitude_m, render.sun_elevation_deg, render.sun_azimuth_deg}) {
     if (!std::isfinite(value)) throw Error("altitude and sun angles must be finite");
   }
-  if (parameters.channel_count() != 3) {
-    throw Error("the gl backend renders 3 channels (red, green, blue); these parameters have " +
-                std::to_string(parameters.channel_count()));
-  }
   const ElekModel model(parameters, settings);  // checks the parameters (spherical, valid)
   CheckSettings(settings);
   if (render.altitude_m < 0.0) throw Error("altitude_m must be >= 0 for model elek");
-  const shared::AtmosphereParameters km = ElekKmAtmosphere(model, 0);
-  const ElekTablesGl tables = ComputeElekTablesGl(context, km, settings, timings);
 
   double compile_ms = 0.0;
   const ComputeProgram& program = ElekProgram(context, kFrameMain, "elek frame", compile_ms);
   if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
   const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
   const shared::CameraParameters camera = ToSharedCamera(render.camera);
-  SetAtmosphereUniforms(program, "atmosphere", km);
-  SetCameraUniforms(program, "camera", camera);
-  program.SetInt("mapping", settings.mapping);
-  program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
-  program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
-  program.SetVec3("sun_direction", sun);
-  program.SetInt("sun_disc", 0);  // added on the host, integrated over the pixels (AddSunDiscOnHost)
-  program.SetVec3("solar_irradiance", shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
-                                                   parameters.solar_irradiance[2]));
-  BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
-                         {"rayleigh_table", &tables.total.rayleigh},
-                         {"mie_table", &tables.total.mie}});
-  const GpuTexture frame = GpuTexture::Make2D({camera.width, camera.height});
-  frame.BindImage(0);
-  GpuPassTimer timer(timings);
-  DispatchCompute2D(program, {camera.width, camera.height});
-  timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
-  const std::vector<float> rgba = frame.DownloadRgba();
-  Image image(camera.width, camera.height, 3);
+  const std::size_t nc = parameters.channel_count();
+  const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
+  Image image(camera.width, camera.height, static_cast<int>(nc));
   const bool has_alpha = camera.kind == shared::kCameraFisheye;
-  if (has_alpha) image.alpha.assign(static_cast<std::size_t>(camera.width) * camera.height, 0.0f);
-  for (std::size_t i = 0; i < static_cast<std::size_t>(camera.width) * camera.height; ++i) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
-    if (has_alpha) image.alpha[i] = rgba[4 * i + 3];
+  if (has_alpha) image.alpha.assign(n, 0.0f);
+  const GpuTexture frame = GpuTexture::Make2D({camera.width, camera.height});
+  std::vector<shared::Texture2D> transmittance;  // per batch, for the host's sun disc
+  // Batch by batch: its tables, its frame pass and the frame's read-back into its channels; the
+  // tables of a batch are freed before the next one's are made. Passes of the same name add up
+  // over the batches in `timings`.
+  for (std::size_t b = 0; b < model.batches().size(); ++b) {
+    const shared::AtmosphereParameters km = ElekKmAtmosphere(model, b);
+    const ElekTablesGl tables = ComputeElekTablesGl(context, km, settings, timings);
+    SetAtmosphereUniforms(program, "atmosphere", km);
+    SetCameraUniforms(program, "camera", camera);
+    program.SetInt("mapping", settings.mapping);
+    program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
+    program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
+    program.SetVec3("sun_direction", sun);
+    program.SetInt("sun_disc", 0);  // added on the host, integrated over the pixels (AddSunDiscOnHost)
+    program.SetVec3("solar_irradiance", BatchValues(parameters.solar_irradiance, b));
+    BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
+                           {"rayleigh_table", &tables.total.rayleigh},
+                           {"mie_table", &tables.total.mie}});
+    frame.BindImage(0);
+    {
+      GpuPassTimer timer(timings);
+      DispatchCompute2D(program, {camera.width, camera.height});
+      timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+    }
+    const std::vector<float> rgba = frame.DownloadRgba();
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t c = 0; c < 3 && 3 * b + c < nc; ++c) image.pixels[nc * i + 3 * b + c] = rgba[4 * i + c];
+      if (has_alpha && b == 0) image.alpha[i] = rgba[4 * i + 3];
+    }
+    if (render.terms.sun_disc) transmittance.push_back(tables.transmittance.Download2D());
   }
-  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, tables.transmittance.Download2D(), render, image);
+  CheckGlError("elek frame");
+  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, transmittance, render, image);
   return image;
 }
 

@@ -21,9 +21,12 @@
 // Tables and radiance do not depend on the length unit (I integrates sigma_s dt), so GL tables
 // answer the CPU's lookups in metres.
 //
+// Any number of channels: as on the CPU, every batch of three channels has its own tables
+// (ElekModel::batches(), ElekKmAtmosphere), and PrecomputeElekGl and RenderElekGl run the passes
+// once per batch, under the same names (a PassTimings entry then sums its batches' calls).
+//
 // Errors (atmo::Error, one line): a model that loads its table (option table=NAME), parameters
-// elek rejects, and for RenderElekGl what atmo::Render rejects and parameters without exactly 3
-// channels.
+// elek rejects, and for RenderElekGl what atmo::Render rejects.
 #pragma once
 
 #include <vector>
@@ -63,12 +66,13 @@ shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_
 // sum: ElekModel::SetComputedTables), so that its SkyView answers from them.
 void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* timings = nullptr);
 
-// The tables on GL, then the frame pass: per pixel the camera ray (GetCameraRayDirection),
-// GetElekRadiance (what ElekModel's SkyView answers) times the solar irradiance, and the sun disc
-// when render.terms.sun_disc, added on the host integrated over the pixels (AddSunDiscOnHost,
-// gl/hillaire_gl.h); alpha (0 outside the circle) for a fisheye
-// camera, as atmo::Render. Elek has no lit ground, so terms.ground adds nothing, as on the CPU.
-// The frame pass is timed as frame_WxH.
+// Per batch the tables on GL, then the frame pass: per pixel the camera ray
+// (GetCameraRayDirection), GetElekRadiance (what ElekModel's SkyView answers) times the solar
+// irradiance; the batches' frames make one image with one channel per wavelength, and the sun disc
+// when render.terms.sun_disc is added on the host integrated over the pixels (AddSunDiscOnHost,
+// gl/hillaire_gl.h); alpha (0 outside the circle) for a fisheye camera, as atmo::Render. Elek
+// has no lit ground, so terms.ground adds nothing, as on the CPU. The frame pass is timed as
+// frame_WxH (once per batch).
 Image RenderElekGl(const Context& context, const AtmosphereParameters& parameters, const ElekSettings& settings,
                    const RenderSettings& render, PassTimings* timings = nullptr);
 

@@ -260,38 +260,51 @@ HillaireGl::HillaireGl(const Context& context, const AtmosphereParameters& param
     throw Error("model hillaire needs a spherical atmosphere; the half-space of preset '" + parameters.name +
                 "' is the geometry of the simple model");
   }
-  if (parameters.channel_count() != 3) {
-    throw Error("the gl backend computes 3 channels (red, green, blue); these parameters have " +
-                std::to_string(parameters.channel_count()));
+  channel_count_ = parameters.channel_count();
+  batches_.resize(ChannelBatchCount(channel_count_));
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    batches_[b].metres = ToSharedParameters(parameters, b);
+    batches_[b].km = ToSharedParameters(parameters, b, 1000.0);
+    batches_[b].solar_irradiance = BatchValues(parameters.solar_irradiance, b);
   }
-  metres_ = ToSharedParameters(parameters, 0);
-  km_ = ToSharedParameters(parameters, 0, 1000.0);
-  solar_irradiance_ = shared::vec3(parameters.solar_irradiance[0], parameters.solar_irradiance[1],
-                                   parameters.solar_irradiance[2]);
 }
 
+// Each pass runs for every batch before the next pass (as HillaireModel::Precompute), so that
+// each timed pass name holds the sum of its batches.
 void HillaireGl::Precompute(PassTimings* timings) {
   context_.MakeCurrent();
   const HillaireSettings& s = settings_;
-  if (transmittance_.empty()) {
-    transmittance_ = GpuTexture::Make2D(s.transmittance_lut);
-    multiple_scattering_ = GpuTexture::Make2D(s.multiple_scattering_lut);
-    ground_irradiance_ = GpuTexture::Make2D({s.ground_irradiance_lut, 1});
+  if (batches_.front().transmittance.empty()) {
+    for (Batch& batch : batches_) {
+      batch.transmittance = GpuTexture::Make2D(s.transmittance_lut);
+      batch.multiple_scattering = GpuTexture::Make2D(s.multiple_scattering_lut);
+      batch.ground_irradiance = GpuTexture::Make2D({s.ground_irradiance_lut, 1});
+    }
   }
   // The ground's share of orders >= 2 is a small hemisphere sum, computed on the host as the CPU does.
-  const shared::vec3 ground_transfer =
-      s.multiple_scattering_ground
-          ? shared::GetGroundTransfer(metres_, s.multiple_scattering_directions / 2, s.multiple_scattering_samples)
-          : shared::vec3(0.0);
+  std::vector<shared::vec3> ground_transfer(batches_.size(), shared::vec3(0.0));
+  if (s.multiple_scattering_ground) {
+    for (std::size_t b = 0; b < batches_.size(); ++b) {
+      ground_transfer[b] = shared::GetGroundTransfer(batches_[b].metres, s.multiple_scattering_directions / 2,
+                                                     s.multiple_scattering_samples);
+    }
+  }
   GpuPassTimer timer(timings);
-  RunTransmittancePass(context_, km_, s.transmittance_samples, transmittance_);
+  for (const Batch& batch : batches_) {
+    RunTransmittancePass(context_, batch.km, s.transmittance_samples, batch.transmittance);
+  }
   timer.Stop("transmittance_lut");
-  RunMultipleScatteringPass(context_, km_, transmittance_, s.multiple_scattering_directions,
-                            s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer,
-                            multiple_scattering_);
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    const Batch& batch = batches_[b];
+    RunMultipleScatteringPass(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
+                              s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer[b],
+                              batch.multiple_scattering);
+  }
   timer.Stop("multiple_scattering_lut");
-  RunGroundIrradiancePass(context_, km_, transmittance_, multiple_scattering_, s.ground_irradiance_directions,
-                          s.ground_irradiance_samples, ground_irradiance_);
+  for (const Batch& batch : batches_) {
+    RunGroundIrradiancePass(context_, batch.km, batch.transmittance, batch.multiple_scattering,
+                            s.ground_irradiance_directions, s.ground_irradiance_samples, batch.ground_irradiance);
+  }
   timer.Stop("ground_irradiance_lut");
   CheckGlError("hillaire tables");
   precomputed_ = true;
@@ -308,33 +321,41 @@ void HillaireGl::SetView(double altitude_m, const glm::dvec3& sun_direction, boo
   context_.MakeCurrent();
   sun_ = glm::normalize(sun_direction);
   mu_s_ = shared::ClampCosine(sun_.z);
-  // Double-precision metres for what the host decides, km for the GPU.
-  const double r_m = metres_.bottom_radius + altitude_m;
+  // Double-precision metres for what the host decides, km for the GPU; the radii are those of
+  // every batch.
+  const shared::AtmosphereParameters& metres = batches_.front().metres;
+  const double r_m = metres.bottom_radius + altitude_m;
   r_km_ = r_m / 1000.0;
-  horizon_nadir_angle_ = shared::GetHorizonNadirAngle(metres_, r_m);
-  uses_sky_view_ = settings_.use_sky_view_lut && r_m <= metres_.top_radius;
+  horizon_nadir_angle_ = shared::GetHorizonNadirAngle(metres, r_m);
+  uses_sky_view_ = settings_.use_sky_view_lut && r_m <= metres.top_radius;
   has_ground_view_ = false;
   view_set_ = true;
   if (!uses_sky_view_) return;
-  if (sky_view_.empty()) {
-    sky_view_ = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
-    sky_and_ground_view_ = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
+  if (batches_.front().sky_view.empty()) {
+    for (Batch& batch : batches_) {
+      batch.sky_view = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
+      batch.sky_and_ground_view = GpuTexture::Make2D(settings_.sky_view_lut, /*repeat_u=*/true);
+    }
   }
   GpuPassTimer timer(timings);
-  RunSkyViewPass(context_, km_, transmittance_, multiple_scattering_, r_km_, mu_s_, settings_.sky_view_samples,
-                 sky_view_);
+  for (const Batch& batch : batches_) {
+    RunSkyViewPass(context_, batch.km, batch.transmittance, batch.multiple_scattering, r_km_, mu_s_,
+                   settings_.sky_view_samples, batch.sky_view);
+  }
   timer.Stop("sky_view_lut");
   if (ground) {
-    RunGroundViewPass(context_, km_, transmittance_, ground_irradiance_, sky_view_, r_km_, mu_s_,
-                      sky_and_ground_view_);
+    for (const Batch& batch : batches_) {
+      RunGroundViewPass(context_, batch.km, batch.transmittance, batch.ground_irradiance, batch.sky_view, r_km_, mu_s_,
+                        batch.sky_and_ground_view);
+    }
     timer.Stop("ground_view_lut");
     has_ground_view_ = true;
   }
   CheckGlError("hillaire sky view");
 }
 
-void HillaireGl::SetSkyUniforms(const ComputeProgram& program) const {
-  SetAtmosphereUniforms(program, "atmosphere", km_);
+void HillaireGl::SetSkyUniforms(const ComputeProgram& program, const Batch& batch) const {
+  SetAtmosphereUniforms(program, "atmosphere", batch.km);
   program.SetFloat("r", r_km_);
   program.SetFloat("mu_s", mu_s_);
   program.SetVec3("sun_direction", sun_);
@@ -380,47 +401,55 @@ void main() {
   imageStore(output_image, pixel, vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0));
 }
 )glsl", "frame");
-  if (frame_.empty() || frame_.size2() != shared::ivec2(camera.width, camera.height)) {
-    frame_ = GpuTexture::Make2D({camera.width, camera.height});
+  for (Batch& batch : batches_) {
+    if (batch.frame.empty() || batch.frame.size2() != shared::ivec2(camera.width, camera.height)) {
+      batch.frame = GpuTexture::Make2D({camera.width, camera.height});
+    }
   }
   frame_has_alpha_ = camera.kind == shared::kCameraFisheye;
-  SetSkyUniforms(program);
   SetCameraUniforms(program, "camera", camera);
   program.SetInt("sun_disc", terms.sun_disc ? 1 : 0);
   program.SetInt("ground", terms.ground ? 1 : 0);
-  program.SetVec3("solar_irradiance", solar_irradiance_);
-  const GpuTexture& sky_view = terms.ground ? sky_and_ground_view_ : sky_view_;
-  BindSamplers(program, {{"transmittance_texture", &transmittance_},
-                         {"multiple_scattering_texture", &multiple_scattering_},
-                         {"ground_irradiance_texture", &ground_irradiance_},
-                         {"sky_view_texture", &sky_view}});
-  frame_.BindImage(0);
   GpuPassTimer timer(timings);
-  DispatchCompute2D(program, frame_.size2());
+  for (const Batch& batch : batches_) {
+    SetSkyUniforms(program, batch);
+    program.SetVec3("solar_irradiance", batch.solar_irradiance);
+    const GpuTexture& sky_view = terms.ground ? batch.sky_and_ground_view : batch.sky_view;
+    BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
+                           {"multiple_scattering_texture", &batch.multiple_scattering},
+                           {"ground_irradiance_texture", &batch.ground_irradiance},
+                           {"sky_view_texture", &sky_view}});
+    batch.frame.BindImage(0);
+    DispatchCompute2D(program, batch.frame.size2());
+  }
   timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
   CheckGlError("frame");
 }
 
 Image HillaireGl::ReadFrame() const {
-  if (frame_.empty()) throw Error("GL hillaire: ReadFrame before RenderFrame");
+  if (batches_.front().frame.empty()) throw Error("GL hillaire: ReadFrame before RenderFrame");
   context_.MakeCurrent();
-  const std::vector<float> rgba = frame_.DownloadRgba();
-  const shared::ivec2 size = frame_.size2();
-  Image image(size.x, size.y, 3);
+  const shared::ivec2 size = batches_.front().frame.size2();
   const std::size_t n = static_cast<std::size_t>(size.x) * size.y;
+  const std::size_t nc = channel_count_;
+  Image image(size.x, size.y, static_cast<int>(nc));
   if (frame_has_alpha_) image.alpha.assign(n, 0.0f);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
-    if (frame_has_alpha_) image.alpha[i] = rgba[4 * i + 3];
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    const std::vector<float> rgba = batches_[b].frame.DownloadRgba();
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t c = 0; c < 3 && 3 * b + c < nc; ++c) image.pixels[nc * i + 3 * b + c] = rgba[4 * i + c];
+      if (frame_has_alpha_ && b == 0) image.alpha[i] = rgba[4 * i + 3];
+    }
   }
   return image;
 }
 
-void HillaireGl::Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec3>& radiance,
-                        std::vector<glm::dvec3>& transmittance, PassTimings* timings) {
+void HillaireGl::Sample(std::span<const glm::dvec3> views, std::vector<double>& radiance,
+                        std::vector<double>& transmittance, PassTimings* timings) {
   if (!view_set_) throw Error("GL hillaire: Sample before SetView");
-  radiance.assign(views.size(), glm::dvec3(0.0));
-  transmittance.assign(views.size(), glm::dvec3(0.0));
+  const std::size_t nc = channel_count_;
+  radiance.assign(views.size() * nc, 0.0);
+  transmittance.assign(views.size() * nc, 0.0);
   if (views.empty()) return;
   context_.MakeCurrent();
   const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
@@ -445,32 +474,43 @@ void main() {
     directions[4 * i + 1] = static_cast<float>(v.y);
     directions[4 * i + 2] = static_cast<float>(v.z);
   }
-  GLuint buffers[2] = {0, 0};
-  glCreateBuffers(2, buffers);
+  // The directions, then one results buffer per batch.
+  const std::size_t batch_count = batches_.size();
+  std::vector<GLuint> buffers(1 + batch_count, 0);
+  glCreateBuffers(static_cast<GLsizei>(buffers.size()), buffers.data());
   glNamedBufferStorage(buffers[0], static_cast<GLsizeiptr>(directions.size() * sizeof(float)), directions.data(), 0);
   const auto results_bytes = static_cast<GLsizeiptr>(8 * views.size() * sizeof(float));
-  glNamedBufferStorage(buffers[1], results_bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
+  for (std::size_t b = 0; b < batch_count; ++b) {
+    glNamedBufferStorage(buffers[1 + b], results_bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
+  }
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[0]);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1]);
-  SetSkyUniforms(program);
   program.SetInt("count", static_cast<int>(views.size()));
-  BindSamplers(program, {{"transmittance_texture", &transmittance_},
-                         {"multiple_scattering_texture", &multiple_scattering_},
-                         {"ground_irradiance_texture", &ground_irradiance_},
-                         {"sky_view_texture", &sky_view_}});
   {
     GpuPassTimer timer(timings);
-    DispatchCompute1D(program, static_cast<int>(views.size()));
+    for (std::size_t b = 0; b < batch_count; ++b) {
+      const Batch& batch = batches_[b];
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1 + b]);
+      SetSkyUniforms(program, batch);
+      BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
+                             {"multiple_scattering_texture", &batch.multiple_scattering},
+                             {"ground_irradiance_texture", &batch.ground_irradiance},
+                             {"sky_view_texture", &batch.sky_view}});
+      DispatchCompute1D(program, static_cast<int>(views.size()));
+    }
     timer.Stop("sample_" + std::to_string(views.size()));
   }
   std::vector<float> results(8 * views.size());
-  glGetNamedBufferSubData(buffers[1], 0, results_bytes, results.data());
-  glDeleteBuffers(2, buffers);
-  CheckGlError("sample");
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    radiance[i] = glm::dvec3(results[8 * i], results[8 * i + 1], results[8 * i + 2]);
-    transmittance[i] = glm::dvec3(results[8 * i + 4], results[8 * i + 5], results[8 * i + 6]);
+  for (std::size_t b = 0; b < batch_count; ++b) {
+    glGetNamedBufferSubData(buffers[1 + b], 0, results_bytes, results.data());
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      for (std::size_t c = 0; c < 3 && 3 * b + c < nc; ++c) {
+        radiance[nc * i + 3 * b + c] = results[8 * i + c];
+        transmittance[nc * i + 3 * b + c] = results[8 * i + 4 + c];
+      }
+    }
   }
+  glDeleteBuffers(static_cast<GLsizei>(buffers.size()), buffers.data());
+  CheckGlError("sample");
 }
 
 AerialPerspectiveVolume HillaireGl::ComputeAerialPerspective(const Camera& camera,
@@ -517,46 +557,62 @@ void main() {
     aerial_radiance_ = GpuTexture::Make3D(size);
     aerial_transmittance_ = GpuTexture::Make3D(size);
   }
-  SetAtmosphereUniforms(program, "atmosphere", km_);
   SetCameraUniforms(program, "camera", ToSharedCamera(camera));
   program.SetFloat("r", r_km_);
   program.SetFloat("mu_s", mu_s_);
   program.SetVec3("sun_direction", sun_);
   program.SetFloat("max_distance", settings.max_distance_m / 1000.0);
   program.SetInt("ray_march_samples", settings_.ray_march_samples);
-  BindSamplers(program,
-               {{"transmittance_texture", &transmittance_}, {"multiple_scattering_texture", &multiple_scattering_}});
   aerial_radiance_.BindImage(0);
   aerial_transmittance_.BindImage(1);
-  {
-    GpuPassTimer timer(timings);
-    DispatchCompute3D(program, size);
-    timer.Stop("aerial_perspective_lut");
-  }
-  CheckGlError("aerial perspective");
-  // Read back into the CPU's volume (rgb of each froxel, in its x + width (y + height z) order).
-  const auto rgb = [](const std::vector<float>& rgba) {
-    std::vector<float> values(rgba.size() / 4 * 3);
-    for (std::size_t i = 0; i < rgba.size() / 4; ++i) {
-      for (int c = 0; c < 3; ++c) values[3 * i + c] = rgba[4 * i + c];
+  // Batch by batch into the same two textures, each read back into the CPU's volume layout
+  // (channel_count values per froxel, in its x + width (y + height z) order).
+  const std::size_t nc = channel_count_;
+  const std::size_t froxels = static_cast<std::size_t>(size.x) * size.y * size.z;
+  std::vector<float> radiance(froxels * nc);
+  std::vector<float> transmittance(froxels * nc);
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    const Batch& batch = batches_[b];
+    SetAtmosphereUniforms(program, "atmosphere", batch.km);
+    BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
+                           {"multiple_scattering_texture", &batch.multiple_scattering}});
+    {
+      GpuPassTimer timer(timings);
+      DispatchCompute3D(program, size);
+      timer.Stop("aerial_perspective_lut");
     }
-    return values;
-  };
-  return AerialPerspectiveVolume(settings, camera, 3, rgb(aerial_radiance_.DownloadRgba()),
-                                 rgb(aerial_transmittance_.DownloadRgba()));
+    CheckGlError("aerial perspective");
+    const std::vector<float> l = aerial_radiance_.DownloadRgba();
+    const std::vector<float> t = aerial_transmittance_.DownloadRgba();
+    for (std::size_t i = 0; i < froxels; ++i) {
+      for (std::size_t c = 0; c < 3 && 3 * b + c < nc; ++c) {
+        radiance[nc * i + 3 * b + c] = l[4 * i + c];
+        transmittance[nc * i + 3 * b + c] = t[4 * i + c];
+      }
+    }
+  }
+  return AerialPerspectiveVolume(settings, camera, nc, std::move(radiance), std::move(transmittance));
 }
 
-void AddSunDiscOnHost(const AtmosphereParameters& parameters, const shared::Texture2D& transmittance_km,
+void AddSunDiscOnHost(const AtmosphereParameters& parameters, std::span<const shared::Texture2D> transmittance_km,
                       const RenderSettings& render, Image& image) {
-  const shared::AtmosphereParameters km = ToSharedParameters(parameters, 0, 1000.0);
+  const std::size_t batch_count = ChannelBatchCount(parameters.channel_count());
+  if (transmittance_km.size() != batch_count) {
+    throw Error("the GL sun disc needs one transmittance table per batch of 3 channels (" +
+                std::to_string(batch_count) + "), got " + std::to_string(transmittance_km.size()));
+  }
+  std::vector<shared::AtmosphereParameters> km;
+  for (std::size_t b = 0; b < batch_count; ++b) km.push_back(ToSharedParameters(parameters, b, 1000.0));
   const double r_km = (parameters.ground_radius_m + render.altitude_m) / 1000.0;
   const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
   AddSunDisc(
       render.camera, sun, parameters.sun_angular_radius_rad,
       [&](const glm::dvec3& view, std::span<double> out) {
-        const shared::vec3 l = shared::GetSunDiscRadiance(km, transmittance_km, r_km, shared::ClampCosine(view.z),
-                                                          glm::dot(view, sun));
-        for (int c = 0; c < 3; ++c) out[c] = l[c];
+        const double mu = shared::ClampCosine(view.z);
+        const double nu = glm::dot(view, sun);
+        ScatterBatches(batch_count, out, [&](std::size_t b) {
+          return shared::GetSunDiscRadiance(km[b], transmittance_km[b], r_km, mu, nu);
+        });
       },
       parameters.solar_irradiance, image);
 }
@@ -576,7 +632,11 @@ Image RenderHillaireGl(const Context& context, const AtmosphereParameters& param
   frame_terms.sun_disc = false;
   sky.RenderFrame(ToSharedCamera(render.camera), frame_terms, timings);
   Image image = sky.ReadFrame();
-  if (render.terms.sun_disc) AddSunDiscOnHost(parameters, sky.ReadTransmittance(), render, image);
+  if (render.terms.sun_disc) {
+    std::vector<shared::Texture2D> transmittance;
+    for (std::size_t b = 0; b < sky.batch_count(); ++b) transmittance.push_back(sky.ReadTransmittance(b));
+    AddSunDiscOnHost(parameters, transmittance, render, image);
+  }
   return image;
 }
 

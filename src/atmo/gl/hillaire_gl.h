@@ -7,6 +7,13 @@
 // GPU between passes (resources.h) and are read back only on request; programs are compiled once
 // per context (Context::Program), so a pass run again costs only its dispatch.
 //
+// Any number of channels, as on the CPU (HillaireModel): the passes compute three channels (an
+// rgba32f texel), so the channels go in batches of three (ChannelBatchCount; a last batch with
+// fewer repeats its last channel) and every batch has its own set of GPU tables, sky-view tables
+// and frame. Each pass runs once per batch, under the same name, so `timings` sums the batches;
+// the read-backs (ReadFrame, Sample, ComputeAerialPerspective) assemble one value per channel.
+// Three channels are one batch: the passes and their cost are those of an RGB atmosphere.
+//
 // To use it (a gl::Context alive on this thread):
 //   gl::HillaireGl sky(context, Preset("earth"), HillaireSettings{});
 //   sky.Precompute(&timings);                          // the view-independent tables
@@ -14,7 +21,8 @@
 //   sky.RenderFrame(ToSharedCamera(camera), terms, &timings);
 //   Image image = sky.ReadFrame();
 // or sky.Sample(directions, ...) for the radiance and transmittance of single directions (the
-// `atmo sample` contract). timings (may be null) receives each pass's GPU time.
+// `atmo sample` contract). timings (may be null) receives each pass's GPU time (summed over the
+// batches).
 //
 // As on the CPU (HillaireModel), an observer inside the atmosphere looks the sky up in the
 // sky-view table; above the atmosphere, or with sky_view=off, every pixel or direction is ray
@@ -23,6 +31,7 @@
 // values do not depend on the length unit).
 #pragma once
 
+#include <cstddef>
 #include <span>
 #include <vector>
 
@@ -70,8 +79,11 @@ void RunGroundViewPass(const Context& context, const shared::AtmosphereParameter
 
 class HillaireGl {
  public:
-  // Throws atmo::Error for parameters hillaire rejects or without exactly 3 channels.
+  // Throws atmo::Error for parameters hillaire rejects.
   HillaireGl(const Context& context, const AtmosphereParameters& parameters, const HillaireSettings& settings);
+
+  std::size_t channel_count() const { return channel_count_; }
+  std::size_t batch_count() const { return batches_.size(); }
 
   // transmittance_lut, multiple_scattering_lut, ground_irradiance_lut.
   void Precompute(PassTimings* timings = nullptr);
@@ -83,47 +95,66 @@ class HillaireGl {
 
   // One frame through `camera` into a GPU image (frame_WxH): the sky (and the ground and the sun
   // disc as `terms` says; `ground` needs SetView(..., ground = true) with the sky-view table) per
-  // unit solar irradiance times parameters.solar_irradiance, as atmo::RenderView.
+  // unit solar irradiance times parameters.solar_irradiance, as atmo::RenderView; one frame per
+  // batch.
   void RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
                    PassTimings* timings = nullptr);
-  // The last frame: RGB, with alpha (0 outside the circle) for a fisheye camera.
+  // The last frame, one channel per wavelength (the batches' frames read back and interleaved),
+  // with alpha (0 outside the circle) for a fisheye camera.
   Image ReadFrame() const;
 
   // Per unit direction (local frame): the scattered radiance per unit solar irradiance (no sun
   // disc, no ground light) and the transmittance to the top of the atmosphere (0 towards the
-  // ground), as SkyView::Radiance and Transmittance (pass sample_N).
-  void Sample(std::span<const glm::dvec3> views, std::vector<glm::dvec3>& radiance,
-              std::vector<glm::dvec3>& transmittance, PassTimings* timings = nullptr);
+  // ground), as SkyView::Radiance and Transmittance (pass sample_N, once per batch): channel c of
+  // view i at [i * channel_count() + c].
+  void Sample(std::span<const glm::dvec3> views, std::vector<double>& radiance, std::vector<double>& transmittance,
+              PassTimings* timings = nullptr);
 
   // The aerial-perspective volume of `camera` (aerial_perspective_lut; Hillaire 2020, section
   // 5.4), as atmo::ComputeAerialPerspectiveVolume on the CPU: per froxel the camera ray through
   // its centre, ray marched (ray_march_samples steps) to the slice's distance; kept on the GPU as
-  // two 3D textures (radiance, transmittance) and read back into the CPU's volume type.
+  // two 3D textures (radiance, transmittance) per batch pass and read back into the CPU's volume
+  // type, one value per channel.
   AerialPerspectiveVolume ComputeAerialPerspective(const Camera& camera, const AerialPerspectiveSettings& settings,
                                                    PassTimings* timings = nullptr);
 
-  // Read-backs of the tables (shared::Texture2D layout).
-  shared::Texture2D ReadTransmittance() const { return transmittance_.Download2D(); }
-  shared::Texture2D ReadMultipleScattering() const { return multiple_scattering_.Download2D(); }
-  shared::Texture2D ReadGroundIrradiance() const { return ground_irradiance_.Download2D(); }
-  shared::Texture2D ReadSkyView() const { return sky_view_.Download2D(); }
-  shared::Texture2D ReadSkyAndGroundView() const { return sky_and_ground_view_.Download2D(); }
+  // Read-backs of the tables of batch `batch` (shared::Texture2D layout: channels 3 batch ..
+  // 3 batch + 2 in rgb). Throws std::out_of_range for a batch >= batch_count().
+  shared::Texture2D ReadTransmittance(std::size_t batch = 0) const {
+    return batches_.at(batch).transmittance.Download2D();
+  }
+  shared::Texture2D ReadMultipleScattering(std::size_t batch = 0) const {
+    return batches_.at(batch).multiple_scattering.Download2D();
+  }
+  shared::Texture2D ReadGroundIrradiance(std::size_t batch = 0) const {
+    return batches_.at(batch).ground_irradiance.Download2D();
+  }
+  shared::Texture2D ReadSkyView(std::size_t batch = 0) const { return batches_.at(batch).sky_view.Download2D(); }
+  shared::Texture2D ReadSkyAndGroundView(std::size_t batch = 0) const {
+    return batches_.at(batch).sky_and_ground_view.Download2D();
+  }
 
  private:
-  void SetSkyUniforms(const ComputeProgram& program) const;
+  // Channels 3b .. 3b + 2: their atmosphere and their GPU tables and frame.
+  struct Batch {
+    shared::AtmosphereParameters metres;  // double, for what the host computes
+    shared::AtmosphereParameters km;      // for the GPU (program.h)
+    shared::vec3 solar_irradiance;
+    GpuTexture transmittance;
+    GpuTexture multiple_scattering;
+    GpuTexture ground_irradiance;
+    GpuTexture sky_view;
+    GpuTexture sky_and_ground_view;
+    GpuTexture frame;
+  };
+
+  void SetSkyUniforms(const ComputeProgram& program, const Batch& batch) const;
 
   const Context& context_;
   HillaireSettings settings_;
-  shared::AtmosphereParameters metres_;  // double, for what the host computes
-  shared::AtmosphereParameters km_;      // for the GPU (program.h)
-  shared::vec3 solar_irradiance_;
-  GpuTexture transmittance_;
-  GpuTexture multiple_scattering_;
-  GpuTexture ground_irradiance_;
-  GpuTexture sky_view_;
-  GpuTexture sky_and_ground_view_;
-  GpuTexture frame_;
-  GpuTexture aerial_radiance_;
+  std::size_t channel_count_ = 0;
+  std::vector<Batch> batches_;   // batch 0's geometry (radii) serves every batch
+  GpuTexture aerial_radiance_;   // one batch's volume at a time
   GpuTexture aerial_transmittance_;
   bool precomputed_ = false;
   bool view_set_ = false;
@@ -138,15 +169,18 @@ class HillaireGl {
 
 // The images' sun disc on the GL backend: the frame pass leaves it out and the host adds it after
 // read-back with the CPU's pass (cpu/sun_disc.h: integrated over each pixel, the same strata as
-// on the CPU), evaluating shared::GetSunDiscRadiance in double on the GPU's transmittance table
-// (read back, km units). The disc needs up to ~10^5 radiances in the few pixels it covers, so
-// this costs far less than a read-back; it keeps one disc pass for both backends.
-// (RenderFrame with terms.sun_disc still draws a per-pixel disc on the GPU, for interactive use.)
-void AddSunDiscOnHost(const AtmosphereParameters& parameters, const shared::Texture2D& transmittance_km,
+// on the CPU), evaluating shared::GetSunDiscRadiance in double on the GPU's transmittance tables
+// (read back, km units), one per batch of three channels (ChannelBatchCount of
+// parameters.channel_count(), in order; `image` has one channel per wavelength). The disc needs
+// up to ~10^5 radiances in the few pixels it covers, so this costs far less than a read-back; it
+// keeps one disc pass for both backends. Throws atmo::Error when the table count is not the
+// batch count. (RenderFrame with terms.sun_disc still draws a per-pixel disc on the GPU, for
+// interactive use.)
+void AddSunDiscOnHost(const AtmosphereParameters& parameters, std::span<const shared::Texture2D> transmittance_km,
                       const RenderSettings& render, Image& image);
 
 // Renders one frame of model hillaire on the GL backend (a HillaireGl through all passes, the sun
-// disc by AddSunDiscOnHost): what atmo::Render gives on the CPU. Throws atmo::Error (one line) for what atmo::Render rejects.
+// disc by AddSunDiscOnHost): what atmo::Render gives on the CPU, one channel per wavelength. Throws atmo::Error (one line) for what atmo::Render rejects.
 Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
                        const HillaireSettings& settings, const RenderSettings& render,
                        PassTimings* timings = nullptr);

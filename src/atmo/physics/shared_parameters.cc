@@ -32,6 +32,11 @@ glm::dvec3 Batch(const std::vector<double>& values, std::size_t first, double sc
 
 }  // namespace
 
+shared::vec3 BatchValues(std::span<const double> values, std::size_t batch) {
+  if (values.empty()) throw Error("BatchValues needs at least one channel");
+  return Batch(std::vector<double>(values.begin(), values.end()), 3 * batch, 1.0);
+}
+
 int ToSharedPhase(PhaseFunction phase) {
   switch (phase) {
     case PhaseFunction::kIsotropic: return shared::kPhaseIsotropic;

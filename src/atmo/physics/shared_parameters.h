@@ -25,6 +25,10 @@ void ScatterBatches(std::size_t batch_count, std::span<double> out, const F& f) 
   }
 }
 
+// The values of channels [3 * batch, 3 * batch + 3) of a per-channel list (the solar irradiance,
+// say); a batch with fewer than three channels repeats its last one, as ToSharedParameters does.
+shared::vec3 BatchValues(std::span<const double> values, std::size_t batch);
+
 // The shared parameters for channels [3 * batch, 3 * batch + 3) of a spherical atmosphere; a batch
 // with fewer than three channels repeats its last one. `length_unit_m` is the length unit of the
 // result in metres (1 on the CPU, 1000 for the km of the GPU). Throws atmo::Error for what the
