@@ -52,6 +52,8 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
+  CheckOutputsApart(common, {},
+                    {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
   const bool on_gl = common.backend == "gl";
   AtmosphereParameters parameters = LoadParameters(common);
   if (command.sun_size_deg) {
