@@ -167,6 +167,25 @@ TEST(BoundedLoops, GrazingTransmittancesOnALargePlanetFinishQuickly) {
   EXPECT_LT(seconds, 20.0);
 }
 
+// The densest allowed medium: optical depths of ~1e8 that the adaptive quadrature cannot resolve
+// to 1e-10 (its error measure is weighted by the extinction), and ratio tracking that reaches 0
+// in a few steps. Both must stop; the transmittances are 0 or in [0, 1].
+TEST(BoundedLoops, DensestMediumFinishesQuickly) {
+  atmo::AtmosphereParameters p = atmo::Preset("earth");
+  p.rayleigh.scattering_per_m = {1e3, 1e3, 1e3};
+  p.mie.absorption_per_m = {1e3, 1e3, 1e3};
+  const atmo::cpu::PathTracer tracer(p, atmo::cpu::PathTracerSettings{});
+  std::vector<double> out(3);
+  const auto start = std::chrono::steady_clock::now();
+  for (const double mu : {1.0, 0.5, 0.01, 0.0, -0.01}) {
+    const glm::dvec3 view(std::sqrt(1.0 - mu * mu), 0.0, mu);
+    tracer.Transmittance(glm::dvec3(0.0, 0.0, p.ground_radius_m + 10.0), view, out);
+    for (double t : out) EXPECT_TRUE(t >= 0.0 && t <= 1.0) << mu << " " << t;
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 20.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The command line.
 
@@ -207,6 +226,7 @@ const BadInput kBadInputs[] = {
     {"AsymmetryTooClose", "sample --config g.json" ATMO_ONE " --out out.csv", "mie.phase_g"},
     {"WavelengthTooLong", "sample --config wavelength.json" ATMO_ONE " --out out.csv", "wavelengths_nm[0]"},
     {"SunTooSmall", "render --config sun.json" ATMO_TINY, "sun_angular_radius_rad"},
+    {"SunSizeTooSmall", "render --sun-size 1e-10" ATMO_TINY, "--sun-size must be in [0.00012, 20] degrees"},
     {"ObserverTooFar", "render --config observer.json" ATMO_TINY, "observer_altitude_m"},
     {"AltitudeTooFar", "render --altitude 1e12" ATMO_TINY, "--altitude"},
     {"GridAltitudeTooFar", "sample --grid far.csv --out out.csv", "far.csv:2: altitude_m 1e+12 is outside"},
