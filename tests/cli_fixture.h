@@ -69,10 +69,12 @@ class CliFixture : public ::testing::Test {
     fs::remove_all(dir_, ignored);
   }
 
-  // Runs `atmo <args>` (a shell-quoted string) in the test's folder.
-  RunResult Run(const std::string& args) const {
+  // Runs `atmo <args>` (a shell-quoted string) in the test's folder; with timeout_s > 0 through
+  // `timeout`, so that a hang ends as exit code 124 rather than blocking the test.
+  RunResult Run(const std::string& args, int timeout_s = 0) const {
+    const std::string limit = timeout_s > 0 ? "timeout " + std::to_string(timeout_s) + " " : "";
     const std::string command =
-        "cd '" + dir_.string() + "' && '" ATMO_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
+        "cd '" + dir_.string() + "' && " + limit + "'" ATMO_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
     const int status = std::system(command.c_str());
     RunResult result;
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -4,6 +4,7 @@
 // driver); on the CI image (Mesa llvmpipe through EGL surfaceless) they run.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -731,6 +732,37 @@ TEST_F(GlCliTest, SampleMatchesTheCpuBackend) {
     // table tests in gl_elek_test.cc), including twilight (sun 95 degrees) where the values are
     // 1e-4 of the day's. Measured on llvmpipe: 7.1e-4 (hillaire), 1.5e-5 (elek).
     EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3) << model;
+  }
+}
+
+// The in-range extremes of docs/reliability.md in float on the GPU: every sample finite (the
+// GLSL clamps map NaN into the tables, and the bounds keep float's intermediates finite).
+TEST_F(GlCliTest, InRangeExtremesGiveFiniteSamples) {
+  if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
+  atmo::testing::WriteFile(dir_ / "grid.csv", "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg\n"
+                                              "0,30,60,90\n0,30,90,0\n0,95,90,0\n1e6,30,180,0\n1e11,30,180,0\n");
+  const char* extremes[] = {
+      R"({"ground_radius_m": 1, "top_radius_m": 1.00001})",
+      R"({"ground_radius_m": 1, "top_radius_m": 11})",
+      R"({"ground_radius_m": 1e10, "top_radius_m": 1.00001e10})",
+      R"({"rayleigh": {"scattering_per_m": 1000}, "mie": {"absorption_per_m": 1000}})",
+      R"({"mie": {"phase_g": 0.999, "density": {"upper": {"exp_term": 1e6, "exp_scale_per_m": 1e6,
+          "linear_term_per_m": -1e6, "constant_term": -1e6}}}, "sun_angular_radius_rad": 1e-6})",
+  };
+  for (const char* json : extremes) {
+    atmo::testing::WriteFile(dir_ / "extreme.json", json);
+    for (const char* model : {"--model hillaire", "--model elek --option size=4x8x4 --option orders=1"}) {
+      const atmo::testing::RunResult r =
+          Run(std::string("sample --backend gl ") + model + " --config extreme.json --grid grid.csv", 60);
+      ASSERT_EQ(r.exit_code, 0) << json << " " << model << ": " << r.err;
+      const std::vector<std::string> lines = atmo::testing::Lines(r.out);
+      ASSERT_EQ(lines.size(), 1u + 5u * 3u) << json << " " << model;
+      for (std::size_t i = 1; i < lines.size(); ++i) {
+        for (const std::string& field : atmo::testing::Split(lines[i])) {
+          EXPECT_TRUE(std::isfinite(std::strtod(field.c_str(), nullptr))) << json << " " << model << ": " << lines[i];
+        }
+      }
+    }
   }
 }
 

@@ -209,13 +209,13 @@ TEST(Validate, EachInvalidValueNamesItsKey) {
       {"earth", [](P& p) { p.solar_irradiance.push_back(1); }, "solar_irradiance has 4 values"},
       // Coefficients.
       {"earth", [](P& p) { p.rayleigh.scattering_per_m[1] = -1; },
-       "rayleigh.scattering_per_m[1] must be finite and >= 0 (got -1)"},
+       "rayleigh.scattering_per_m[1] must be in [0, 1000] per m (got -1)"},
       {"earth", [=](P& p) { p.mie.scattering_per_m[2] = nan; }, "mie.scattering_per_m[2]"},
       {"earth", [=](P& p) { p.mie.absorption_per_m[0] = inf; }, "mie.absorption_per_m[0]"},
       {"earth", [](P& p) { p.ozone.absorption_per_m[1] = -1e-6; }, "ozone.absorption_per_m[1]"},
       {"earth", [](P& p) { p.ozone.scattering_per_m[0] = -1; }, "ozone.scattering_per_m[0]"},
       // Geometry.
-      {"earth", [](P& p) { p.ground_radius_m = 0; }, "ground_radius_m must be > 0"},
+      {"earth", [](P& p) { p.ground_radius_m = 0; }, "ground_radius_m must be in [1, 1e+10] m (got 0)"},
       {"earth", [](P& p) { p.ground_radius_m = -1; }, "ground_radius_m"},
       {"earth", [=](P& p) { p.ground_radius_m = nan; }, "ground_radius_m"},
       {"earth", [](P& p) { p.top_radius_m = 6000000; },
@@ -231,7 +231,7 @@ TEST(Validate, EachInvalidValueNamesItsKey) {
       {"earth", [](P& p) { p.ozone.phase_g = -1; }, "ozone.phase_g"},
       // Density layers.
       {"earth", [](P& p) { p.rayleigh.density.lower.width_m = -1; },
-       "rayleigh.density.lower.width_m must be >= 0"},
+       "rayleigh.density.lower.width_m must be in [0, 1e+11] m (got -1)"},
       {"earth", [](P& p) { p.ozone.density.upper.width_m = -5; }, "ozone.density.upper.width_m"},
       {"earth", [=](P& p) { p.mie.density.upper.exp_term = nan; }, "mie.density.upper.exp_term"},
       {"earth", [=](P& p) { p.mie.density.lower.exp_scale_per_m = inf; },
@@ -499,7 +499,7 @@ TEST_F(ParametersFileTest, ErrorsArePrefixedWithThePath) {
   EXPECT_EQ(message.rfind("config '" + bad.string() + "': malformed JSON", 0), 0u) << message;
   const std::filesystem::path invalid = Write("invalid.json", R"({"exposure": -1})");
   EXPECT_EQ(ErrorMessage([&] { LoadParametersFile(invalid); }),
-            "config '" + invalid.string() + "': exposure must be finite and > 0 (got -1)");
+            "config '" + invalid.string() + "': exposure must be in [1e-10, 1e+10] (got -1)");
 }
 
 // ---------------------------------------------------------------------------------------------

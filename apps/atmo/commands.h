@@ -66,6 +66,20 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.
 void CheckOutputWritable(const std::filesystem::path& path);
+
+// A flag and the path it names, e.g. {"--grid", "in.csv"}.
+struct NamedPath {
+  std::string flag;
+  std::filesystem::path path;
+};
+// Refuses, in one line and before any work, an output that names the same file as an input (the
+// --config, the tables of --table, and `inputs`) or as another output: they were silently
+// overwritten. Empty paths are skipped; existing files are compared by identity (links included).
+void CheckOutputsApart(const CommonOptions& common, std::vector<NamedPath> inputs,
+                       const std::vector<NamedPath>& outputs);
+
+// A --seed or seed=N: a decimal integer in [0, 2^64 - 1], digits only (no sign, no spaces).
+std::optional<std::uint64_t> ParseSeed(const std::string& text);
 // printf-style formatting into a std::string.
 std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
 

@@ -1,6 +1,7 @@
 // Helpers shared by the subcommands of `atmo`: parameters, model options, output checks.
 #include <unistd.h>
 
+#include <charconv>
 #include <cstdarg>
 #include <cstdio>
 #include <system_error>
@@ -103,6 +104,53 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
   return CreateModel(common.model, parameters, options);
 }
 
+std::optional<std::uint64_t> ParseSeed(const std::string& text) {
+  if (text.empty() || text.size() > 20 || text.find_first_not_of("0123456789") != std::string::npos) return {};
+  std::uint64_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) return {};  // above 2^64 - 1
+  return value;
+}
+
+namespace {
+
+// Whether two paths name one file: by identity when both exist (hard and symbolic links, "./x"),
+// else by their normalised absolute form.
+bool SameFile(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+  return ca == cb;
+}
+
+}  // namespace
+
+void CheckOutputsApart(const CommonOptions& common, std::vector<NamedPath> inputs,
+                       const std::vector<NamedPath>& outputs) {
+  if (!common.config.empty()) inputs.push_back({"--config", common.config});
+  for (const std::string& option : common.options) {
+    if (option.rfind("table=", 0) != 0) continue;
+    const std::string name = option.substr(6);
+    for (const char* extension : {".exr", ".raw", ".json"}) inputs.push_back({"--table", name + extension});
+  }
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const NamedPath& out = outputs[i];
+    if (out.path.empty()) continue;
+    for (const NamedPath& in : inputs) {
+      if (!in.path.empty() && SameFile(out.path, in.path)) {
+        throw Error(out.flag + " '" + out.path.string() + "' is the " + in.flag + " input '" + in.path.string() +
+                    "'; write the output elsewhere");
+      }
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (!outputs[j].path.empty() && SameFile(out.path, outputs[j].path)) {
+        throw Error(outputs[j].flag + " and " + out.flag + " name the same file '" + out.path.string() + "'");
+      }
+    }
+  }
+}
+
 void CheckOutputWritable(const fs::path& path) {
   fs::path folder = path.parent_path();
   if (folder.empty()) folder = ".";
@@ -115,6 +163,15 @@ void CheckOutputWritable(const fs::path& path) {
     throw Error(prefix + "folder '" + folder.string() + "' is not writable");
   }
   if (fs::is_directory(path, error)) throw Error(prefix + "it is a folder");
+  // Where it exists (through links), a regular file: WriteFileAtomically would refuse a device,
+  // FIFO or socket at the end; refused here before any work.
+  const fs::file_status status = fs::status(path, error);
+  if (fs::exists(status) && !fs::is_regular_file(status)) {
+    throw Error(prefix + "it is not a regular file (a device, FIFO or socket); atmo writes only regular files");
+  }
+  if (fs::is_symlink(fs::symlink_status(path, error)) && !fs::exists(status)) {
+    throw Error(prefix + "it is a symbolic link to a missing file");
+  }
 }
 
 std::string Format(const char* format, ...) {

@@ -592,6 +592,8 @@ Image ErrorImage(const Model& model, const Model& reference, const CompareComman
 
 int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   CheckBackend(common);
+  CheckOutputsApart(common, {{"--grid", command.grid == "standard" ? std::string() : command.grid}},
+                    {{"--csv", command.csv_path}, {"--json", command.json_path}, {"--image", command.image_path}});
   if (!(command.floor >= 0.0 && command.floor <= 1.0)) {
     throw Error(Format("--floor %g is outside [0, 1]", command.floor));
   }

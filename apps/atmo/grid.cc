@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "atmo/error.h"
+#include "atmo/image.h"
 #include "commands.h"
 
 namespace atmo::cli {
@@ -44,6 +45,9 @@ void CheckPoint(const SamplePoint& point, const std::string& where) {
   for (const auto& [name, value] : values) {
     if (!std::isfinite(value)) throw Error(where + name + " is not a finite number");
   }
+  if (!(std::fabs(point.altitude_m) <= kMaxAltitude_m)) {
+    throw Error(where + "altitude_m " + Format("%.10g", point.altitude_m) + " is outside [-1e+11, 1e+11] m");
+  }
   for (const auto& [name, value] : {values[1], values[2]}) {
     if (value < 0.0 || value > 180.0) {
       throw Error(where + name + " " + Format("%.10g", value) + " is outside [0, 180]");
@@ -52,12 +56,12 @@ void CheckPoint(const SamplePoint& point, const std::string& where) {
 }
 
 std::vector<SamplePoint> ReadGrid(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error("cannot read '" + path + "'");
-  std::stringstream buffer;
-  buffer << file.rdbuf();
-  if (file.bad()) throw Error("cannot read '" + path + "'");
-  const std::string text = buffer.str();
+  // A regular file of at most 64 MiB: "cannot read 'PATH': is a directory" (a folder was "an
+  // empty file"), a device or FIFO is refused (/dev/zero ended in std::bad_alloc).
+  const std::string text = ReadFileBounded(path);
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    throw Error(path + ": a NUL byte at byte " + std::to_string(nul + 1) + "; a grid is CSV text");
+  }
 
   std::vector<SamplePoint> points;
   bool header_seen = false;

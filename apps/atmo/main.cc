@@ -113,13 +113,21 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
       ->capture_default_str();
   app->add_option("--threads", common.threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
-  app->add_option_function<std::uint64_t>(
-      "--seed",
-      [&common](const std::uint64_t& seed) {
-        common.seed = seed;
-        common.seed_given = true;
-      },
-      "random seed for Monte Carlo models (deterministic models ignore it)");
+  // Read as text: CLI11's unsigned conversion wrapped -1 to 2^64 - 1 and refused 20-digit seeds.
+  app->add_option_function<std::string>(
+         "--seed",
+         [&common](const std::string& text) {
+           common.seed = *atmo::cli::ParseSeed(text);
+           common.seed_given = true;
+         },
+         "random seed for Monte Carlo models, an integer in [0, 18446744073709551615] (deterministic models "
+         "ignore it)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (atmo::cli::ParseSeed(text)) return {};
+            return "'" + text + "' is not an integer in [0, 18446744073709551615]";
+          },
+          "SEED", "SEED"));
   app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")
       ->expected(1)
       ->take_all();
@@ -183,7 +191,8 @@ int main(int argc, char** argv) {
       ->check(RangeOf(-90.0, 90.0));
   AddNumber(render_app, "--sun-azimuth", render.sun_azimuth_deg, "sun compass azimuth in degrees");
   AddOptionalNumber(render_app, "--altitude", render.altitude_m,
-                    "observer altitude in metres [default: the preset's]");
+                    "observer altitude in metres [default: the preset's]")
+      ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
   CLI::Option* exposure = AddOptionalNumber(render_app, "--exposure", render.exposure,
                                             "linear exposure multiplier of the PNG (docs/display.md) [default: "
                                             "auto-exposure; a relative 3-channel render: the preset's]")
@@ -296,7 +305,8 @@ int main(int argc, char** argv) {
   compare_app->add_option("--csv", compare.csv_path, "per-row CSV output (one row per configuration and channel)");
   compare_app->add_option("--json", compare.json_path, "summary JSON output");
   compare_app->add_option("--image", compare.image_path, "false-colour relative-error fisheye PNG");
-  AddNumber(compare_app, "--altitude", compare.image_altitude_m, "observer altitude of the --image in metres");
+  AddNumber(compare_app, "--altitude", compare.image_altitude_m, "observer altitude of the --image in metres")
+      ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
   AddNumber(compare_app, "--sun-zenith", compare.image_sun_zenith_deg, "sun zenith of the --image in degrees")
       ->check(RangeOf(0.0, 180.0));
   AddNumber(compare_app, "--image-range", compare.image_range_percent,
@@ -343,7 +353,8 @@ int main(int argc, char** argv) {
       ->check(RangeOf(-90.0, 90.0))
       ->capture_default_str();
   AddOptionalNumber(illuminance_app, "--altitude", illuminance.altitude_m,
-                    "observer altitude in metres [default: the preset's]");
+                    "observer altitude in metres [default: the preset's]")
+      ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
 
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;

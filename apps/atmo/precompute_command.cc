@@ -16,8 +16,9 @@ int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command)
   if (common.model != "elek") {
     throw Error("precompute exports the table of model elek; model " + common.model + " has none (use --model elek)");
   }
-  const AtmosphereParameters parameters = LoadParameters(common);
   const ElekTableFiles files = ElekTableFilesFor(command.out);
+  CheckOutputsApart(common, {}, {{"--out", files.exr}, {"--out", files.raw}, {"--out", files.json}});
+  const AtmosphereParameters parameters = LoadParameters(common);
   for (const auto& path : {files.exr, files.raw, files.json}) CheckOutputWritable(path);
   const auto start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = CreateModelFor(common, parameters);

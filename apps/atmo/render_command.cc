@@ -65,11 +65,16 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
+  CheckOutputsApart(common, {},
+                    {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
   const bool on_gl = common.backend == "gl";
   AtmosphereParameters parameters = LoadParameters(common);
   if (command.sun_size_deg) {
     const double d = *command.sun_size_deg;
-    if (!(d > 0.0 && d <= 20.0)) throw Error("--sun-size must be in (0, 20] degrees (got " + Format("%g", d) + ")");
+    // The lower bound is sun_angular_radius_rad's 1e-6 rad (docs/parameters.md) as a diameter.
+    if (!(d >= 1.2e-4 && d <= 20.0)) {
+      throw Error("--sun-size must be in [0.00012, 20] degrees (got " + Format("%g", d) + ")");
+    }
     parameters.sun_angular_radius_rad = 0.5 * d * std::numbers::pi / 180.0;
   }
   const RadianceUnit unit = ParseRadianceUnit(command.unit);

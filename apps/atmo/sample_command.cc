@@ -164,6 +164,7 @@ GroupEvaluator HillaireGlEvaluator(gl::HillaireGl& sky) {
 
 int RunSample(const CommonOptions& common, const SampleCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
+  CheckOutputsApart(common, {{"--grid", command.grid_path}}, {{"--out", command.out_path}});
   const AtmosphereParameters parameters = LoadParameters(common);
   const RadianceUnit unit = ParseRadianceUnit(command.unit);
 

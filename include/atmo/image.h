@@ -143,8 +143,24 @@ void WritePng(const std::filesystem::path& path, const Image& image, const ToneM
 
 // Calls write(temporary_path) and renames the temporary file onto `path`. If `write` throws, the
 // temporary file is removed and the error is rethrown as atmo::Error naming `path`. Fails early,
-// before calling `write`, when the target's folder does not exist or is not writable.
+// before calling `write`, when the target's folder does not exist or is not writable, or when
+// `path` exists and is not a regular file (a directory, device, FIFO or socket: /dev/null stays
+// a device). A symbolic link is written through: its final target is replaced and the link kept;
+// a dangling link is refused. A file replaced keeps its mode and owner (refused when the owner
+// cannot be kept). The temporary file is fsync'ed before the rename and the folder after it.
 void WriteFileAtomically(const std::filesystem::path& path,
                          const std::function<void(const std::filesystem::path&)>& write);
+
+// The most bytes ReadFileBounded reads by default: 64 MiB, above every config, grid and manifest
+// atmo writes (a 4096-channel config is ~1 MiB) and far below the memory of any machine.
+inline constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{64} << 20;
+
+// The whole of a regular file, for text inputs (configs, grids, manifests). Throws atmo::Error
+// "cannot read WHAT'PATH': REASON" for a missing file, a directory ("is a directory"), anything
+// that is not a regular file (a device such as /dev/zero, a FIFO: opened without blocking), and
+// a file of more than `max_bytes`. `what` is e.g. "config " or "" (the message then reads
+// "cannot read 'PATH': ...").
+std::string ReadFileBounded(const std::filesystem::path& path, const std::string& what = "",
+                            std::uintmax_t max_bytes = kMaxInputFileBytes);
 
 }  // namespace atmo

@@ -101,9 +101,15 @@ struct AtmosphereParameters {
   bool operator==(const AtmosphereParameters&) const = default;
 };
 
+// The largest observer altitude (and layer width, and |length| of the half-space), in metres:
+// 1e11 m (0.7 au). Commands check their --altitude against it too (docs/parameters.md).
+inline constexpr double kMaxAltitude_m = 1e11;
+
 // Throws atmo::Error naming the first invalid value: a non-finite number, a negative radius or
 // coefficient, top <= ground, |g| >= 1, an albedo outside [0, 1], zero channels, a per-channel
-// vector of the wrong length, a non-positive wavelength or sun radius, ...
+// vector of the wrong length, a non-positive wavelength or sun radius, and every value outside
+// the physical bounds of docs/parameters.md (radii in [1 m, 1e10 m], coefficients <= 1e3 per m,
+// ...), which keep the numerics finite in double and in float.
 void Validate(const AtmosphereParameters& parameters);
 
 // Presets of docs/design.md §3: "earth", "atmosphere-plus", "simple". Throws atmo::Error for an

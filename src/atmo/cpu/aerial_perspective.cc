@@ -82,7 +82,7 @@ void AerialPerspectiveVolume::Lookup(double px, double py, double distance_m, st
   // Continuous froxel coordinates: froxel centres at integers in x and y; slice z at distance
   // (z + 1) / depth * max, with a virtual slice -1 at the camera (radiance 0, transmittance 1).
   auto taps = [](double f, int size, int& i0, int& i1, double& w) {
-    f = std::clamp(f, 0.0, static_cast<double>(size - 1));
+    f = shared::ClampToRange(f, 0.0, static_cast<double>(size - 1));  // NaN -> 0, never an index outside
     i0 = static_cast<int>(std::floor(f));
     i1 = std::min(i0 + 1, size - 1);
     w = f - i0;
@@ -91,7 +91,7 @@ void AerialPerspectiveVolume::Lookup(double px, double py, double distance_m, st
   double wx, wy;
   taps(px / camera_.width * s.width - 0.5, s.width, x0, x1, wx);
   taps(py / camera_.height * s.height - 0.5, s.height, y0, y1, wy);
-  const double fz = std::clamp(distance_m / s.max_distance_m * s.depth - 1.0, -1.0, s.depth - 1.0);
+  const double fz = shared::ClampToRange(distance_m / s.max_distance_m * s.depth - 1.0, -1.0, s.depth - 1.0);
   const int z0 = static_cast<int>(std::floor(fz));
   const int z1 = std::min(z0 + 1, s.depth - 1);
   const double wz = fz - z0;

@@ -88,13 +88,14 @@ __attribute__((noinline)) void SunColumns(int n, double r_mu_s, double nu, const
 #pragma omp simd
   for (int i = 0; i < n; ++i) {
     const double r_i = r[i];
-    const double mu = std::min(std::max((r_mu_s + t[i] * nu) * inverse_r[i], -1.0), 1.0);
+    // The clamps map NaN into the table (shared::ClampToRange): these columns become indices.
+    const double mu = shared::ClampToRange((r_mu_s + t[i] * nu) * inverse_r[i], -1.0, 1.0);
     const double r2_mu2 = r_i * r_i * mu * mu;
     lit[i] = (mu < 0.0 && c_ground[i] + r2_mu2 >= 0.0) ? 0.0 : 1.0;
     const double root = std::sqrt(std::max(c_top[i] + r2_mu2, 0.0));
     const double d = mu > 0.0 ? c_top[i] / (r_i * mu + root) : -r_i * mu + root;
-    sun_column[i] = std::min(std::max((std::max(d, 0.0) - d_min[i]) * inverse_range[i], 0.0), 1.0) * t_columns;
-    ms_column[i] = std::min(std::max(0.5 * mu + 0.5, 0.0), 1.0) * m_columns;
+    sun_column[i] = shared::ClampToRange((std::max(d, 0.0) - d_min[i]) * inverse_range[i], 0.0, 1.0) * t_columns;
+    ms_column[i] = shared::ClampToRange(0.5 * mu + 0.5, 0.0, 1.0) * m_columns;
   }
 }
 
@@ -142,7 +143,7 @@ class SunLookupsAlongRay {
     inverse_range_.push_back(1.0 / (rho + H - (a_.top_radius - r_i)));
     AddRow(transmittance_, shared::GetTextureCoordFromUnitRange(rho / H, transmittance_.height), transmittance_rows_);
     if (multiple_scattering_ != nullptr) {
-      const double x_r = std::clamp((r_i - a_.bottom_radius) / (a_.top_radius - a_.bottom_radius), 0.0, 1.0);
+      const double x_r = shared::ClampToRange((r_i - a_.bottom_radius) / (a_.top_radius - a_.bottom_radius), 0.0, 1.0);
       AddRow(*multiple_scattering_, shared::GetTextureCoordFromUnitRange(x_r, multiple_scattering_->height),
              multiple_scattering_rows_);
     }
@@ -196,7 +197,8 @@ class SunLookupsAlongRay {
   // GL_LINEAR at texel coordinate s (texel centres at integers, s in [0, width - 1]) of `row`, in
   // float like the table itself.
   static vec3 Blend(const PaddedTable& table, const Row& row, double s) {
-    const int x0 = static_cast<int>(s);
+    // s is in [0, width - 1] (its callers clamp it, NaN included); the guard keeps the cast defined.
+    const int x0 = s > 0.0 ? static_cast<int>(std::min(s, static_cast<double>(table.width - 1))) : 0;
     const int x1 = std::min(x0 + 1, table.width - 1);
     const float wx = static_cast<float>(s - x0);
     const glm::vec4 a = row.texels0[x0] + (row.texels0[x1] - row.texels0[x0]) * wx;

@@ -20,6 +20,18 @@ constexpr std::uint64_t kBlockPaths = 128;
 // Absolute tolerance on optical depths (unitless) of the adaptive Simpson quadrature: its error
 // in a transmittance T is <= T * 1e-10, far below any Monte Carlo noise.
 constexpr double kOpticalDepthTolerance = 1e-10;
+// Bounds on the loops that depend on the data (docs/reliability.md). The adaptive quadrature
+// stops refining a panel at depth 30 or once one integral has spent its evaluations, and never
+// asks for less than the rounding error of the panel's own value (a grazing ray over a large
+// planet has density samples whose noise is above 1e-10 / 2^k: depth 40 meant 2^40 evaluations,
+// the audit's hang of > 100 s). Tracking loops stop after kMaxTrackingSteps tentative
+// collisions (the expected count is the majorant's optical depth, < 100 for any real sky) and
+// ratio tracking as soon as the transmittance is 0 (with an extinction of 1e300 it reached 0 in
+// a few steps and then looped for ever).
+constexpr int kMaxQuadratureDepth = 30;
+constexpr int kMaxQuadratureEvaluations = 1 << 16;
+constexpr double kQuadratureRelativeFloor = 1e-14;
+constexpr std::uint64_t kMaxTrackingSteps = std::uint64_t{1} << 24;
 
 // splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
 std::uint64_t Mix64(std::uint64_t z) {
@@ -237,11 +249,14 @@ double PathTracer::RatioTracking(const glm::dvec3& p, const glm::dvec3& d, doubl
   if (majorant <= 0.0) return 1.0;
   double transmittance = 1.0;
   double t = 0.0;
-  while (true) {
+  for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
     t -= std::log1p(-rng.Uniform()) / majorant;
     if (!(t < length)) return transmittance;
     transmittance *= 1.0 - OpticalDepth(c, Densities(p + t * d)) / majorant;
+    // Every later factor is in [0, 1]: once 0 (or NaN), it stays so.
+    if (!(transmittance > 0.0)) return 0.0;
   }
+  return transmittance;  // an optical depth above ~1.7e7: the rest of the product is negligible
 }
 
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
@@ -274,7 +289,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
       double t = 0.0;
       bool first = true;
-      while (true) {
+      for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
         if (first && force) {
           const double p_collide = -std::expm1(-majorant * length);
           weight *= p_collide;
@@ -446,6 +461,7 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
   const auto f = [&](double t) { return shared::GetDensities(atmosphere_, glm::length(p + t * d)); };
   // Adaptive Simpson; the error of a panel is measured as an optical depth (weights: the largest
   // extinction of each medium), and the Richardson term is added to the result.
+  int evaluations = 0;  // of f by adapt, for this integral
   std::function<glm::dvec3(double, double, const glm::dvec3&, const glm::dvec3&, const glm::dvec3&,
                            const glm::dvec3&, double, int)>
       adapt = [&](double a, double b, const glm::dvec3& fa, const glm::dvec3& fm, const glm::dvec3& fb,
@@ -455,8 +471,13 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
     const glm::dvec3 frm = f(0.5 * (m + b));
     const glm::dvec3 left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
     const glm::dvec3 right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+    evaluations += 2;
     const glm::dvec3 delta = left + right - whole;
-    if (depth <= 0 || glm::dot(glm::abs(delta), max_extinction_) <= 15.0 * eps) return left + right + delta / 15.0;
+    const double error = glm::dot(glm::abs(delta), max_extinction_);
+    const double rounding = kQuadratureRelativeFloor * glm::dot(glm::abs(left + right), max_extinction_);
+    if (depth <= 0 || evaluations >= kMaxQuadratureEvaluations || error <= 15.0 * std::max(eps, rounding)) {
+      return left + right + delta / 15.0;
+    }
     return adapt(a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + adapt(m, b, fm, frm, fb, right, 0.5 * eps, depth - 1);
   };
   glm::dvec3 total(0.0);
@@ -468,7 +489,8 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
       const double a = ts[i] + k * h;
       const double b = k + 1 == kPanels ? ts[i + 1] : a + h;
       const glm::dvec3 fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
-      total += adapt(a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), kOpticalDepthTolerance, 40);
+      total += adapt(a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), kOpticalDepthTolerance,
+                     kMaxQuadratureDepth);
     }
   }
   return total;

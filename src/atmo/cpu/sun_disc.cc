@@ -64,10 +64,15 @@ bool FindFootprint(const shared::CameraParameters& camera, const glm::dvec3& sun
     max_y = std::max(max_y, p.y);
   }
   if (behind == kBoundaryPoints + 1) return false;  // the whole cap behind a perspective camera
-  f.x0 = static_cast<int>(std::floor(min_x)) - 1;
-  f.x1 = static_cast<int>(std::floor(max_x)) + 1;
-  f.y0 = static_cast<int>(std::floor(min_y)) - 1;
-  f.y1 = static_cast<int>(std::floor(max_y)) + 1;
+  // As ints: a projection far off the image (a point just in front of a perspective camera's
+  // plane goes to ~1e17) or NaN is clamped first, so that the conversion is defined; the clamps
+  // to the image follow.
+  const double limit = 4.0 * (static_cast<double>(w) + h);
+  const auto pixel = [limit](double x) { return static_cast<int>(std::floor(shared::ClampToRange(x, -limit, limit))); };
+  f.x0 = pixel(min_x) - 1;
+  f.x1 = pixel(max_x) + 1;
+  f.y0 = pixel(min_y) - 1;
+  f.y1 = pixel(max_y) + 1;
   if (behind > 0) f = {0, w - 1, 0, h - 1, false};  // partly behind: look everywhere (fov < 180)
   if (camera.kind == shared::kCameraEquirect) {
     // A disc over a pole covers every column down to its far edge.
@@ -129,8 +134,9 @@ void AddSunDisc(const Camera& camera_settings, const glm::dvec3& sun_direction, 
   }
   const double diameter_px = density > 0.0 ? 2.0 * alpha / std::sqrt(density)
                                             : std::max(footprint.x1 - footprint.x0, footprint.y1 - footprint.y0);
-  const int strata = std::clamp(static_cast<int>(std::ceil(kStrataAcrossDisc / std::max(diameter_px, 1e-6))),
-                                kMinStrata, kMaxStrata);
+  // Clamped as a double, NaN included, so that the conversion to int is defined.
+  const int strata = static_cast<int>(std::ceil(shared::ClampToRange(
+      kStrataAcrossDisc / std::max(diameter_px, 1e-6), static_cast<double>(kMinStrata), static_cast<double>(kMaxStrata))));
   const bool smooth_inside = diameter_px > kSmoothDiscPixels;
   const double pixel_radius = 1.05 * PixelAngularRadius(camera);
   const int width = camera_settings.width;

@@ -82,10 +82,25 @@ Json Manifest(const ElekModel& model, const std::vector<unsigned char>& raw) {
   return j;
 }
 
-std::string ReadFile(const std::filesystem::path& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read elek table " + std::string(what) + " '" + path.string() + "'");
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+// A regular file of at most max_bytes (a device or FIFO is refused, /dev/zero does not exhaust memory).
+std::string ReadFile(const std::filesystem::path& path, const char* what,
+                     std::uintmax_t max_bytes = kMaxInputFileBytes) {
+  return ReadFileBounded(path, "elek table " + std::string(what) + " ", max_bytes);
+}
+
+// An integer of the manifest in [lo, hi]. JSON numbers with a fraction or exponent are refused
+// rather than converted: get<int>() loaded format_version 1.5 as 1, and converting 1e30 to an
+// integer is undefined behaviour (it printed -2147483648, and raw_bytes 1e30 read as 32768).
+std::uint64_t ManifestInteger(const Json& j, const char* key, std::uint64_t lo, std::uint64_t hi,
+                              const std::string& where) {
+  const Json& value = j.at(key);
+  const std::string range = " in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  if (!value.is_number_integer()) throw Error(where + key + " must be an integer" + range + " (got " + value.dump() + ")");
+  if (value.is_number_unsigned()) {
+    const std::uint64_t u = value.get<std::uint64_t>();
+    if (u >= lo && u <= hi) return u;
+  }
+  throw Error(where + key + " must be an integer" + range + " (got " + value.dump() + ")");
 }
 
 }  // namespace
@@ -161,8 +176,8 @@ void LoadElekTable(const std::string& name, ElekModel& model) {
   }
   try {
     if (j.value("format", std::string()) != "atmo-elek-table") throw Error(where + "not an elek table manifest");
-    const int version = j.at("format_version").get<int>();
-    if (version != kElekTableFormatVersion) {
+    const std::uint64_t version = ManifestInteger(j, "format_version", 0, 1u << 30, where);
+    if (version != static_cast<std::uint64_t>(kElekTableFormatVersion)) {
       throw Error(where + "format version " + std::to_string(version) + " does not match this program's " +
                   std::to_string(kElekTableFormatVersion));
     }
@@ -183,12 +198,19 @@ void LoadElekTable(const std::string& name, ElekModel& model) {
                     "=" + stored + ")");
       }
     }
-    if (j.at("batches").get<std::size_t>() != model.batches().size()) throw Error(where + "channel batches differ");
-    const std::string raw = ReadFile(files.raw, "data");
+    if (ManifestInteger(j, "batches", 1, 1u << 20, where) != model.batches().size()) {
+      throw Error(where + "channel batches differ");
+    }
     const glm::ivec3 s = model.settings().size;
     const std::size_t texels = static_cast<std::size_t>(s.x) * s.y * s.z;
     const std::size_t expected = 16 * texels * model.batches().size();
-    if (raw.size() != expected || j.at("raw_bytes").get<std::size_t>() != expected) {
+    const std::uint64_t manifest_bytes = ManifestInteger(j, "raw_bytes", 0, std::uint64_t{1} << 50, where);
+    if (manifest_bytes != expected) {
+      throw Error(where + "raw_bytes " + std::to_string(manifest_bytes) + " does not match the " +
+                  std::to_string(expected) + " bytes of this model's table");
+    }
+    const std::string raw = ReadFile(files.raw, "data", expected);
+    if (raw.size() != expected) {
       throw Error("elek table '" + files.raw.string() + "': " + std::to_string(raw.size()) + " bytes, expected " +
                   std::to_string(expected));
     }

@@ -9,7 +9,9 @@
 // - ReadExr returns the string attributes sorted by name: OpenEXR keeps a header's attributes in a
 //   map, so the order in which they were written is not stored in the file.
 // - Every message is one line (newlines in library messages are replaced by spaces).
+#include <fcntl.h>
 #include <png.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -246,12 +248,45 @@ ToneMapper ParseToneMapper(const std::string& name) {
 // ---------------------------------------------------------------------------------------------
 // Atomic writes.
 
+namespace {
+
+// fsync of a file or folder by name; false (errno set) when it cannot be opened or synced.
+bool SyncPath(const fs::path& path, bool directory) {
+  const int fd = ::open(path.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool ok = ::fsync(fd) == 0;
+  const int error = errno;
+  ::close(fd);
+  errno = error;
+  return ok;
+}
+
+}  // namespace
+
 void WriteFileAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   if (path.empty()) throw Error("cannot write '': empty path");
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw Error(WriteError(path, "is a directory"));
   if (!path.has_filename()) throw Error(WriteError(path, "the path names no file"));
-  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+
+  // A symbolic link is written through to its final target, so that the link stays a link (a
+  // rename onto the link would replace it by a plain file). A dangling link is refused rather
+  // than guessed at.
+  fs::path target = path;
+  if (fs::is_symlink(fs::symlink_status(path, ec))) {
+    target = fs::canonical(path, ec);
+    if (ec) throw Error(WriteError(path, "is a symbolic link to a missing file"));
+  }
+  // An existing target must be a regular file: rename would replace a device (as root,
+  // `--out /dev/null` became a plain file), a FIFO or a socket by a plain file.
+  struct stat existing {};
+  const bool exists = ::stat(target.c_str(), &existing) == 0;
+  if (exists && S_ISDIR(existing.st_mode)) throw Error(WriteError(path, "is a directory"));
+  if (exists && !S_ISREG(existing.st_mode)) {
+    throw Error(WriteError(path, "is not a regular file (a device, FIFO or socket); atmo writes only regular files"));
+  }
+
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   if (!fs::exists(dir, ec)) {
     throw Error(WriteError(path, "directory '" + dir.string() + "' does not exist"));
   }
@@ -265,7 +300,7 @@ void WriteFileAtomically(const fs::path& path, const std::function<void(const fs
   // Hidden, unique per process and call, in the same directory so that rename is atomic.
   static std::atomic<unsigned> counter{0};
   std::string temporary_name = ".";
-  temporary_name += path.filename().string();
+  temporary_name += target.filename().string();
   temporary_name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
   const fs::path temporary = dir / temporary_name;
   auto discard = [&] {
@@ -286,11 +321,88 @@ void WriteFileAtomically(const fs::path& path, const std::function<void(const fs
     discard();
     throw Error(WriteError(path, "the writer produced no file"));
   }
-  fs::rename(temporary, path, ec);
+  // A file replaced keeps its mode and its owner; the owner only where we may give it (root, or
+  // our own file); otherwise nothing is replaced.
+  if (exists) {
+    struct stat written {};
+    if (::stat(temporary.c_str(), &written) != 0 || ::chmod(temporary.c_str(), existing.st_mode & 07777) != 0) {
+      const int error = errno;
+      discard();
+      throw Error(WriteError(path, std::string("cannot keep its mode: ") + std::strerror(error)));
+    }
+    if ((written.st_uid != existing.st_uid || written.st_gid != existing.st_gid) &&
+        ::chown(temporary.c_str(), existing.st_uid, existing.st_gid) != 0) {
+      const int error = errno;
+      discard();
+      throw Error(WriteError(path, std::string("cannot keep its owner: ") + std::strerror(error)));
+    }
+  }
+  // The data reaches the disc before the name does, and the new name before we report success.
+  if (!SyncPath(temporary, false)) {
+    const int error = errno;
+    discard();
+    throw Error(WriteError(path, std::string("fsync failed: ") + std::strerror(error)));
+  }
+  fs::rename(temporary, target, ec);
   if (ec) {
     discard();
     throw Error(WriteError(path, ec.message()));
   }
+  if (!SyncPath(dir, true)) {
+    throw Error(WriteError(path, std::string("fsync of the folder failed: ") + std::strerror(errno)));
+  }
+}
+
+std::string ReadFileBounded(const fs::path& path, const std::string& what, std::uintmax_t max_bytes) {
+  const auto fail = [&](const std::string& reason) -> Error {
+    return Error("cannot read " + what + "'" + OneLine(path.string()) + "': " + reason);
+  };
+  // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw fail(std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int error = errno;
+    ::close(fd);
+    throw fail(std::strerror(error));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw fail("is a directory");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw fail("is not a regular file (a device, FIFO or socket)");
+  }
+  const auto too_large = [&] {
+    const std::string limit = max_bytes % (std::uintmax_t{1} << 20) == 0 && max_bytes > 0
+                                  ? std::to_string(max_bytes >> 20) + " MiB"
+                                  : std::to_string(max_bytes) + " bytes";
+    return fail("larger than the " + limit + " allowed");
+  };
+  if (static_cast<std::uintmax_t>(st.st_size) > max_bytes) {
+    ::close(fd);
+    throw too_large();
+  }
+  std::string text;
+  char buffer[65536];
+  while (true) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw fail(std::strerror(error));
+    }
+    if (n == 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
+    if (text.size() > max_bytes) {  // a file that grows while we read it
+      ::close(fd);
+      throw too_large();
+    }
+  }
+  ::close(fd);
+  return text;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 #include "atmo/model.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 
 #include "atmo/error.h"
@@ -71,8 +72,12 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
   ModelOptions model_options = options;
   if (const auto seed = model_options.find("seed"); seed != model_options.end()) {
     const std::string& text = seed->second;
-    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19) {
-      throw Error("option seed=" + text + ": expected an unsigned integer");
+    // Up to 2^64 - 1 = 18446744073709551615 (20 digits; 19 refused valid seeds).
+    std::uint64_t value = 0;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || error != std::errc() ||
+        end != text.data() + text.size()) {
+      throw Error("option seed=" + text + ": expected an integer in [0, 18446744073709551615]");
     }
   }
   std::unique_ptr<Model> model;

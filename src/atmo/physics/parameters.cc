@@ -21,6 +21,37 @@ namespace {
 // 1 nm (about 400 channels); 4096 leaves room and still bounds per-channel allocations.
 constexpr std::size_t kMaxChannelCount = 4096;
 
+// Physical bounds (docs/parameters.md, docs/reliability.md). They keep every intermediate of the
+// shared code finite and meaningful in double on the CPU and in float (lengths in km) on the GPU:
+// - radii in [1 m, 1e10 m]: r^2 stays far from overflow (1e20 m^2; 1e14 km^2 in float) and from
+//   underflow (the audit's 1e154 m and 1e-200 m radii turned r^2 into inf / 0 and NaN into an
+//   index); 1e10 m is 14 solar radii, 1 m a boulder.
+// - a thickness top - ground in [1e-5, 10] x ground: float keeps > 100 distinct radii across the
+//   atmosphere (its epsilon is 6e-8), and no known atmosphere reaches 10 planet radii.
+// - lengths and altitudes up to 1e11 m (0.7 au): far enough to see any allowed planet as a dot.
+// - coefficients up to 1e3 per m: optical depths stay <= 1e14 over the longest allowed path
+//   (exp underflows to 0 well before); the audit's 1e300 overflowed to inf and NaN.
+// - density terms up to 1e6 in magnitude (per m for the rates, i.e. scale heights >= 1 um):
+//   the linear and constant parts stay finite at every allowed altitude, so an exponential that
+//   overflows is +-inf alone and the [0, 1] clamp holds (opposite-signed infinities made NaN).
+constexpr double kMinRadius_m = 1.0;
+constexpr double kMaxRadius_m = 1e10;
+constexpr double kMinRelativeThickness = 1e-5;
+constexpr double kMaxRelativeThickness = 10.0;
+constexpr double kMaxLength_m = kMaxAltitude_m;
+constexpr double kMaxCoefficient_per_m = 1e3;
+constexpr double kMaxDensityTerm = 1e6;
+constexpr double kMinWavelength_nm = 1.0;
+constexpr double kMaxWavelength_nm = 1e5;
+// |g| <= 0.999: the peak (1 + g) / (1 - g)^2 / (4 pi) stays below 2e5 and 1 - g keeps three
+// significant digits in float.
+constexpr double kMaxPhaseG = 0.999;
+// Below 1e-6 rad the disc's centre radiance 1 / (pi sin^2(alpha / 2)) passes 1e12.
+constexpr double kMinSunRadius_rad = 1e-6;
+constexpr double kMaxIrradiance = 1e10;
+constexpr double kMinExposure = 1e-10;
+constexpr double kMaxExposure = 1e10;
+
 // A number as a user would write it: integers without exponent or fraction (6360000, -1), other
 // values in the shortest form that reads back exactly (0.004675, 1e-300), and nan / inf / -inf.
 std::string FormatNumber(double value) {
@@ -32,6 +63,13 @@ std::string FormatNumber(double value) {
     return buffer;
   }
   char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+// A bound of a range, in the shortest form (1e+10 rather than 10000000000).
+std::string FormatBound(double value) {
+  char buffer[32];
   const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
   return std::string(buffer, result.ptr);
 }
@@ -54,34 +92,37 @@ void CheckChannelCount(const std::string& key, const std::vector<double>& values
        (channel_count == 1 ? "is 1 channel" : "are " + std::to_string(channel_count) + " channels"));
 }
 
-// Every value finite and >= 0, one per channel.
-void CheckNonNegativePerChannel(const std::string& key, const std::vector<double>& values,
-                                std::size_t channel_count) {
+// `value` in [lo, hi] (NaN fails): "KEY must be in [LO, HI] UNIT (got VALUE)".
+void CheckRange(const std::string& key, double value, double lo, double hi, const std::string& unit) {
+  if (value >= lo && value <= hi) return;
+  Fail(key + " must be in [" + FormatBound(lo) + ", " + FormatBound(hi) + "]" +
+       (unit.empty() ? "" : " " + unit) + " (got " + FormatNumber(value) + ")");
+}
+
+// Every value in [lo, hi], one per channel.
+void CheckRangePerChannel(const std::string& key, const std::vector<double>& values,
+                          std::size_t channel_count, double lo, double hi, const std::string& unit) {
   CheckChannelCount(key, values, channel_count);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i]) || values[i] < 0.0) {
-      Fail(Indexed(key, i) + " must be finite and >= 0 (got " + FormatNumber(values[i]) + ")");
-    }
-  }
+  for (std::size_t i = 0; i < values.size(); ++i) CheckRange(Indexed(key, i), values[i], lo, hi, unit);
 }
 
 void ValidateLayer(const std::string& key, const DensityLayer& layer) {
-  CheckFinite(key + ".width_m", layer.width_m);
-  CheckFinite(key + ".exp_term", layer.exp_term);
-  CheckFinite(key + ".exp_scale_per_m", layer.exp_scale_per_m);
-  CheckFinite(key + ".linear_term_per_m", layer.linear_term_per_m);
-  CheckFinite(key + ".constant_term", layer.constant_term);
-  if (layer.width_m < 0.0) {
-    Fail(key + ".width_m must be >= 0 (got " + FormatNumber(layer.width_m) + ")");
-  }
+  CheckRange(key + ".width_m", layer.width_m, 0.0, kMaxLength_m, "m");
+  CheckRange(key + ".exp_term", layer.exp_term, -kMaxDensityTerm, kMaxDensityTerm, "");
+  CheckRange(key + ".exp_scale_per_m", layer.exp_scale_per_m, -kMaxDensityTerm, kMaxDensityTerm, "per m");
+  CheckRange(key + ".linear_term_per_m", layer.linear_term_per_m, -kMaxDensityTerm, kMaxDensityTerm, "per m");
+  CheckRange(key + ".constant_term", layer.constant_term, -kMaxDensityTerm, kMaxDensityTerm, "");
 }
 
 void ValidateMedium(const std::string& key, const Medium& medium, std::size_t channel_count) {
-  CheckNonNegativePerChannel(key + ".scattering_per_m", medium.scattering_per_m, channel_count);
-  CheckNonNegativePerChannel(key + ".absorption_per_m", medium.absorption_per_m, channel_count);
-  if (!std::isfinite(medium.phase_g) || !(std::fabs(medium.phase_g) < 1.0)) {
+  CheckRangePerChannel(key + ".scattering_per_m", medium.scattering_per_m, channel_count, 0.0,
+                       kMaxCoefficient_per_m, "per m");
+  CheckRangePerChannel(key + ".absorption_per_m", medium.absorption_per_m, channel_count, 0.0,
+                       kMaxCoefficient_per_m, "per m");
+  if (!(std::fabs(medium.phase_g) < 1.0)) {  // also NaN
     Fail(key + ".phase_g must satisfy |g| < 1 (got " + FormatNumber(medium.phase_g) + ")");
   }
+  CheckRange(key + ".phase_g", medium.phase_g, -kMaxPhaseG, kMaxPhaseG, "");
   ValidateLayer(key + ".density.lower", medium.density.lower);
   ValidateLayer(key + ".density.upper", medium.density.upper);
 }
@@ -147,23 +188,31 @@ void Validate(const AtmosphereParameters& p) {
          std::to_string(kMaxChannelCount) + " allowed");
   }
   for (std::size_t i = 0; i < channel_count; ++i) {
-    const double wavelength = p.wavelengths_nm[i];
-    if (!std::isfinite(wavelength) || wavelength <= 0.0) {
-      Fail(Indexed("wavelengths_nm", i) + " must be finite and > 0 (got " +
-           FormatNumber(wavelength) + ")");
-    }
+    CheckRange(Indexed("wavelengths_nm", i), p.wavelengths_nm[i], kMinWavelength_nm, kMaxWavelength_nm, "nm");
   }
 
   CheckFinite("ground_radius_m", p.ground_radius_m);
   CheckFinite("top_radius_m", p.top_radius_m);
   if (p.geometry == Geometry::kSpherical) {
-    if (p.ground_radius_m <= 0.0) {
-      Fail("ground_radius_m must be > 0 (got " + FormatNumber(p.ground_radius_m) + ")");
-    }
+    CheckRange("ground_radius_m", p.ground_radius_m, kMinRadius_m, kMaxRadius_m, "m");
     if (p.top_radius_m <= p.ground_radius_m) {
       Fail("top_radius_m (" + FormatNumber(p.top_radius_m) +
            ") must be greater than ground_radius_m (" + FormatNumber(p.ground_radius_m) + ")");
     }
+    // The thickness, relative to the planet: the range is given in metres for this planet.
+    const double thickness = p.top_radius_m - p.ground_radius_m;
+    const double relative = thickness / p.ground_radius_m;
+    if (!(relative >= kMinRelativeThickness && relative <= kMaxRelativeThickness)) {
+      char range[64];
+      std::snprintf(range, sizeof range, "[%.6g, %.6g]", kMinRelativeThickness * p.ground_radius_m,
+                    kMaxRelativeThickness * p.ground_radius_m);
+      Fail("top_radius_m - ground_radius_m must be in [1e-05, 10] x ground_radius_m = " + std::string(range) +
+           " m (got " + FormatNumber(thickness) + ")");
+    }
+  } else {
+    // Unused by the half-space, but still bounded: they travel into the shared code.
+    CheckRange("ground_radius_m", p.ground_radius_m, -kMaxLength_m, kMaxLength_m, "m");
+    CheckRange("top_radius_m", p.top_radius_m, -kMaxLength_m, kMaxLength_m, "m");
   }
 
   ValidateMedium("rayleigh", p.rayleigh, channel_count);
@@ -179,21 +228,20 @@ void Validate(const AtmosphereParameters& p) {
   }
 
   const double sun_radius = p.sun_angular_radius_rad;
-  if (!(sun_radius > 0.0 && sun_radius < std::numbers::pi / 2.0)) {
-    Fail("sun_angular_radius_rad must be in (0, pi/2) (got " + FormatNumber(sun_radius) + ")");
+  if (!(sun_radius >= kMinSunRadius_rad && sun_radius < std::numbers::pi / 2.0)) {
+    Fail("sun_angular_radius_rad must be in [1e-06, pi/2) (got " + FormatNumber(sun_radius) + ")");
   }
 
-  CheckNonNegativePerChannel("solar_irradiance", p.solar_irradiance, channel_count);
+  CheckRangePerChannel("solar_irradiance", p.solar_irradiance, channel_count, 0.0, kMaxIrradiance, "");
 
-  if (!std::isfinite(p.exposure) || p.exposure <= 0.0) {
-    Fail("exposure must be finite and > 0 (got " + FormatNumber(p.exposure) + ")");
-  }
+  CheckRange("exposure", p.exposure, kMinExposure, kMaxExposure, "");
 
   CheckFinite("observer_altitude_m", p.observer_altitude_m);
   if (p.geometry == Geometry::kSpherical && p.observer_altitude_m < 0.0) {
     Fail("observer_altitude_m must be >= 0 for spherical geometry (got " +
          FormatNumber(p.observer_altitude_m) + ")");
   }
+  CheckRange("observer_altitude_m", p.observer_altitude_m, -kMaxLength_m, kMaxLength_m, "m");
 }
 
 // FNV-1a, 64 bit (Fowler, Noll, Vo): offset basis 14695981039346656037, prime 1099511628211,

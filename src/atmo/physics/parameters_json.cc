@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atmo/error.h"
+#include "atmo/image.h"
 #include "atmo/parameters.h"
 
 namespace atmo {
@@ -199,11 +200,23 @@ std::string ToJson(const AtmosphereParameters& p) {
 }
 
 AtmosphereParameters FromJson(std::string_view json_text) {
+  // JSON text holds no NUL; the parser stopped at one and ignored the bytes after it.
+  if (const std::size_t nul = json_text.find('\0'); nul != std::string_view::npos) {
+    Fail("malformed JSON (byte " + std::to_string(nul + 1) + "): a NUL byte in the text");
+  }
   Json root;
   try {
     root = Json::parse(json_text.begin(), json_text.end());
   } catch (const Json::parse_error& error) {
     Fail(ParseErrorMessage(error));
+  } catch (const Json::exception& error) {
+    // e.g. out_of_range.406 for 1e400, a number beyond double: one line, without the library's tag.
+    std::string message = error.what();
+    if (!message.empty() && message.front() == '[') {
+      const std::size_t end = message.find("] ");
+      if (end != std::string::npos) message.erase(0, end + 2);
+    }
+    Fail("malformed JSON: " + message);
   }
   if (!root.is_object()) Fail("the parameters must be a JSON object");
   CheckKeys(root, "",
@@ -257,25 +270,13 @@ AtmosphereParameters FromJson(std::string_view json_text) {
 }
 
 AtmosphereParameters LoadParametersFile(const std::filesystem::path& path) {
-  const std::string shown = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    Fail("cannot read config '" + shown + "': is a directory");
-  }
-  errno = 0;
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
-    const int error = errno;
-    Fail("cannot read config '" + shown + "': " +
-         (error != 0 ? std::strerror(error) : "cannot open file"));
-  }
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) Fail("cannot read config '" + shown + "': read error");
+  // Bounded: a regular file of at most 64 MiB ("cannot read config 'PATH': is a directory", ...);
+  // /dev/zero ended in std::bad_alloc.
+  const std::string text = ReadFileBounded(path, "config ");
   try {
-    return FromJson(text.str());
+    return FromJson(text);
   } catch (const Error& error) {
-    Fail("config '" + shown + "': " + error.what());
+    Fail("config '" + path.string() + "': " + error.what());
   }
 }
 

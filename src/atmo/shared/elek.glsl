@@ -33,7 +33,7 @@ Number ElekSignedCubeRoot(Number x) {
 
 // (h, mu, mu_s) -> (u, v, w) in [0, 1]^3. h is the altitude above the ground (length).
 vec3 GetElekUvwFromHMuMuS(IN(AtmosphereParameters) atmosphere, int mapping, Number h, Number mu, Number mu_s) {
-  Number x_h = clamp(h / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
+  Number x_h = ClampToRange(h / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
   mu = ClampCosine(mu);
   mu_s = ClampCosine(mu_s);
   if (mapping == kElekMappingLinear) {
@@ -46,7 +46,7 @@ vec3 GetElekUvwFromHMuMuS(IN(AtmosphereParameters) atmosphere, int mapping, Numb
 void GetElekHMuMuSFromUvw(IN(AtmosphereParameters) atmosphere, int mapping, IN(vec3) uvw, OUT(Number) h,
     OUT(Number) mu, OUT(Number) mu_s) {
   Number height = atmosphere.top_radius - atmosphere.bottom_radius;
-  vec3 c = clamp(uvw, vec3(0.0), vec3(1.0));
+  vec3 c = vec3(ClampToRange(uvw.x, 0.0, 1.0), ClampToRange(uvw.y, 0.0, 1.0), ClampToRange(uvw.z, 0.0, 1.0));
   if (mapping == kElekMappingLinear) {
     h = c.x * height;
     mu = 2.0 * c.y - 1.0;

@@ -7,16 +7,26 @@
 // and the root that suffers cancellation is obtained from the product of the roots
 // (r^2 - R^2) instead of by subtraction. This keeps grazing rays accurate, also in float.
 
+// clamp(x, lo, hi) that maps NaN to lo: every comparison with NaN is false, so NaN takes the
+// first branch. GLSL's clamp and glm::clamp (like std::clamp) let NaN through, and a NaN texture
+// coordinate or table column then became an index far outside the table (the audit's crash for
+// radii of 1e154 m). Every clamp of the shared code that feeds a lookup goes through this one.
+Number ClampToRange(Number x, Number lo, Number hi) {
+  return !(x > lo) ? lo : (x < hi ? x : hi);
+}
+
 Number ClampCosine(Number mu) {
-  return clamp(mu, -1.0, 1.0);
+  return ClampToRange(mu, -1.0, 1.0);
 }
 
+// max(d, 0) with NaN -> 0.
 Number ClampDistance(Number d) {
-  return max(d, 0.0);
+  return d > 0.0 ? d : 0.0;
 }
 
+// sqrt(max(a, 0)) with NaN -> 0.
 Number SafeSqrt(Number a) {
-  return sqrt(max(a, 0.0));
+  return sqrt(a > 0.0 ? a : 0.0);
 }
 
 // Distance from a point at radius r <= top_radius, along mu, to the top atmosphere boundary.

@@ -88,9 +88,15 @@ inline ivec3 textureSize(const Texture3D& t, int /*lod*/) { return ivec3(t.width
 
 namespace detail {
 // Splits a texture coordinate into the two texels that GL_LINEAR blends and the weight of the
-// second one.
+// second one. Any u, NaN and infinities included, gives texels inside the table: x is first
+// brought into [-1, size] with comparisons that NaN fails (NaN -> -1, i.e. the first texel), so
+// that the conversion to int is always defined (a NaN cast to int is undefined behaviour and
+// gave an index of -2^31, the audit's segfault).
 inline void LinearTaps(double u, int size, bool repeat, int& i0, int& i1, double& w) {
-  const double x = u * size - 0.5;
+  // Wrapped coordinates keep their fraction; beyond 2^52 there is none, and NaN goes to 0.
+  if (repeat) u = (u > -4.5e15 && u < 4.5e15) ? u - std::floor(u) : 0.0;
+  double x = u * size - 0.5;
+  x = !(x > -1.0) ? -1.0 : (x < static_cast<double>(size) ? x : static_cast<double>(size));
   const double fl = std::floor(x);
   w = x - fl;
   i0 = static_cast<int>(fl);

@@ -4,7 +4,7 @@
 Number GetLayerDensity(IN(DensityProfileLayer) layer, Number altitude) {
   Number exponential = layer.exp_term == 0.0 ? 0.0 : layer.exp_term * exp(layer.exp_scale * altitude);
   Number density = exponential + layer.linear_term * altitude + layer.constant_term;
-  return clamp(density, 0.0, 1.0);
+  return ClampToRange(density, 0.0, 1.0);
 }
 
 Number GetProfileDensity(IN(DensityProfile) profile, Number altitude) {

@@ -11,16 +11,16 @@
 
 vec2 GetMultiScatteringTextureUvFromRMuS(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size,
     Number r, Number mu_s) {
-  Number x_mu_s = clamp(0.5 * mu_s + 0.5, 0.0, 1.0);
-  Number x_r = clamp((r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
+  Number x_mu_s = ClampToRange(0.5 * mu_s + 0.5, 0.0, 1.0);
+  Number x_r = ClampToRange((r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
   return vec2(GetTextureCoordFromUnitRange(x_mu_s, texture_size.x),
               GetTextureCoordFromUnitRange(x_r, texture_size.y));
 }
 
 void GetRMuSFromMultiScatteringTextureUv(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size,
     IN(vec2) uv, OUT(Number) r, OUT(Number) mu_s) {
-  Number x_mu_s = clamp(GetUnitRangeFromTextureCoord(uv.x, texture_size.x), 0.0, 1.0);
-  Number x_r = clamp(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
+  Number x_mu_s = ClampToRange(GetUnitRangeFromTextureCoord(uv.x, texture_size.x), 0.0, 1.0);
+  Number x_r = ClampToRange(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
   mu_s = 2.0 * x_mu_s - 1.0;
   r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
 }

@@ -122,7 +122,7 @@ vec3 GetSunDiscRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTex
 // atmosphere. The height must be even. A ray exactly along the horizon is a sky ray, as in
 // RayIntersectsGround.
 Number GetHorizonNadirAngle(IN(AtmosphereParameters) atmosphere, Number r) {
-  Number cos_beta = clamp(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0);
+  Number cos_beta = ClampToRange(SafeSqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r, 0.0, 1.0);
   return max(acos(cos_beta), 1e-9);
 }
 
@@ -155,10 +155,10 @@ void GetViewAnglesFromSkyViewTextureUv(IN(AtmosphereParameters) atmosphere, IN(i
   int half_height = texture_size.y / 2;
   Number view_zenith;
   if (uv.y < 0.5) {
-    Number y = clamp(GetUnitRangeFromTextureCoord(2.0 * uv.y, half_height), 0.0, 1.0);
+    Number y = ClampToRange(GetUnitRangeFromTextureCoord(2.0 * uv.y, half_height), 0.0, 1.0);
     view_zenith = zenith_horizon_angle * (1.0 - (1.0 - y) * (1.0 - y));
   } else {
-    Number y = clamp(GetUnitRangeFromTextureCoord(2.0 * uv.y - 1.0, half_height), 0.0, 1.0);
+    Number y = ClampToRange(GetUnitRangeFromTextureCoord(2.0 * uv.y - 1.0, half_height), 0.0, 1.0);
     view_zenith = zenith_horizon_angle + beta * y * y;
   }
   mu = cos(view_zenith);

@@ -39,7 +39,7 @@
 
 // The coefficients a_0 .. a_5 of Neckel and Labs' f(mu) at a wavelength in nm.
 void GetSunLimbDarkeningCoefficients(Number wavelength_nm, OUT(vec3) a012, OUT(vec3) a345) {
-  Number lambda_nm = clamp(wavelength_nm, 300.0, 1100.0);
+  Number lambda_nm = ClampToRange(wavelength_nm, 300.0, 1100.0);
   if (lambda_nm >= 372.98 && lambda_nm < 385.0) {
     lambda_nm = lambda_nm - 372.98 < 385.0 - lambda_nm ? 372.98 : 385.0;
   }
@@ -69,7 +69,7 @@ Number GetSunLimbDarkening(Number wavelength_nm, Number mu) {
   vec3 a012;
   vec3 a345;
   GetSunLimbDarkeningCoefficients(wavelength_nm, a012, a345);
-  return EvaluateSunLimbDarkening(a012, a345, clamp(mu, 0.0, 1.0));
+  return EvaluateSunLimbDarkening(a012, a345, ClampToRange(mu, 0.0, 1.0));
 }
 
 // Node i (0..3) and weight of the 8-point Gauss-Legendre rule on [-1, 1]: +-x_i with weight w_i.

@@ -13,7 +13,7 @@
 vec3 ComputeOpticalDepthToTopAtmosphereBoundary(IN(AtmosphereParameters) atmosphere, Number r, Number mu,
     int sample_count) {
   Number d = DistanceToTopAtmosphereBoundary(atmosphere, r, mu);
-  Number t_low = clamp(-r * mu, 0.0, d);
+  Number t_low = ClampToRange(-r * mu, 0.0, d);
   Number x_0 = -sqrt(t_low);
   Number dx = (sqrt(d - t_low) - x_0) / Number(sample_count);
   // The integrals of the three densities, combined with the coefficients once at the end.
@@ -98,7 +98,7 @@ vec3 GetTransmittanceToTopAtmosphereBoundary(IN(AtmosphereParameters) atmosphere
 // ground both ends are mirrored (mu -> -mu) so that the table is read only above the horizon.
 vec3 GetTransmittance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     Number r, Number mu, Number d, bool ray_r_mu_intersects_ground) {
-  Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), atmosphere.bottom_radius, atmosphere.top_radius);
+  Number r_d = ClampToRange(sqrt(d * d + 2.0 * r * mu * d + r * r), atmosphere.bottom_radius, atmosphere.top_radius);
   Number mu_d = ClampCosine((r * mu + d) / r_d);
   if (ray_r_mu_intersects_ground) {
     return min(GetTransmittanceToTopAtmosphereBoundary(atmosphere, transmittance_texture, r_d, -mu_d) /
