@@ -28,6 +28,7 @@
 #include <oneapi/tbb/global_control.h>
 
 #include "atmo/error.h"
+#include "atmo/interrupt.h"
 #include "atmo/render.h"
 #include "commands.h"
 
@@ -161,6 +162,7 @@ CLI::Option* AddSunOptions(CLI::App* app, atmo::cli::SunOptions& sun) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  atmo::InstallInterruptHandlers("atmo");  // SIGINT/SIGTERM: no temporary file is left behind
   CLI::App app{"atmo: physically based sky rendering", "atmo"};
   app.set_version_flag("--version", std::string("atmo ") + ATMO_VERSION);
   app.require_subcommand(0, 1);

@@ -50,6 +50,7 @@
 
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/interrupt.h"
 
 namespace atmo {
 namespace {
@@ -303,6 +304,11 @@ void WriteFileAtomically(const fs::path& path, const std::function<void(const fs
   temporary_name += target.filename().string();
   temporary_name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
   const fs::path temporary = dir / temporary_name;
+  // SIGINT/SIGTERM remove it (include/atmo/interrupt.h) while it exists under this name.
+  struct Registration {
+    int slot;
+    ~Registration() { ReleaseTemporaryFile(slot); }
+  } registration{RegisterTemporaryFile(temporary.c_str())};
   auto discard = [&] {
     std::error_code ignored;
     fs::remove(temporary, ignored);

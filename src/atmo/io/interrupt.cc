@@ -1,0 +1,80 @@
+// Removal of temporary files on SIGINT and SIGTERM (include/atmo/interrupt.h).
+//
+// The handler may run at any point of any thread, so the registry is a fixed array of slots
+// claimed with an atomic flag: Register copies the path into a free slot and only then publishes
+// it (release store); the handler reads the published flag (acquire) and unlinks the path.
+// unlink, write, signal and raise are async-signal-safe; nothing here allocates or locks.
+#include "atmo/interrupt.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstring>
+
+namespace atmo {
+namespace {
+
+enum SlotState : int { kFree = 0, kClaimed = 1, kPublished = 2 };
+
+struct Slot {
+  std::atomic<int> state{kFree};
+  char path[kMaxTemporaryPathBytes] = {};
+};
+
+Slot g_slots[kMaxTemporaryFiles];
+const char* g_program = "atmo";
+
+void WriteAll(const char* text) {
+  std::size_t left = std::strlen(text);
+  while (left > 0) {
+    const ssize_t n = ::write(STDERR_FILENO, text, left);
+    if (n <= 0) return;
+    text += n;
+    left -= static_cast<std::size_t>(n);
+  }
+}
+
+extern "C" void HandleInterrupt(int signal_number) {
+  for (Slot& slot : g_slots) {
+    if (slot.state.load(std::memory_order_acquire) == kPublished) ::unlink(slot.path);
+  }
+  WriteAll(g_program);
+  WriteAll(signal_number == SIGINT ? ": error: interrupted by SIGINT; temporary files removed\n"
+                                   : ": error: interrupted by SIGTERM; temporary files removed\n");
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+}  // namespace
+
+void InstallInterruptHandlers(const char* program) {
+  g_program = program;
+  struct sigaction action {};
+  action.sa_handler = HandleInterrupt;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+int RegisterTemporaryFile(const char* path) {
+  const std::size_t length = std::strlen(path);
+  if (length + 1 > kMaxTemporaryPathBytes) return -1;
+  for (std::size_t i = 0; i < kMaxTemporaryFiles; ++i) {
+    int expected = kFree;
+    if (g_slots[i].state.compare_exchange_strong(expected, kClaimed, std::memory_order_acq_rel)) {
+      std::memcpy(g_slots[i].path, path, length + 1);
+      g_slots[i].state.store(kPublished, std::memory_order_release);
+      return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+void ReleaseTemporaryFile(int slot) {
+  if (slot < 0 || static_cast<std::size_t>(slot) >= kMaxTemporaryFiles) return;
+  g_slots[slot].state.store(kFree, std::memory_order_release);
+}
+
+}  // namespace atmo
