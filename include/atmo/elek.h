@@ -35,8 +35,11 @@ struct ElekTableFiles {
 // The three file names of NAME (NAME.exr, NAME.raw, NAME.json).
 ElekTableFiles ElekTableFilesFor(const std::filesystem::path& name);
 
-// Writes the three files of a model made by CreateModel("elek", ...), each atomically (manifest
-// last). Throws atmo::Error for another model, a model whose table was loaded, or a failed write.
+// Writes the three files of a model made by CreateModel("elek", ...) as one set: all three are
+// written completely first, then published together, the manifest last, under an exclusive lock
+// of their folder (flock), while loading holds a shared one. A failed write changes no file, two
+// exports to one name publish one after the other, and a load never sees a mixed set. Throws
+// atmo::Error for another model, a model whose table was loaded, or a failed write.
 ElekTableFiles ExportElekTable(const Model& model, const std::filesystem::path& name);
 
 }  // namespace atmo

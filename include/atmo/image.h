@@ -129,7 +129,10 @@ ToneMapper ParseToneMapper(const std::string& name);
 // other than 3 channels writes C0..Cn-1), plus A when the image has alpha; ZIP compression; each
 // metadata entry as a string attribute. channel_names must be empty or one unique, non-empty name
 // per channel other than "A".
-void WriteExr(const std::filesystem::path& path, const Image& image, const ImageMetadata& metadata = {});
+// With `set`, the file is staged there (AtomicFileSet below) and appears on its Commit.
+class AtomicFileSet;
+void WriteExr(const std::filesystem::path& path, const Image& image, const ImageMetadata& metadata = {},
+              AtomicFileSet* set = nullptr);
 // Reads an EXR written by WriteExr; throws atmo::Error. Channels: R, G, B (or C0, C1, ... when the
 // file has no R, G, B) first, then every other channel but A: those named "P.layer" for one of
 // the first channels P grouped by layer, in the order of P (R.stderr, G.stderr, B.stderr), then
@@ -150,6 +153,28 @@ void WritePng(const std::filesystem::path& path, const Image& image, const ToneM
 // cannot be kept). The temporary file is fsync'ed before the rename and the folder after it.
 void WriteFileAtomically(const std::filesystem::path& path,
                          const std::function<void(const std::filesystem::path&)>& write);
+
+// Several files published as one set: Stage writes each into a complete temporary file beside
+// its target, with every check of WriteFileAtomically; Commit renames them in the order they were
+// staged (put a manifest last: it appears last) and fsyncs their folders. When anything fails
+// before Commit, or the set is destroyed without it, no target changes and the temporaries are
+// removed (SIGINT/SIGTERM remove them too, include/atmo/interrupt.h). Throws atmo::Error naming
+// the file. Readers that must never see a half-published set take a lock as well
+// (include/atmo/elek.h does).
+class AtomicFileSet {
+ public:
+  AtomicFileSet();
+  ~AtomicFileSet();
+  AtomicFileSet(const AtomicFileSet&) = delete;
+  AtomicFileSet& operator=(const AtomicFileSet&) = delete;
+  void Stage(const std::filesystem::path& path, const std::function<void(const std::filesystem::path&)>& write);
+  void Commit();
+
+ private:
+  struct Staged;
+  std::vector<Staged> staged_;
+  bool committed_ = false;
+};
 
 // The most bytes ReadFileBounded reads by default: 64 MiB, above every config, grid and manifest
 // atmo writes (a 4096-channel config is ~1 MiB) and far below the memory of any machine.

@@ -1,5 +1,10 @@
 #include "io/elek_table_file.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -114,6 +119,34 @@ std::uint64_t Fnv1a64(std::span<const unsigned char> bytes) {
   return hash;
 }
 
+// An advisory lock (flock) on the folder of a table's files, for as long as it lives: exclusive
+// while an export publishes its set, shared while a load reads it, so that a reader never sees
+// the files of two exports mixed and two exports publish one after the other. A folder that
+// cannot be opened is not locked (the operation then fails on its own files).
+namespace {
+
+class FolderLock {
+ public:
+  FolderLock(const std::filesystem::path& file, bool exclusive) {
+    const std::filesystem::path dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+    fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd_ >= 0) {
+      while (::flock(fd_, exclusive ? LOCK_EX : LOCK_SH) != 0 && errno == EINTR) {
+      }
+    }
+  }
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);  // closing releases the lock
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace
+
 ElekTableFiles ElekTableFilesFor(const std::filesystem::path& name) {
   const std::string base = name.string();
   return {base + ".exr", base + ".raw", base + ".json"};
@@ -130,7 +163,10 @@ ElekTableFiles ExportElekTable(const Model& model, const std::filesystem::path& 
   const glm::ivec3 s = elek->settings().size;
   const std::size_t batches = elek->batches().size();
 
-  WriteFileAtomically(files.raw, [&](const std::filesystem::path& temporary) {
+  // One set: every file written completely first, then published in one locked commit with the
+  // manifest last; a failure before that changes no file.
+  AtomicFileSet set;
+  set.Stage(files.raw, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     out.write(reinterpret_cast<const char*>(raw.data()), static_cast<std::streamsize>(raw.size()));
     if (!out) throw Error("write failed");
@@ -154,19 +190,23 @@ ElekTableFiles ExportElekTable(const Model& model, const std::filesystem::path& 
             {"atmo:parameterHash", ParameterHashHex(elek->parameters())},
             {"atmo:elekSize", std::to_string(s.x) + "x" + std::to_string(s.y) + "x" + std::to_string(s.z)},
             {"atmo:elekParameterisation", MappingName(*elek)},
-            {"atmo:elekLayout", "slice z of batch b = rows [H (z + D b), H (z + D b + 1)); A = Mie of channel 3b"}});
+            {"atmo:elekLayout", "slice z of batch b = rows [H (z + D b), H (z + D b + 1)); A = Mie of channel 3b"}},
+           &set);
 
   const std::string manifest = Manifest(*elek, raw).dump(2) + "\n";
-  WriteFileAtomically(files.json, [&](const std::filesystem::path& temporary) {
+  set.Stage(files.json, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     out << manifest;
     if (!out) throw Error("write failed");
   });
+  const FolderLock lock(files.json, /*exclusive=*/true);
+  set.Commit();
   return files;
 }
 
 void LoadElekTable(const std::string& name, ElekModel& model) {
   const ElekTableFiles files = ElekTableFilesFor(name);
+  const FolderLock lock(files.json, /*exclusive=*/false);  // no export publishes while we read
   const std::string where = "elek table '" + files.json.string() + "': ";
   Json j;
   try {

@@ -264,99 +264,139 @@ bool SyncPath(const fs::path& path, bool directory) {
 
 }  // namespace
 
-void WriteFileAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+// One staged file: its target (a symbolic link resolved), folder, the stat of what it replaces,
+// and its temporary, registered for removal on SIGINT/SIGTERM.
+struct AtomicFileSet::Staged {
+  fs::path path;    // as given, for messages
+  fs::path target;  // the final target of a symbolic link, else path
+  fs::path dir;
+  fs::path temporary;
+  bool exists = false;
+  struct stat existing {};
+  int signal_slot = -1;
+
+  void Discard() {
+    std::error_code ignored;
+    if (!temporary.empty()) fs::remove(temporary, ignored);
+    ReleaseTemporaryFile(signal_slot);
+    signal_slot = -1;
+    temporary.clear();
+  }
+};
+
+AtomicFileSet::AtomicFileSet() = default;
+
+AtomicFileSet::~AtomicFileSet() {
+  for (Staged& staged : staged_) staged.Discard();
+}
+
+void AtomicFileSet::Stage(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (committed_) throw Error(WriteError(path, "the file set was already committed"));
   if (path.empty()) throw Error("cannot write '': empty path");
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw Error(WriteError(path, "is a directory"));
   if (!path.has_filename()) throw Error(WriteError(path, "the path names no file"));
 
+  Staged staged;
+  staged.path = path;
   // A symbolic link is written through to its final target, so that the link stays a link (a
   // rename onto the link would replace it by a plain file). A dangling link is refused rather
   // than guessed at.
-  fs::path target = path;
+  staged.target = path;
   if (fs::is_symlink(fs::symlink_status(path, ec))) {
-    target = fs::canonical(path, ec);
+    staged.target = fs::canonical(path, ec);
     if (ec) throw Error(WriteError(path, "is a symbolic link to a missing file"));
   }
   // An existing target must be a regular file: rename would replace a device (as root,
   // `--out /dev/null` became a plain file), a FIFO or a socket by a plain file.
-  struct stat existing {};
-  const bool exists = ::stat(target.c_str(), &existing) == 0;
-  if (exists && S_ISDIR(existing.st_mode)) throw Error(WriteError(path, "is a directory"));
-  if (exists && !S_ISREG(existing.st_mode)) {
+  staged.exists = ::stat(staged.target.c_str(), &staged.existing) == 0;
+  if (staged.exists && S_ISDIR(staged.existing.st_mode)) throw Error(WriteError(path, "is a directory"));
+  if (staged.exists && !S_ISREG(staged.existing.st_mode)) {
     throw Error(WriteError(path, "is not a regular file (a device, FIFO or socket); atmo writes only regular files"));
   }
+  for (const Staged& other : staged_) {
+    if (other.target == staged.target) throw Error(WriteError(path, "is staged twice"));
+  }
 
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  if (!fs::exists(dir, ec)) {
-    throw Error(WriteError(path, "directory '" + dir.string() + "' does not exist"));
+  staged.dir = staged.target.has_parent_path() ? staged.target.parent_path() : fs::path(".");
+  if (!fs::exists(staged.dir, ec)) {
+    throw Error(WriteError(path, "directory '" + staged.dir.string() + "' does not exist"));
   }
-  if (!fs::is_directory(dir, ec)) {
-    throw Error(WriteError(path, "'" + dir.string() + "' is not a directory"));
+  if (!fs::is_directory(staged.dir, ec)) {
+    throw Error(WriteError(path, "'" + staged.dir.string() + "' is not a directory"));
   }
-  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
-    throw Error(WriteError(path, "directory '" + dir.string() + "' is not writable"));
+  if (::access(staged.dir.c_str(), W_OK | X_OK) != 0) {
+    throw Error(WriteError(path, "directory '" + staged.dir.string() + "' is not writable"));
   }
 
   // Hidden, unique per process and call, in the same directory so that rename is atomic.
   static std::atomic<unsigned> counter{0};
   std::string temporary_name = ".";
-  temporary_name += target.filename().string();
+  temporary_name += staged.target.filename().string();
   temporary_name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
-  const fs::path temporary = dir / temporary_name;
+  staged.temporary = staged.dir / temporary_name;
   // SIGINT/SIGTERM remove it (include/atmo/interrupt.h) while it exists under this name.
-  struct Registration {
-    int slot;
-    ~Registration() { ReleaseTemporaryFile(slot); }
-  } registration{RegisterTemporaryFile(temporary.c_str())};
-  auto discard = [&] {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
+  staged.signal_slot = RegisterTemporaryFile(staged.temporary.c_str());
+  const auto fail = [&](const std::string& reason) {
+    staged.Discard();
+    return Error(WriteError(path, reason));
   };
 
   try {
-    write(temporary);
+    write(staged.temporary);
   } catch (const std::exception& e) {
-    discard();
-    throw Error(WriteError(path, e.what()));
+    throw fail(e.what());
   } catch (...) {
-    discard();
-    throw Error(WriteError(path, "unknown error"));
+    throw fail("unknown error");
   }
-  if (!fs::is_regular_file(temporary, ec)) {
-    discard();
-    throw Error(WriteError(path, "the writer produced no file"));
-  }
+  if (!fs::is_regular_file(staged.temporary, ec)) throw fail("the writer produced no file");
   // A file replaced keeps its mode and its owner; the owner only where we may give it (root, or
   // our own file); otherwise nothing is replaced.
-  if (exists) {
+  if (staged.exists) {
     struct stat written {};
-    if (::stat(temporary.c_str(), &written) != 0 || ::chmod(temporary.c_str(), existing.st_mode & 07777) != 0) {
-      const int error = errno;
-      discard();
-      throw Error(WriteError(path, std::string("cannot keep its mode: ") + std::strerror(error)));
+    if (::stat(staged.temporary.c_str(), &written) != 0 ||
+        ::chmod(staged.temporary.c_str(), staged.existing.st_mode & 07777) != 0) {
+      throw fail(std::string("cannot keep its mode: ") + std::strerror(errno));
     }
-    if ((written.st_uid != existing.st_uid || written.st_gid != existing.st_gid) &&
-        ::chown(temporary.c_str(), existing.st_uid, existing.st_gid) != 0) {
-      const int error = errno;
-      discard();
-      throw Error(WriteError(path, std::string("cannot keep its owner: ") + std::strerror(error)));
+    if ((written.st_uid != staged.existing.st_uid || written.st_gid != staged.existing.st_gid) &&
+        ::chown(staged.temporary.c_str(), staged.existing.st_uid, staged.existing.st_gid) != 0) {
+      throw fail(std::string("cannot keep its owner: ") + std::strerror(errno));
     }
   }
-  // The data reaches the disc before the name does, and the new name before we report success.
-  if (!SyncPath(temporary, false)) {
-    const int error = errno;
-    discard();
-    throw Error(WriteError(path, std::string("fsync failed: ") + std::strerror(error)));
+  // The data reaches the disc before the name does.
+  if (!SyncPath(staged.temporary, false)) throw fail(std::string("fsync failed: ") + std::strerror(errno));
+  staged_.push_back(std::move(staged));
+}
+
+void AtomicFileSet::Commit() {
+  if (committed_) return;
+  committed_ = true;
+  std::error_code ec;
+  for (Staged& staged : staged_) {
+    fs::rename(staged.temporary, staged.target, ec);
+    if (ec) {
+      const std::string reason = ec.message();
+      for (Staged& rest : staged_) {
+        if (!rest.temporary.empty() && fs::exists(rest.temporary)) rest.Discard();
+      }
+      throw Error(WriteError(staged.path, reason));
+    }
+    ReleaseTemporaryFile(staged.signal_slot);
+    staged.signal_slot = -1;
+    staged.temporary.clear();
   }
-  fs::rename(temporary, target, ec);
-  if (ec) {
-    discard();
-    throw Error(WriteError(path, ec.message()));
+  // The new names reach the disc before we report success.
+  for (const Staged& staged : staged_) {
+    if (!SyncPath(staged.dir, true)) {
+      throw Error(WriteError(staged.path, std::string("fsync of the folder failed: ") + std::strerror(errno)));
+    }
   }
-  if (!SyncPath(dir, true)) {
-    throw Error(WriteError(path, std::string("fsync of the folder failed: ") + std::strerror(errno)));
-  }
+}
+
+void WriteFileAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  AtomicFileSet set;
+  set.Stage(path, write);
+  set.Commit();
 }
 
 std::string ReadFileBounded(const fs::path& path, const std::string& what, std::uintmax_t max_bytes) {
@@ -414,7 +454,7 @@ std::string ReadFileBounded(const fs::path& path, const std::string& what, std::
 // ---------------------------------------------------------------------------------------------
 // EXR.
 
-void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& metadata) {
+void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& metadata, AtomicFileSet* set) {
   if (auto problem = ImageProblem(image)) throw Error(WriteError(path, *problem));
 
   // Build the header before touching the file system, so that bad metadata creates nothing.
@@ -444,7 +484,7 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
     }
   }
 
-  WriteFileAtomically(path, [&](const fs::path& temporary) {
+  const auto write = [&](const fs::path& temporary) {
     std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
     if (!stream) throw std::runtime_error("cannot create '" + temporary.string() + "'");
     {
@@ -466,7 +506,12 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
     }  // ~OutputFile writes the line-offset table.
     stream.close();
     if (!stream) throw std::runtime_error("error while writing '" + temporary.string() + "'");
-  });
+  };
+  if (set != nullptr) {
+    set->Stage(path, write);
+  } else {
+    WriteFileAtomically(path, write);
+  }
 }
 
 Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
