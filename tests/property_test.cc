@@ -1,0 +1,180 @@
+// Property tests over random valid atmospheres and queries: every model answers finite,
+// non-negative radiance and a transmittance in [0, 1], in bounded time, over magnitudes of many
+// decades, any albedo and asymmetry, observers from the ground to 1000 km, exactly horizontal and
+// grazing views and a sun below the horizon. CI runs >= 10^4 queries here; scripts/property_sweep.sh
+// runs 10^6 (ATMO_PROPERTY_SCALE=100).
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+
+namespace atmo {
+namespace {
+
+// ATMO_PROPERTY_SCALE multiplies the atmosphere counts (1 in CI).
+int Scale() {
+  const char* text = std::getenv("ATMO_PROPERTY_SCALE");
+  const int scale = text == nullptr ? 1 : std::atoi(text);
+  return scale < 1 ? 1 : scale;
+}
+
+double LogUniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::exp(std::uniform_real_distribution<double>(std::log(lo), std::log(hi))(rng));
+}
+
+// A random spherical atmosphere inside the documented bounds (docs/reliability.md): radii from a
+// 1 km rock to 1e9 m, thickness 1e-4..1 radii, coefficients over 10 decades, scale heights
+// relative to the thickness, any albedo and g in (-0.999, 0.999).
+AtmosphereParameters RandomAtmosphere(std::mt19937_64& rng) {
+  AtmosphereParameters p = Preset("earth");
+  p.name = "random";
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  p.ground_radius_m = LogUniform(rng, 1e3, 1e9);
+  const double thickness = p.ground_radius_m * LogUniform(rng, 1e-4, 1.0);
+  p.top_radius_m = p.ground_radius_m + thickness;
+  for (Medium* m : {&p.rayleigh, &p.mie}) {
+    for (int c = 0; c < 3; ++c) {
+      m->scattering_per_m[c] = unit(rng) < 0.1 ? 0.0 : LogUniform(rng, 1e-12, 1e-2);
+      m->absorption_per_m[c] = unit(rng) < 0.3 ? 0.0 : LogUniform(rng, 1e-12, 1e-2);
+    }
+    m->density = DensityProfile::Exponential(thickness * LogUniform(rng, 1e-3, 1.0));
+  }
+  for (int c = 0; c < 3; ++c) p.ozone.absorption_per_m[c] = unit(rng) < 0.5 ? 0.0 : LogUniform(rng, 1e-12, 1e-4);
+  p.ozone.density = DensityProfile::Tent(0.1 * thickness, 0.25 * thickness, 0.4 * thickness);
+  p.mie.phase_g = std::uniform_real_distribution<double>(-0.999, 0.999)(rng);
+  p.mie.phase = unit(rng) < 0.5 ? PhaseFunction::kCornetteShanks : PhaseFunction::kHenyeyGreenstein;
+  for (int c = 0; c < 3; ++c) p.ground_albedo[c] = unit(rng);
+  Validate(p);
+  return p;
+}
+
+// Random queries of one atmosphere: altitudes from the ground to 1000 km (and exactly at the
+// top), views exactly horizontal, grazing (within 1e-6 of the horizon and of the ground's
+// tangent), straight up and down, and uniform; suns above and below the horizon.
+struct Query {
+  double altitude_m;
+  glm::dvec3 sun;
+  glm::dvec3 view;
+};
+
+std::vector<Query> RandomQueries(std::mt19937_64& rng, const AtmosphereParameters& p, int count) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Query> queries;
+  for (int i = 0; i < count; ++i) {
+    Query q;
+    const double pick = unit(rng);
+    q.altitude_m = pick < 0.2 ? 0.0 : pick < 0.3 ? p.top_radius_m - p.ground_radius_m : LogUniform(rng, 1.0, 1e6);
+    const double sun_zenith = std::acos(std::uniform_real_distribution<double>(-1.0, 1.0)(rng));
+    q.sun = DirectionFromZenithAzimuth(sun_zenith, 0.0);
+    const double r = p.ground_radius_m + q.altitude_m;
+    const double horizon = std::acos(-std::sqrt(std::max(0.0, 1.0 - (p.ground_radius_m / r) * (p.ground_radius_m / r))));
+    const double kind = unit(rng);
+    double zenith;
+    if (kind < 0.15) zenith = 0.5 * M_PI;                                // exactly horizontal
+    else if (kind < 0.3) zenith = horizon + (unit(rng) - 0.5) * 2e-6;   // grazing the ground
+    else if (kind < 0.35) zenith = 0.0;
+    else if (kind < 0.4) zenith = M_PI;
+    else zenith = std::acos(std::uniform_real_distribution<double>(-1.0, 1.0)(rng));
+    q.view = DirectionFromZenithAzimuth(std::clamp(zenith, 0.0, M_PI), 2.0 * M_PI * unit(rng));
+    queries.push_back(q);
+  }
+  return queries;
+}
+
+// Checks every query of `count` per atmosphere over `atmospheres` random atmospheres; returns the
+// number of queries checked.
+int CheckModel(const char* model_name, const ModelOptions& options, int atmospheres, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  int checked = 0;
+  for (int a = 0; a < atmospheres; ++a) {
+    const AtmosphereParameters p = RandomAtmosphere(rng);
+    const auto start = std::chrono::steady_clock::now();
+    const auto model = CreateModel(model_name, p, options);
+    std::vector<double> l(3), t(3), d(3);
+    for (const Query& q : RandomQueries(rng, p, count)) {
+      const auto sky = model->View(q.altitude_m, q.sun);
+      sky->Radiance(q.view, l);
+      sky->Transmittance(q.view, t);
+      sky->SunDiscRadiance(q.view, d);
+      for (int c = 0; c < 3; ++c) {
+        const bool ok = std::isfinite(l[c]) && l[c] >= 0.0 && t[c] >= 0.0 && t[c] <= 1.0 && std::isfinite(d[c]) &&
+                        d[c] >= 0.0;
+        if (!ok) {
+          ADD_FAILURE() << model_name << " atmosphere " << a << ": radius " << p.ground_radius_m << " top "
+                        << p.top_radius_m << " altitude " << q.altitude_m << " view z " << q.view.z << " sun z "
+                        << q.sun.z << ": L " << l[c] << " T " << t[c] << " disc " << d[c];
+          return checked;
+        }
+      }
+      ++checked;
+    }
+    // Bounded time: one atmosphere's tables and queries take well under this on 2 cores.
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0)
+        << model_name << " atmosphere " << a;
+  }
+  return checked;
+}
+
+// The half-space of model simple: random coefficients over 10 decades and phase asymmetry,
+// observers inside (depth 0 to 1e3 units) and above the boundary plane, any view and sun.
+int CheckSimple(int atmospheres, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int checked = 0;
+  for (int a = 0; a < atmospheres; ++a) {
+    AtmosphereParameters p = Preset("simple");
+    for (Medium* m : {&p.rayleigh, &p.mie, &p.ozone}) {
+      if (!m->present()) continue;
+      for (std::size_t c = 0; c < 3; ++c) {
+        m->scattering_per_m[c] = LogUniform(rng, 1e-6, 1e3);
+        m->absorption_per_m[c] = unit(rng) < 0.5 ? 0.0 : LogUniform(rng, 1e-6, 1e3);
+      }
+    }
+    const auto model = CreateModel("simple", p);
+    std::vector<double> l(3), t(3);
+    for (int i = 0; i < count; ++i) {
+      const double altitude = unit(rng) < 0.8 ? -LogUniform(rng, 1e-6, 1e3) : LogUniform(rng, 1e-6, 1e3);
+      const glm::dvec3 sun = DirectionFromZenithAzimuth(std::acos(2.0 * unit(rng) - 1.0), 0.0);
+      const double zenith = unit(rng) < 0.2 ? 0.5 * M_PI : std::acos(2.0 * unit(rng) - 1.0);
+      const glm::dvec3 view = DirectionFromZenithAzimuth(zenith, 2.0 * M_PI * unit(rng));
+      const auto sky = model->View(altitude, sun);
+      sky->Radiance(view, l);
+      sky->Transmittance(view, t);
+      for (int c = 0; c < 3; ++c) {
+        if (!(std::isfinite(l[c]) && l[c] >= 0.0 && t[c] >= 0.0 && t[c] <= 1.0)) {
+          ADD_FAILURE() << "simple atmosphere " << a << " altitude " << altitude << " view z " << view.z << ": L "
+                        << l[c] << " T " << t[c];
+          return checked;
+        }
+      }
+      ++checked;
+    }
+  }
+  return checked;
+}
+
+TEST(Properties, RandomAtmospheresAndQueriesGiveFinitePhysicalValues) {
+  const int s = Scale();
+  int total = 0;
+  // Small tables keep CI fast; the properties do not depend on the table sizes.
+  total += CheckModel("hillaire",
+                      {{"transmittance_lut", "32x16"}, {"multiple_scattering_lut", "8x8"},
+                       {"multiple_scattering_directions", "8"}, {"sky_view_lut", "32x16"},
+                       {"ground_irradiance_lut", "8"}},
+                      40 * s, 200, 1);
+  total += CheckModel("elek", {{"size", "8x16x8"}, {"orders", "2"}}, 20 * s, 150, 2);
+  total += CheckModel("reference", {{"samples", "4"}}, 10 * s, 50, 3);
+  total += CheckSimple(20 * s, 100, 4);
+  std::printf("%d queries, all finite, radiance >= 0, transmittance in [0, 1]\n", total);
+  EXPECT_GE(total, 10000 * s);
+}
+
+}  // namespace
+}  // namespace atmo
