@@ -60,30 +60,36 @@ glm::dvec3 ShIrradiance(const SphericalHarmonics& sh, const glm::dvec3& normal);
 // The irradiance coefficients E_lm = A_l L_lm (what many engines store instead).
 std::array<glm::dvec3, 9> ShIrradianceCoefficients(const SphericalHarmonics& sh);
 
-// The irradiance integral E(n) = sum over texels of L max(n.w, 0) dOmega, over the whole cube
-// (n in the cube frame): the exact cosine-weighted integral of the cube's radiance.
+// The irradiance integral E(n) = integral of L max(n.w, 0) dOmega over the whole cube (n in the
+// cube frame), by the texels: pi sum L c dOmega / sum c dOmega with c = max(n.w, 0) at the texel
+// centres (the kernel's quadrature normalised to its exact integral pi; a constant sky gives
+// pi L to rounding, and the error left is O(texel^2) in the radiance's variation).
 glm::dvec3 CubemapIrradiance(const Cubemap& radiance, const glm::dvec3& normal_cube);
 
-// The diffuse irradiance cube map: texel n holds E(n) as CubemapIrradiance computes it, from the
-// radiance box-filtered (solid-angle weighted, energy conserving) to `source_size` texels a face.
+// The diffuse irradiance cube map: texel n holds E(n) = pi sum L c dOmega / sum c dOmega,
+// c = max(n.w, 0), over the radiance box-filtered (solid-angle weighted, energy conserving) to
+// `source_size` texels a face: CubemapIrradiance with the kernel's quadrature normalised to its
+// exact integral pi.
 // Divide by pi for the radiance a white Lambertian surface reflects. Throws atmo::Error for sizes
 // below 1 or a cube without 3 channels.
-Cubemap IrradianceCubemap(const Cubemap& radiance, int size = 32, int source_size = 16);
+Cubemap IrradianceCubemap(const Cubemap& radiance, int size = 32, int source_size = 32);
 
 // The split-sum specular prefilter of Karis 2013 ("Real Shading in Unreal Engine 4") as glTF
 // viewers use it: level m of `levels` has face size max(1, N >> m) and roughness
 // r = m / (levels - 1) (GGX alpha = r^2), and holds, with N = V = R,
 //   sum over k of L(l_k) (n.l_k) / sum over k of (n.l_k),
-// l_k the reflections of `samples` GGX half vectors (Hammersley points) with n.l_k > 0. Each
+// l_k the reflections of K = max(8, round(samples r)) GGX half vectors (Hammersley points
+// ((k + 1/2) / K, radical inverse of k)) with n.l_k > 0: narrower lobes take fewer. Each
 // sample reads the radiance's mip pyramid (the solid-angle weighted box filter) at the
 // filtered-importance-sampling level of Krivanek & Colbert 2008 (GPU Gems 3, ch. 20):
-//   lod = 0.5 log2(Omega_s / Omega_p) + 1,  Omega_s = 1 / (samples pdf),  Omega_p = 4 pi / (6 N^2),
+//   lod = 0.5 log2(Omega_s / Omega_p) + lod_bias (1),  Omega_s = 1 / (K pdf),  Omega_p = 4 pi / (6 N^2),
 // pdf = D(h) / 4 the GGX pdf of l at N = V, bilinear within the face (clamped at its edges) and
 // linear between levels. Level 0 (roughness 0) is the radiance itself. Throws atmo::Error for
 // levels outside [1, log2(N) + 1], samples < 1 or a cube without 3 channels.
 struct SpecularSettings {
   int levels = 6;
   int samples = 32;
+  double lod_bias = 1.0;  // the "+ 1" above; -inf: every sample reads the full-resolution radiance
 };
 std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSettings& settings = {});
 

@@ -59,6 +59,28 @@ glm::dvec3 Bilinear(const Image& face, double s, double t) {
          fy * ((1.0 - fx) * Texel(face, x0, y1) + fx * Texel(face, x1, y1));
 }
 
+// Adds weight x the bilinear value at (s, t) (clamped at the face's edges) to acc[0..2], in float.
+inline void AccumulateBilinear(const Image& face, double s, double t, float weight, float* acc) {
+  const int n = face.width;
+  const float x = std::clamp(static_cast<float>(s * n - 0.5), 0.0f, static_cast<float>(n - 1));
+  const float y = std::clamp(static_cast<float>(t * n - 0.5), 0.0f, static_cast<float>(n - 1));
+  const int x0 = std::min(static_cast<int>(x), n - 1);
+  const int y0 = std::min(static_cast<int>(y), n - 1);
+  const int x1 = std::min(x0 + 1, n - 1);
+  const int y1 = std::min(y0 + 1, n - 1);
+  const float fx = x - x0;
+  const float fy = y - y0;
+  const float w00 = weight * (1.0f - fx) * (1.0f - fy);
+  const float w10 = weight * fx * (1.0f - fy);
+  const float w01 = weight * (1.0f - fx) * fy;
+  const float w11 = weight * fx * fy;
+  const float* p00 = &face.pixels[(static_cast<std::size_t>(y0) * n + x0) * 3];
+  const float* p10 = &face.pixels[(static_cast<std::size_t>(y0) * n + x1) * 3];
+  const float* p01 = &face.pixels[(static_cast<std::size_t>(y1) * n + x0) * 3];
+  const float* p11 = &face.pixels[(static_cast<std::size_t>(y1) * n + x1) * 3];
+  for (int c = 0; c < 3; ++c) acc[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+}
+
 Cubemap Resized(const Cubemap& cube, int size) {
   Cubemap out = cube;
   while (out.face_size > size) out = DownsampleCubemap(out);
@@ -134,19 +156,31 @@ glm::dvec3 CubemapIrradiance(const Cubemap& radiance, const glm::dvec3& normal_c
   const std::vector<double> omega = FaceSolidAngles(n);
   const glm::dvec3 normal = glm::normalize(normal_cube);
   std::array<glm::dvec3, kCubeFaceCount> partial{};
+  std::array<double, kCubeFaceCount> kernel{};
   oneapi::tbb::parallel_for(0, kCubeFaceCount, [&](int f) {
     glm::dvec3 sum(0.0);
+    double weight = 0.0;
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
         const double c = glm::dot(normal, TexelDirection(f, n, i, j));
-        if (c > 0.0) sum += Texel(radiance.faces[f], i, j) * (c * omega[static_cast<std::size_t>(j) * n + i]);
+        if (c > 0.0) {
+          const double w = c * omega[static_cast<std::size_t>(j) * n + i];
+          sum += Texel(radiance.faces[f], i, j) * w;
+          weight += w;
+        }
       }
     }
     partial[f] = sum;
+    kernel[f] = weight;
   });
   glm::dvec3 sum(0.0);
-  for (const glm::dvec3& p : partial) sum += p;
-  return sum;
+  double weight = 0.0;
+  for (int f = 0; f < kCubeFaceCount; ++f) {
+    sum += partial[f];
+    weight += kernel[f];
+  }
+  // The kernel's texel-centre quadrature, normalised to its exact integral pi (IrradianceCubemap).
+  return sum * (kPi / weight);
 }
 
 Cubemap IrradianceCubemap(const Cubemap& radiance, int size, int source_size) {
@@ -156,7 +190,7 @@ Cubemap IrradianceCubemap(const Cubemap& radiance, int size, int source_size) {
   const int m = source.face_size;
   // The source as flat arrays: direction, and L dOmega per texel.
   const std::size_t count = static_cast<std::size_t>(kCubeFaceCount) * m * m;
-  std::vector<float> dx(count), dy(count), dz(count), lr(count), lg(count), lb(count);
+  std::vector<float> dx(count), dy(count), dz(count), lr(count), lg(count), lb(count), w(count);
   const std::vector<double> omega = FaceSolidAngles(m);
   for (int f = 0; f < kCubeFaceCount; ++f) {
     for (int j = 0; j < m; ++j) {
@@ -170,7 +204,26 @@ Cubemap IrradianceCubemap(const Cubemap& radiance, int size, int source_size) {
         lr[k] = static_cast<float>(l.x);
         lg[k] = static_cast<float>(l.y);
         lb[k] = static_cast<float>(l.z);
+        w[k] = static_cast<float>(omega[static_cast<std::size_t>(j) * m + i]);
       }
+    }
+  }
+  // Bands of 4 source rows (contiguous in the arrays), with the face-plane corners of each.
+  struct Band {
+    std::size_t begin, end;
+    std::array<glm::dvec3, 4> corners;
+  };
+  std::vector<Band> bands;
+  constexpr int kBandRows = 4;
+  for (int f = 0; f < kCubeFaceCount; ++f) {
+    for (int j0 = 0; j0 < m; j0 += kBandRows) {
+      const int j1 = std::min(m, j0 + kBandRows);
+      const CubeFace face = static_cast<CubeFace>(f);
+      const double t0 = static_cast<double>(j0) / m;
+      const double t1 = static_cast<double>(j1) / m;
+      bands.push_back({(static_cast<std::size_t>(f) * m + j0) * m, (static_cast<std::size_t>(f) * m + j1) * m,
+                       {CubeFaceDirection(face, 0.0, t0), CubeFaceDirection(face, 1.0, t0), CubeFaceDirection(face, 0.0, t1),
+                        CubeFaceDirection(face, 1.0, t1)}});
     }
   }
   Cubemap out(size, 3);
@@ -186,18 +239,38 @@ Cubemap IrradianceCubemap(const Cubemap& radiance, int size, int source_size) {
         const float nz = static_cast<float>(normal.z);
         // float sums of at most 6 x 16^2 terms by default: ~1e-6 relative, far below the 1e-2
         // the tests ask.
-        float r = 0.0f, g = 0.0f, b = 0.0f;
-#pragma omp simd reduction(+ : r, g, b)
-        for (std::size_t k = 0; k < count; ++k) {
-          const float c = std::max(nx * dx[k] + ny * dy[k] + nz * dz[k], 0.0f);
-          r += c * lr[k];
-          g += c * lg[k];
-          b += c * lb[k];
+        // The texel-centre quadrature of the kernel, sum of max(n.w, 0) dOmega, misses its exact
+        // integral pi by O(texel^2) (the kink at n.w = 0 most): dividing by it and multiplying by
+        // pi makes the weights integrate exactly, so a constant sky gives pi L to rounding.
+        // Float sums of 6 x 32^2 terms: ~1e-6 relative, far below what the tests ask. Bands of
+        // source rows wholly behind the normal are skipped: n.d is linear in the (unnormalised)
+        // face-plane direction d, so its largest value over a band is at one of its corners.
+        float r = 0.0f, g = 0.0f, b = 0.0f, kernel = 0.0f;
+        for (const Band& band : bands) {
+          bool seen = false;
+          for (const glm::dvec3& corner : band.corners) seen = seen || glm::dot(normal, corner) > 0.0;
+          if (!seen) continue;
+          const float* bx = dx.data();
+          const float* by = dy.data();
+          const float* bz = dz.data();
+          const float* br = lr.data();
+          const float* bg = lg.data();
+          const float* bb = lb.data();
+          const float* bw = w.data();
+#pragma omp simd reduction(+ : r, g, b, kernel)
+          for (std::size_t k = band.begin; k < band.end; ++k) {
+            const float c = std::max(nx * bx[k] + ny * by[k] + nz * bz[k], 0.0f);
+            r += c * br[k];
+            g += c * bg[k];
+            b += c * bb[k];
+            kernel += c * bw[k];
+          }
         }
+        const float scale = static_cast<float>(kPi) / kernel;
         float* p = &out.faces[f].pixels[(static_cast<std::size_t>(j) * size + i) * 3];
-        p[0] = r;
-        p[1] = g;
-        p[2] = b;
+        p[0] = r * scale;
+        p[1] = g * scale;
+        p[2] = b * scale;
       }
     }
   });
@@ -235,15 +308,22 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
     const double a2 = alpha * alpha;
     // The samples in the tangent frame of n (= v = r): l = 2 (n.h) h - n, the same for every
     // texel, with their weight n.l and mip level.
+    // A sample: its direction in the tangent frame, and its weight n.l split between the two
+    // pyramid levels around its lod (trilinear).
     struct Sample {
       glm::dvec3 l;
-      double weight;
-      double lod;
+      int lo, hi;
+      float weight_lo, weight_hi;
     };
     std::vector<Sample> samples;
     double weight_sum = 0.0;
-    for (int k = 0; k < settings.samples; ++k) {
-      const double u = (k + 0.5) / settings.samples;
+    // Fewer samples for narrower lobes: with filtered importance sampling each sample reads a mip
+    // texel of about its share of the lobe (Omega_s), so the lobe is covered at any count; the
+    // count only sets how finely its shape is resolved, and a lobe of roughness r spans ~r of the
+    // widest one. K = max(8, round(samples r)), the full count at roughness 1.
+    const int count = std::max(std::min(8, settings.samples), static_cast<int>(std::lround(settings.samples * roughness)));
+    for (int k = 0; k < count; ++k) {
+      const double u = (k + 0.5) / count;
       const double v = RadicalInverse(static_cast<std::uint32_t>(k));
       // GGX importance sampling of h (Walter et al. 2007): cos^2(theta_h) = (1 - u) / (1 + (a^2 - 1) u).
       const double cos2 = (1.0 - u) / (1.0 + (a2 - 1.0) * u);
@@ -256,9 +336,12 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
       const double denominator = (a2 - 1.0) * cos2 + 1.0;
       const double d = a2 / (kPi * denominator * denominator);
       const double pdf = d / 4.0;
-      const double sample_solid_angle = 1.0 / (settings.samples * pdf);
-      const double lod = std::clamp(0.5 * std::log2(sample_solid_angle / texel_solid_angle) + 1.0, 0.0, max_lod);
-      samples.push_back({l, l.z, lod});
+      const double sample_solid_angle = 1.0 / (count * pdf);
+      const double lod = std::clamp(0.5 * std::log2(sample_solid_angle / texel_solid_angle) + settings.lod_bias, 0.0, max_lod);
+      const int lo = static_cast<int>(lod);
+      const int hi = std::min(lo + 1, static_cast<int>(max_lod));
+      const double frac = hi == lo ? 0.0 : lod - lo;
+      samples.push_back({l, lo, hi, static_cast<float>(l.z * (1.0 - frac)), static_cast<float>(l.z * frac)});
       weight_sum += l.z;
     }
     const int size = std::max(1, n >> m);
@@ -273,20 +356,17 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
           const glm::dvec3 helper = std::abs(normal.y) < 0.999 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0);
           const glm::dvec3 tangent = glm::normalize(glm::cross(helper, normal));
           const glm::dvec3 bitangent = glm::cross(normal, tangent);
-          glm::dvec3 sum(0.0);
+          float acc[3] = {0.0f, 0.0f, 0.0f};
           for (const Sample& sample : samples) {
             const glm::dvec3 l = sample.l.x * tangent + sample.l.y * bitangent + sample.l.z * normal;
             CubeFace face;
             double s = 0.0;
             double t = 0.0;
             CubeFaceCoordinates(l, face, s, t);
-            const int lo = static_cast<int>(sample.lod);
-            const int hi = std::min(lo + 1, static_cast<int>(max_lod));
-            const double frac = sample.lod - lo;
-            glm::dvec3 value = Bilinear(pyramid[lo].face(face), s, t);
-            if (frac > 0.0 && hi != lo) value = (1.0 - frac) * value + frac * Bilinear(pyramid[hi].face(face), s, t);
-            sum += sample.weight * value;
+            AccumulateBilinear(pyramid[sample.lo].face(face), s, t, sample.weight_lo, acc);
+            if (sample.weight_hi > 0.0f) AccumulateBilinear(pyramid[sample.hi].face(face), s, t, sample.weight_hi, acc);
           }
+          const glm::dvec3 sum(acc[0], acc[1], acc[2]);
           const glm::dvec3 mean = sum / weight_sum;
           float* p = &out.faces[f].pixels[(static_cast<std::size_t>(j) * size + i) * 3];
           p[0] = static_cast<float>(mean.x);
