@@ -80,6 +80,12 @@ TEST(CubeFaces, TexelSolidAnglesSumTo4Pi) {
       for (int i = 0; i < n; ++i) sum += CubeTexelSolidAngle(n, i, j);
     }
     EXPECT_NEAR(kCubeFaceCount * sum, 4.0 * kPi, 1e-12) << n;
+    const std::vector<double> table = CubeFaceSolidAngles(n);
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        EXPECT_NEAR(table[static_cast<std::size_t>(j) * n + i], CubeTexelSolidAngle(n, i, j), 1e-15) << n;
+      }
+    }
   }
 }
 
@@ -290,8 +296,10 @@ TEST_F(CubemapSky, Ktx2IsReadBackByKtxParse) {
     std::string command = "NODE_PATH='" ATMO_NODE_MODULES "' '" ATMO_NODE "' '" ATMO_SOURCE_DIR "/tests/ktx2_inspect.mjs' '" +
                           path.string() + "'";
     for (const auto& p : probes) {
-      command += " " + std::to_string(p[0]) + "," + std::to_string(p[1]) + "," + std::to_string(p[2]) + "," +
-                 std::to_string(p[3]);
+      for (int k = 0; k < 4; ++k) {
+        command += k == 0 ? ' ' : ',';
+        command += std::to_string(p[k]);
+      }
     }
     int status = 0;
     const std::string out = Capture(command + " 2>&1", status);

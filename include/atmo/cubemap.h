@@ -57,6 +57,9 @@ void CubeFaceCoordinates(const glm::dvec3& direction, CubeFace& face, double& s,
 // inclusion-exclusion of the rectangle form atan(X Y / sqrt(1 + X^2 + Y^2)) over its corners on
 // the face plane at distance 1. The 6 N^2 texels sum to 4 pi.
 double CubeTexelSolidAngle(int size, int i, int j);
+// CubeTexelSolidAngle of every texel of a face, row-major (j * size + i), the same to rounding,
+// from the rectangle form at the (size + 1)^2 corners once.
+std::vector<double> CubeFaceSolidAngles(int size);
 
 // Six square faces of `channels` values per texel, in the convention above.
 struct Cubemap {

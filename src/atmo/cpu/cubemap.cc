@@ -108,6 +108,25 @@ double CubeTexelSolidAngle(int size, int i, int j) {
          RectangleSolidAngle(x0, y0);
 }
 
+std::vector<double> CubeFaceSolidAngles(int size) {
+  // The rectangle form at the (size + 1)^2 texel corners once, each texel the inclusion-exclusion
+  // of its four: a quarter of the atan calls of CubeTexelSolidAngle per texel, the same values.
+  const int c = size + 1;
+  const double step = 2.0 / size;
+  std::vector<double> corner(static_cast<std::size_t>(c) * c);
+  for (int j = 0; j < c; ++j) {
+    for (int i = 0; i < c; ++i) corner[static_cast<std::size_t>(j) * c + i] = RectangleSolidAngle(i * step - 1.0, j * step - 1.0);
+  }
+  std::vector<double> omega(static_cast<std::size_t>(size) * size);
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j) * c + i;
+      omega[static_cast<std::size_t>(j) * size + i] = corner[k + c + 1] - corner[k + c] - corner[k + 1] + corner[k];
+    }
+  }
+  return omega;
+}
+
 Camera CubeFaceCamera(CubeFace face, int size) {
   // The perspective camera looks along forward = (sin yaw cos pitch, cos yaw cos pitch, sin pitch)
   // (ENU) with right = (cos yaw, -sin yaw, 0) and up = right x forward (shared/camera.glsl): its
@@ -167,10 +186,7 @@ Cubemap DownsampleCubemap(const Cubemap& cube) {
   Cubemap out(h, c);
   // Each coarse texel is the solid-angle weighted mean of its 2 x 2 children, sum L dOmega /
   // sum dOmega: the children tile it exactly (for even n), so the energy sum L dOmega is kept.
-  std::vector<double> omega(static_cast<std::size_t>(n) * n);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) omega[static_cast<std::size_t>(j) * n + i] = CubeTexelSolidAngle(n, i, j);
-  }
+  const std::vector<double> omega = CubeFaceSolidAngles(n);
   oneapi::tbb::parallel_for(0, kCubeFaceCount, [&](int f) {
     const Image& in = cube.faces[f];
     Image& o = out.faces[f];

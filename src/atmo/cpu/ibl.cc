@@ -27,13 +27,7 @@ void CheckColourCube(const Cubemap& cube, const char* what) {
 }
 
 // The texel solid angles of a face of size n (the same on every face), row-major.
-std::vector<double> FaceSolidAngles(int n) {
-  std::vector<double> omega(static_cast<std::size_t>(n) * n);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) omega[static_cast<std::size_t>(j) * n + i] = CubeTexelSolidAngle(n, i, j);
-  }
-  return omega;
-}
+std::vector<double> FaceSolidAngles(int n) { return CubeFaceSolidAngles(n); }
 
 glm::dvec3 TexelDirection(int face, int n, int i, int j) {
   return CubeFaceDirection(static_cast<CubeFace>(face), (i + 0.5) / n, (j + 0.5) / n);
@@ -60,10 +54,10 @@ glm::dvec3 Bilinear(const Image& face, double s, double t) {
 }
 
 // Adds weight x the bilinear value at (s, t) (clamped at the face's edges) to acc[0..2], in float.
-inline void AccumulateBilinear(const Image& face, double s, double t, float weight, float* acc) {
+inline void AccumulateBilinear(const Image& face, float s, float t, float weight, float* acc) {
   const int n = face.width;
-  const float x = std::clamp(static_cast<float>(s * n - 0.5), 0.0f, static_cast<float>(n - 1));
-  const float y = std::clamp(static_cast<float>(t * n - 0.5), 0.0f, static_cast<float>(n - 1));
+  const float x = std::clamp(s * n - 0.5f, 0.0f, static_cast<float>(n - 1));
+  const float y = std::clamp(t * n - 0.5f, 0.0f, static_cast<float>(n - 1));
   const int x0 = std::min(static_cast<int>(x), n - 1);
   const int y0 = std::min(static_cast<int>(y), n - 1);
   const int x1 = std::min(x0 + 1, n - 1);
@@ -79,6 +73,35 @@ inline void AccumulateBilinear(const Image& face, double s, double t, float weig
   const float* p01 = &face.pixels[(static_cast<std::size_t>(y1) * n + x0) * 3];
   const float* p11 = &face.pixels[(static_cast<std::size_t>(y1) * n + x1) * 3];
   for (int c = 0; c < 3; ++c) acc[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+}
+
+// CubeFaceCoordinates in float, for the specular prefilter's inner loop (the same table).
+inline int FaceCoordinates(float x, float y, float z, float& s, float& t) {
+  const float ax = std::abs(x);
+  const float ay = std::abs(y);
+  const float az = std::abs(z);
+  int face = 0;
+  float a = 0.0f;
+  float b = 0.0f;
+  if (ax >= ay && ax >= az) {
+    const float inv = 1.0f / ax;
+    face = x > 0.0f ? 0 : 1;
+    a = (x > 0.0f ? -z : z) * inv;
+    b = -y * inv;
+  } else if (ay >= az) {
+    const float inv = 1.0f / ay;
+    face = y > 0.0f ? 2 : 3;
+    a = x * inv;
+    b = (y > 0.0f ? z : -z) * inv;
+  } else {
+    const float inv = 1.0f / az;
+    face = z > 0.0f ? 4 : 5;
+    a = (z > 0.0f ? x : -x) * inv;
+    b = -y * inv;
+  }
+  s = 0.5f * (a + 1.0f);
+  t = 0.5f * (b + 1.0f);
+  return face;
 }
 
 Cubemap Resized(const Cubemap& cube, int size) {
@@ -311,7 +334,7 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
     // A sample: its direction in the tangent frame, and its weight n.l split between the two
     // pyramid levels around its lod (trilinear).
     struct Sample {
-      glm::dvec3 l;
+      glm::vec3 l;
       int lo, hi;
       float weight_lo, weight_hi;
     };
@@ -341,7 +364,7 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
       const int lo = static_cast<int>(lod);
       const int hi = std::min(lo + 1, static_cast<int>(max_lod));
       const double frac = hi == lo ? 0.0 : lod - lo;
-      samples.push_back({l, lo, hi, static_cast<float>(l.z * (1.0 - frac)), static_cast<float>(l.z * frac)});
+ samples.push_back({glm::vec3(l), lo, hi, static_cast<float>(l.z * (1.0 - frac)), static_cast<float>(l.z * frac)});
       weight_sum += l.z;
     }
     const int size = std::max(1, n >> m);
@@ -356,15 +379,17 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
           const glm::dvec3 helper = std::abs(normal.y) < 0.999 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0);
           const glm::dvec3 tangent = glm::normalize(glm::cross(helper, normal));
           const glm::dvec3 bitangent = glm::cross(normal, tangent);
+          const glm::vec3 tf(tangent);
+          const glm::vec3 bf(bitangent);
+          const glm::vec3 nf(normal);
           float acc[3] = {0.0f, 0.0f, 0.0f};
           for (const Sample& sample : samples) {
-            const glm::dvec3 l = sample.l.x * tangent + sample.l.y * bitangent + sample.l.z * normal;
-            CubeFace face;
-            double s = 0.0;
-            double t = 0.0;
-            CubeFaceCoordinates(l, face, s, t);
-            AccumulateBilinear(pyramid[sample.lo].face(face), s, t, sample.weight_lo, acc);
-            if (sample.weight_hi > 0.0f) AccumulateBilinear(pyramid[sample.hi].face(face), s, t, sample.weight_hi, acc);
+            const glm::vec3 l = sample.l.x * tf + sample.l.y * bf + sample.l.z * nf;
+            float s = 0.0f;
+            float t = 0.0f;
+            const int face = FaceCoordinates(l.x, l.y, l.z, s, t);
+            AccumulateBilinear(pyramid[sample.lo].faces[face], s, t, sample.weight_lo, acc);
+            if (sample.weight_hi > 0.0f) AccumulateBilinear(pyramid[sample.hi].faces[face], s, t, sample.weight_hi, acc);
           }
           const glm::dvec3 sum(acc[0], acc[1], acc[2]);
           const glm::dvec3 mean = sum / weight_sum;
