@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package atmo needs to build, test and benchmark.
-# Idempotent: safe to run again; uses sudo only when not already root.
+# Idempotent: safe to run again; uses sudo only when not already root. nodejs and npm are for
+# the KTX2 read-back test: configuring the build then installs the npm package ktx-parse into
+# <build>/node/node_modules (tests/CMakeLists.txt).
 set -euo pipefail
 
 SUDO=""
@@ -15,6 +17,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
   libglfw3-dev xvfb xauth
+  nodejs npm
 )
 
 missing=()

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "atmo/cubemap.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -117,8 +118,25 @@ struct RenderCommand {
   bool xyz = false;
   // --date etc.: the sun from a date and place instead of the two angles above; --until: a time-lapse.
   SunOptions sun;
+  // --camera cubemap (docs/environment.md): the face size, and the outputs beyond --exr / --png
+  // (which hold the six faces stacked vertically, OpenEXR's cube-map layout). Empty: none.
+  int face_size = 256;
+  std::string ktx2_path;        // KTX 2.0 cubemap (RGBA16F; RGBA32F with ktx2_float32)
+  bool ktx2_float32 = false;    // every KTX2 output in RGBA32F
+  bool mips = false;            // the KTX2 cubemap with its box-filtered mip chain down to 1 texel
+  std::string sh_path;          // L2 spherical harmonics, JSON
+  std::string irradiance_path;  // diffuse irradiance cube map: OpenEXR cube for *.exr, else KTX2
+  int irradiance_size = 32;
+  std::string specular_path;    // GGX-prefiltered specular mip chain, KTX2
+  int specular_levels = 6;
+  int specular_samples = 32;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
+// cubemap_command.cc: whether --ktx2, --sh, --irradiance or --specular asks for output, and
+// writing them from the cube (3 channels; linear sRGB when `luminance`), appending the paths.
+bool WantsEnvironmentOutputs(const RenderCommand& command);
+void WriteEnvironmentOutputs(const RenderCommand& command, const Cubemap& cube, const std::string& unit_description,
+                             bool luminance, std::vector<std::string>& written);
 
 struct SampleCommand {
   std::string grid_path;  // a CSV grid; empty: the single configuration below

@@ -172,8 +172,8 @@ int main(int argc, char** argv) {
   atmo::cli::RenderCommand render;
   CLI::App* render_app = app.add_subcommand("render", "render a sky image (EXR + tone-mapped PNG)");
   AddCommonOptions(render_app, common);
-  render_app->add_option("--camera", render.camera, "perspective, fisheye or equirect")
-      ->check(CLI::IsMember({"perspective", "fisheye", "equirect"}))
+  render_app->add_option("--camera", render.camera, "perspective, fisheye, equirect or cubemap")
+      ->check(CLI::IsMember({"perspective", "fisheye", "equirect", "cubemap"}))
       ->capture_default_str();
   const std::string side_help = " in pixels";
   render_app->add_option("--width", render.width, "image width" + side_help)
@@ -243,6 +243,27 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
 
   // The sun from a date (sun_options.h) instead of --sun-elevation and --sun-azimuth, and the time-lapse.
+  // --camera cubemap and its environment outputs (docs/environment.md).
+  render_app->add_option("--face-size", render.face_size, "cubemap face size in texels")
+      ->check(CLI::Range(1, atmo::kMaxImageSide))
+      ->capture_default_str();
+  render_app->add_option("--ktx2", render.ktx2_path, "cubemap: KTX 2.0 cubemap output (RGBA16F)");
+  render_app->add_flag("--ktx2-float", render.ktx2_float32, "cubemap: KTX2 outputs in RGBA32F instead of RGBA16F");
+  render_app->add_flag("--mips", render.mips, "cubemap: the --ktx2 file with its box-filtered mip chain");
+  render_app->add_option("--sh", render.sh_path, "cubemap: L2 spherical harmonics of the radiance, JSON");
+  render_app->add_option("--irradiance", render.irradiance_path,
+                         "cubemap: diffuse irradiance cube map (OpenEXR cube for *.exr, else KTX2)");
+  render_app->add_option("--irradiance-size", render.irradiance_size, "cubemap: irradiance face size")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  render_app->add_option("--specular", render.specular_path, "cubemap: GGX-prefiltered specular mip chain, KTX2");
+  render_app->add_option("--specular-levels", render.specular_levels,
+                         "cubemap: specular levels (roughness = level / (levels - 1))")
+      ->check(CLI::Range(1, 15))
+      ->capture_default_str();
+  render_app->add_option("--specular-samples", render.specular_samples, "cubemap: GGX samples per specular texel")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
   CLI::Option* render_date = AddSunOptions(render_app, render.sun);
   render_date->excludes(render_app->get_option("--sun-elevation"))->excludes(render_app->get_option("--sun-azimuth"));
   CLI::Option* until = render_app->add_option(

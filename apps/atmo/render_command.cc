@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "atmo/colour.h"
+#include "atmo/cubemap.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/render.h"
@@ -92,7 +93,20 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   const bool legacy_png = unit == RadianceUnit::kRelative && parameters.channel_count() == 3;
 
   RenderSettings settings;
-  settings.camera.kind = ParseCameraKind(command.camera);
+  // --camera cubemap: six 90-degree perspective faces (atmo/cubemap.h), rendered below.
+  const bool cubemap = command.camera == "cubemap";
+  if (cubemap) {
+    if (on_gl) throw Error("--camera cubemap renders on the cpu backend only");
+    if (IsTimeLapse(command.sun)) throw Error("--camera cubemap does not take --until (a time-lapse)");
+    if (common.model == "reference") throw Error("--camera cubemap needs a deterministic model, not reference");
+    if (command.face_size < 1 || command.face_size > kMaxImageSide) {
+      throw Error("--face-size must be in 1.." + std::to_string(kMaxImageSide) + " (got " +
+                  std::to_string(command.face_size) + ")");
+    }
+  } else if (WantsEnvironmentOutputs(command)) {
+    throw Error("--ktx2, --sh, --irradiance and --specular need --camera cubemap");
+  }
+  settings.camera.kind = cubemap ? CameraKind::kPerspective : ParseCameraKind(command.camera);
   settings.camera.width = command.width;
   settings.camera.height = command.height;
   settings.camera.fov_deg = command.fov_deg;
@@ -152,7 +166,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       {"atmo:unit", std::string(ToString(unit))},
       {"atmo:radianceUnit", UnitDescription(unit, command.xyz, parameters.solar_irradiance)},
       {"atmo:renderTimeMs", ""},
-      {"atmo:camera", std::string(ToString(settings.camera.kind))},
+      {"atmo:camera", cubemap ? std::string("cubemap") : std::string(ToString(settings.camera.kind))},
       {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
       {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
       {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
@@ -205,6 +219,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       Image exr_image = is_colour ? (command.xyz ? LinearSrgbImageToXyz(image) : image)
                         : unit == RadianceUnit::kRelative ? image
                                                           : ConvertImage(image, convert, exr_colour);
+      // Equirects and cube maps carry OpenEXR's envmap attribute (docs/environment.md).
+      exr_image.envmap = settings.camera.kind == CameraKind::kEquirect ? EnvMap::kLatLong : image.envmap;
       if (standard_error != nullptr) {
         ProgressiveImage with_error;
         with_error.radiance = exr_image;
@@ -285,6 +301,31 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   std::vector<std::string> written;
   Image image;
   double render_ms = 0.0;
+  if (cubemap) {
+    // The six faces as render_cpu renders a frame (folded into linear sRGB in luminance); --exr
+    // and --png get OpenEXR's layout of them, the other outputs the cube itself.
+    const std::unique_ptr<SkyView> sky =
+        model->View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
+    Cubemap cube = unit == RadianceUnit::kLuminance
+                       ? RenderCubemapFolded(*sky, command.face_size, settings.terms, srgb_weights)
+                       : RenderCubemap(*sky, command.face_size, settings.terms, model_parameters.solar_irradiance);
+    if (unit == RadianceUnit::kLuminance) {
+      for (Image& face : cube.faces) face.colour_space = ColourSpace::kLinearSrgb;
+    }
+    render_ms = elapsed_ms();
+    set_metadata("atmo:cubeFaceSize", std::to_string(command.face_size));
+    set_metadata("atmo:cubeFrame", "X east, Y up, Z south (docs/environment.md); faces +X -X +Y -Y +Z -Z");
+    image = CubemapExrImage(cube);
+    written = write(image, nullptr, render_ms);
+    WriteEnvironmentOutputs(command, cube, UnitDescription(unit, /*xyz=*/false, parameters.solar_irradiance),
+                            unit == RadianceUnit::kLuminance, written);
+    std::string files;
+    for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
+    std::printf("%s %s (%d-texel cubemap, %s, %s) in %.1f ms\n", written.empty() ? "rendered" : "wrote",
+                written.empty() ? "without writing a file" : files.c_str(), command.face_size, model_name.c_str(),
+                parameters.name.c_str(), render_ms);
+    return 0;
+  }
   if (model != nullptr && IsMonteCarlo(*model)) {
     ProgressiveSettings progressive;
     progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option

@@ -29,6 +29,11 @@ namespace atmo {
 // white (1/3, 1/3)). kUnspecified writes none (per-wavelength or relative channels).
 enum class ColourSpace { kUnspecified, kLinearSrgb, kCieXyz };
 
+// What an EXR says its image is as an environment map, as OpenEXR's standard `envmap` attribute
+// (ImfEnvmap.h): none, ENVMAP_LATLONG (an equirect) or ENVMAP_CUBE (six faces stacked vertically,
+// atmo/cubemap.h). docs/environment.md relates both to atmo's frame.
+enum class EnvMap { kNone, kLatLong, kCube };
+
 struct Image {
   int width = 0;
   int height = 0;
@@ -40,6 +45,7 @@ struct Image {
   // else C0..Cn-1. Monte Carlo renders name their 6 channels R, G, B, R.stderr, G.stderr, B.stderr.
   std::vector<std::string> channel_names;
   ColourSpace colour_space = ColourSpace::kUnspecified;
+  EnvMap envmap = EnvMap::kNone;  // written by WriteExr as the `envmap` attribute, read by ReadExr
 
   Image() = default;
   Image(int w, int h, int c)

@@ -101,6 +101,7 @@ Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& ev
   Image image(width, camera_settings.height, channels);
   const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
+  if (camera_settings.kind == CameraKind::kEquirect) image.envmap = EnvMap::kLatLong;  // docs/environment.md
   oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
     std::vector<glm::dvec3> views(width);
     for (int y = rows.begin(); y < rows.end(); ++y) {

@@ -472,6 +472,9 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
     Imf::addChromaticities(header, Imf::Chromaticities(Imath::V2f(1.0f, 0.0f), Imath::V2f(0.0f, 1.0f),
                                                        Imath::V2f(0.0f, 0.0f), Imath::V2f(1.0f / 3.0f, 1.0f / 3.0f)));
   }
+  // The standard `envmap` attribute of an environment map (atmo/cubemap.h, docs/environment.md).
+  if (image.envmap == EnvMap::kLatLong) Imf::addEnvmap(header, Imf::ENVMAP_LATLONG);
+  if (image.envmap == EnvMap::kCube) Imf::addEnvmap(header, Imf::ENVMAP_CUBE);
   std::set<std::string> seen;
   for (const auto& [name, value] : metadata) {
     if (name.empty()) throw Error(WriteError(path, "metadata with an empty name"));
@@ -579,6 +582,9 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     if (Imf::hasChromaticities(header)) {
       const Imf::Chromaticities& c = Imf::chromaticities(header);
       image.colour_space = c.red.x == 1.0f && c.green.y == 1.0f ? ColourSpace::kCieXyz : ColourSpace::kLinearSrgb;
+    }
+    if (Imf::hasEnvmap(header)) {
+      image.envmap = Imf::envmap(header) == Imf::ENVMAP_CUBE ? EnvMap::kCube : EnvMap::kLatLong;
     }
 
     if (metadata != nullptr) {
