@@ -1,7 +1,7 @@
 // atmo: the command line of the atmo sky library (docs/design.md §4).
 //
-//   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [--exr F] [--png F]
-//   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv | --altitude --sun-zenith
+//   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [-o NAME | --exr F --png F]
+//   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv|- | --altitude --sun-zenith|--sun-elevation
 //                --view-zenith --azimuth) [--out OUT.csv]
 //   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|IN.csv] [--csv F]
 //                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
@@ -12,7 +12,7 @@
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
 // of that instant and place; render also --until ISO --step DURATION [--mp4 F]: a time-lapse.
-// Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
+// Shared by all but presets: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
