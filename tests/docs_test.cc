@@ -12,6 +12,8 @@
 //    its standard output then standard error must equal the lines that follow, line by line: the
 //    text exactly, each number within a relative 1e-6 (last-digit differences of FMA builds), and
 //    a number followed by ` s` or ` ms` (a timing) matching any number.
+// 3. Every `atmo:KEY` EXR attribute that render_command.cc and sun_options.cc write is named in
+//    docs/cli.md.
 #include <sys/wait.h>
 
 #include <chrono>
@@ -266,6 +268,23 @@ TEST_F(DocsTest, CliExampleOutputsAreTheCurrentOnes) {
     }
   }
   EXPECT_GE(transcripts, 3) << "docs/cli.md has lost its example transcripts";
+}
+
+// Every EXR attribute the render command writes ("atmo:KEY" in its sources) is in cli.md's table.
+TEST(DocsExrAttributes, EveryWrittenAttributeIsDocumented) {
+  const fs::path source = fs::path(ATMO_SOURCE_DIR);
+  const std::string manual = ReadFile(source / "docs" / "cli.md");
+  int found = 0;
+  for (const char* file : {"render_command.cc", "sun_options.cc"}) {
+    const std::string code = ReadFile(source / "apps" / "atmo" / file);
+    for (std::size_t at = code.find("\"atmo:"); at != std::string::npos; at = code.find("\"atmo:", at + 1)) {
+      const std::size_t end = code.find('"', at + 1);
+      const std::string key = code.substr(at + 1, end - at - 1);
+      ++found;
+      EXPECT_NE(manual.find("`" + key + "`"), std::string::npos) << key << " (" << file << ") is not in docs/cli.md";
+    }
+  }
+  EXPECT_GE(found, 20);
 }
 
 TEST(DocsTokens, NumbersTimingsAndText) {

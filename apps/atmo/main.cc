@@ -448,7 +448,7 @@ int main(int argc, char** argv) {
 
   const std::string models = JoinNames(atmo::ModelNames());
   const std::string preset_names = JoinNames(atmo::PresetNames());
-  const std::string lists = "\nModels: " + models + " (docs/models/MODEL.md, options under #options).\nPresets: " +
+  const std::string lists = "\n\nModels: " + models + " (docs/models/MODEL.md, options under #options).\nPresets: " +
                             preset_names + " (`atmo presets`).\nManual: docs/cli.md.";
   const std::pair<CLI::App*, std::string> footers[] = {
       {render_app, "Examples:\n  atmo render --camera fisheye --width 512 --height 512 -o allsky\n"
@@ -467,7 +467,7 @@ int main(int argc, char** argv) {
     sub->footer(footer);
     GroupFlags(sub);
   }
-  app.footer("Run `atmo SUBCOMMAND --help` for its flags and an example." + lists);
+  app.footer("Run `atmo SUBCOMMAND --help` for its flags and an example." + lists.substr(1));
 
   try {
     app.parse(argc, argv);
