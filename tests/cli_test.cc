@@ -581,8 +581,9 @@ TEST_F(CliTest, GridDashReadsStandardInput) {
   const RunResult bad = Run("sample --grid - < bad.csv");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_EQ(bad.err, "atmo: error: <stdin>:2: expected 4 comma-separated numbers\n");
-  const RunResult compare = Run("compare --model hillaire --against hillaire --grid - < grid.csv");
+  const RunResult compare = Run("compare --model hillaire --against hillaire --grid - --image-size 32 < grid.csv");
   EXPECT_EQ(compare.exit_code, 0) << compare.err;
+  EXPECT_EQ(compare.err, "atmo: warning: --image-size applies to the --image only\n");
   EXPECT_NE(compare.out.find("2 configurations x 3 channels = 6 rows"), std::string::npos) << compare.out;
 }
 

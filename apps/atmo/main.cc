@@ -496,6 +496,11 @@ int main(int argc, char** argv) {
   if (!table.empty()) common.options.push_back("table=" + table);
   if (sample_app->parsed() && sample_sun_elevation) sample.sun_zenith_deg = 90.0 - *sample_sun_elevation;
   if (precompute_app->parsed() && precompute_app->get_option("--model")->count() == 0) common.model = "elek";
+  if (compare_app->parsed() && compare.image_path.empty()) {
+    for (const char* flag : {"--altitude", "--sun-zenith", "--image-range", "--image-size"}) {
+      if (compare_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the --image only");
+    }
+  }
   if (render_app->parsed()) {
     if (!render_output.empty()) {
       std::string extension = std::filesystem::path(render_output).extension().string();
