@@ -139,9 +139,9 @@ TEST_F(CliSunTest, TimeLapseWritesNumberedFramesAsTheMorningSunRises) {
 TEST_F(CliSunTest, TimeLapseNamesFramesBeforeTheLastExtension) {
   // --until off the step: the frames stop at the last step before it (06:00, 06:30).
   const RunResult r = Run("render --date 2026-06-21T06:00+02:00 --until 2026-06-21T06:59+02:00 --step 30min" ATMO_PLACE
-                          ATMO_TINY " --exr sky.v1.exr --png frames");
+                          ATMO_TINY " --exr sky.v1.exr --png frames.png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* name : {"sky.v1_0000.exr", "sky.v1_0001.exr", "frames_0000", "frames_0001"}) {
+  for (const char* name : {"sky.v1_0000.exr", "sky.v1_0001.exr", "frames_0000.png", "frames_0001.png"}) {
     EXPECT_TRUE(fs::exists(dir_ / name)) << name;
   }
   EXPECT_FALSE(fs::exists(dir_ / "sky.v1_0002.exr"));

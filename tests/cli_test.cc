@@ -64,11 +64,22 @@ TEST_F(CliTest, NoSubcommandPrintsHelpAndFails) {
 }
 
 TEST_F(CliTest, EverySubcommandHasHelp) {
-  for (const char* subcommand : {"render", "sample", "presets", "bench", "compare", "precompute"}) {
+  for (const char* subcommand : {"render", "sample", "bench", "compare", "precompute", "illuminance"}) {
     const RunResult r = Run(std::string(subcommand) + " --help");
     EXPECT_EQ(r.exit_code, 0) << subcommand;
     EXPECT_NE(r.out.find("--model"), std::string::npos) << subcommand;
+    // One layout: the flags in groups, an example and the model and preset names in the footer.
+    EXPECT_NE(r.out.find("Model and atmosphere:"), std::string::npos) << subcommand << ":\n" << r.out;
+    EXPECT_NE(r.out.find("Example"), std::string::npos) << subcommand;
+    EXPECT_NE(r.out.find("Models: elek, hillaire, reference, simple"), std::string::npos) << subcommand << ":\n" << r.out;
+    EXPECT_NE(r.out.find("Presets: earth"), std::string::npos) << subcommand;
   }
+  // presets takes only the flag it uses.
+  const RunResult presets = Run("presets --help");
+  EXPECT_EQ(presets.exit_code, 0);
+  EXPECT_NE(presets.out.find("--dump"), std::string::npos);
+  EXPECT_EQ(presets.out.find("--model"), std::string::npos) << presets.out;
+  EXPECT_EQ(Run("presets --threads 2").exit_code, 2);
 }
 
 TEST_F(CliTest, PresetsListsTheThreePresets) {
@@ -491,6 +502,115 @@ TEST_F(CliTest, CsvRowErrorNamesTheLine) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(r.err, "atmo: error: grid.csv:3: expected 4 comma-separated numbers\n");
   EXPECT_EQ(r.out, "");
+}
+
+}  // namespace
+
+namespace {
+
+// The command line as a new user meets it: names, outputs, warnings, aliases, timing.
+TEST_F(CliTest, NonIntegerSideIsSaidToBeNoInteger) {
+  const RunResult r = Run("render --width abc");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "atmo: error: --width: 'abc' is not an integer\n");
+}
+
+TEST_F(CliTest, OutputNameWritesBothFilesOrTheOneItsExtensionNames) {
+  ASSERT_EQ(Run("render --width 8 --height 4 -o both").exit_code, 0);
+  EXPECT_TRUE(fs::exists(dir_ / "both.exr"));
+  EXPECT_TRUE(fs::exists(dir_ / "both.png"));
+  ASSERT_EQ(Run("render --width 8 --height 4 --output only.png").exit_code, 0);
+  EXPECT_TRUE(fs::exists(dir_ / "only.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "only.png.exr"));
+  EXPECT_FALSE(fs::exists(dir_ / "only.exr"));
+  const RunResult no_png = Run("render --width 8 --height 4 --no-png --exr solo.exr");
+  ASSERT_EQ(no_png.exit_code, 0) << no_png.err;
+  EXPECT_TRUE(fs::exists(dir_ / "solo.exr"));
+  EXPECT_FALSE(fs::exists(dir_ / "sky.png"));
+  EXPECT_EQ(Lines(no_png.out).size(), 1u);
+  EXPECT_EQ(no_png.out.rfind("wrote solo.exr (8x4 perspective, hillaire, earth) in ", 0), 0u) << no_png.out;
+  EXPECT_NE(no_png.out.find(": precompute "), std::string::npos) << no_png.out;
+  EXPECT_NE(no_png.out.find(", write "), std::string::npos) << no_png.out;
+  EXPECT_EQ(Run("render -o a --exr b.exr").exit_code, 2);
+  EXPECT_EQ(Run("render --no-png --png b.png").exit_code, 2);
+}
+
+TEST_F(CliTest, AnOutputWithTheWrongExtensionIsRefused) {
+  ExpectFailureKeepingOutputs("render --width 8 --height 4 --png x.jpg", "--png 'x.jpg' must end in .png", {"x.jpg"});
+  ExpectFailureKeepingOutputs("render --width 8 --height 4 --exr x.png --png ''", "--exr 'x.png' must end in .exr",
+                              {"x.png"});
+  ExpectFailureKeepingOutputs("sample --altitude 0 --sun-zenith 30 --view-zenith 0 --azimuth 0 --out x.txt",
+                              "--out 'x.txt' must end in .csv", {"x.txt"});
+  WriteFile(dir_ / "g.csv", std::string(kGridHeader) + "\n0,30,0,0\n");
+  ExpectFailureKeepingOutputs("compare --grid g.csv --json x.csv", "--json 'x.csv' must end in .json", {"x.csv"});
+  EXPECT_EQ(Run("render --width 8 --height 4 --png X.PNG --exr ''").exit_code, 0);  // case does not matter
+}
+
+TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
+  const RunResult r = Run("render --camera equirect --width 16 --height 8 --fov 60 --pitch 5 --png ''");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err,
+            "atmo: warning: --fov applies to the perspective camera only\n"
+            "atmo: warning: --pitch applies to the perspective camera only\n");
+  atmo::ImageMetadata metadata;
+  atmo::ReadExr(dir_ / "sky.exr", &metadata);
+  std::map<std::string, std::string> values(metadata.begin(), metadata.end());
+  EXPECT_EQ(values.count("atmo:cameraFovDeg"), 0u);    // the equirect has no field of view
+  EXPECT_EQ(values.count("atmo:cameraPitchDeg"), 0u);  // nor a pitch
+  EXPECT_EQ(values.count("atmo:cameraYawDeg"), 1u);
+  const RunResult png_only = Run("render --width 8 --height 4 --png '' --exposure 2");
+  EXPECT_EQ(png_only.exit_code, 0);
+  EXPECT_EQ(png_only.err, "atmo: warning: --exposure applies to the PNG only\n");
+  const RunResult perspective = Run("render --width 8 --height 4 --fov 60 --png ''");
+  EXPECT_EQ(perspective.err, "");
+  metadata.clear();
+  atmo::ReadExr(dir_ / "sky.exr", &metadata);
+  values = std::map<std::string, std::string>(metadata.begin(), metadata.end());
+  EXPECT_EQ(values["atmo:cameraFovDeg"], "60");
+  EXPECT_EQ(values["atmo:cameraPitchDeg"], "10");
+}
+
+TEST_F(CliTest, GridDashReadsStandardInput) {
+  const std::string grid = std::string(kGridHeader) + "\n0,30,0,0\n1000,85,89,180\n";
+  WriteFile(dir_ / "grid.csv", grid);
+  const RunResult from_file = Run("sample --grid grid.csv");
+  const RunResult from_stdin = Run("sample --grid - < grid.csv");
+  ASSERT_EQ(from_stdin.exit_code, 0) << from_stdin.err;
+  EXPECT_EQ(from_stdin.out, from_file.out);
+  WriteFile(dir_ / "bad.csv", std::string(kGridHeader) + "\n0,30,0\n");
+  const RunResult bad = Run("sample --grid - < bad.csv");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.err, "atmo: error: <stdin>:2: expected 4 comma-separated numbers\n");
+  const RunResult compare = Run("compare --model hillaire --against hillaire --grid - --image-size 32 < grid.csv");
+  EXPECT_EQ(compare.exit_code, 0) << compare.err;
+  EXPECT_EQ(compare.err, "atmo: warning: --image-size applies to the --image only\n");
+  EXPECT_NE(compare.out.find("2 configurations x 3 channels = 6 rows"), std::string::npos) << compare.out;
+}
+
+TEST_F(CliTest, SampleTakesTheSunElevationAndBothPathCountNames) {
+  const RunResult zenith = Run("sample --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90");
+  const RunResult elevation = Run("sample --altitude 0 --sun-elevation 30 --view-zenith 80 --azimuth 90");
+  ASSERT_EQ(elevation.exit_code, 0) << elevation.err;
+  EXPECT_EQ(elevation.out, zenith.out);
+  EXPECT_EQ(Run("sample --altitude 0 --sun-elevation 30 --sun-zenith 60 --view-zenith 80 --azimuth 90").exit_code, 2);
+  const std::string one = "sample --model reference --seed 3 --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90 ";
+  const RunResult samples = Run(one + "--samples 64");
+  const RunResult spp = Run(one + "--spp 64");
+  ASSERT_EQ(spp.exit_code, 0) << spp.err;
+  EXPECT_EQ(spp.out, samples.out);
+  const RunResult render = Run(ATMO_REFERENCE_RENDER "--samples 8 --exr s.exr --png ''");
+  ASSERT_EQ(render.exit_code, 0) << render.err;
+  atmo::ImageMetadata metadata;
+  atmo::ReadExr(dir_ / "s.exr", &metadata);
+  std::map<std::string, std::string> values(metadata.begin(), metadata.end());
+  EXPECT_EQ(values["atmo:samplesPerPixel"], "8");
+}
+
+TEST_F(CliTest, PrecomputeDefaultsToTheModelItExports) {
+  const RunResult r = Run("precompute --preset atmosphere-plus --option size=8x16x8 --option orders=1 --out t");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "t.raw"));
+  EXPECT_EQ(r.out.rfind("wrote t.exr, t.raw, t.json (elek, ", 0), 0u) << r.out;
 }
 
 }  // namespace

@@ -4,9 +4,11 @@
 // model's disc radiance.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "atmo/error.h"
@@ -444,6 +446,38 @@ TEST(SunDiscProgressive, AddsTheDiscPass) {
   for (std::size_t i = 0; i < difference.pixels.size(); ++i) difference.pixels[i] -= without.pixels[i];
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(ImageEnergy(difference, s.camera, c), expected[c], 0.01 * expected[c]) << c;
+  }
+}
+
+}  // namespace
+}  // namespace atmo
+
+namespace atmo {
+namespace {
+
+// RenderView's progress callback: counts that only grow, never beyond the image's rows, ending at
+// (rows, rows), one call at a time, and an image equal to the one rendered without it.
+TEST_F(SunDiscImage, RenderViewReportsRowProgressWithoutChangingTheImage) {
+  const auto sky = model_->View(0.0, SunDirection(30.0, 180.0));
+  const Camera camera{CameraKind::kPerspective, 64, 48, 90.0, 180.0, 10.0};
+  const std::vector<double> one = {1.0, 1.0, 1.0};
+  std::vector<std::pair<int, int>> calls;
+  std::atomic<int> running{0};
+  bool overlapped = false;
+  const Image reported = RenderView(*sky, camera, RadianceTerms{}, one, [&](int done, int total) {
+    if (running.fetch_add(1) != 0) overlapped = true;
+    calls.emplace_back(done, total);
+    running.fetch_sub(1);
+  });
+  const Image plain = RenderView(*sky, camera, RadianceTerms{}, one);
+  EXPECT_EQ(reported.pixels, plain.pixels);
+  ASSERT_FALSE(calls.empty());
+  EXPECT_FALSE(overlapped);
+  EXPECT_EQ(calls.back(), std::make_pair(48, 48));
+  for (const auto& [done, total] : calls) {
+    EXPECT_EQ(total, 48);
+    EXPECT_GE(done, 1);
+    EXPECT_LE(done, 48);
   }
 }
 

@@ -68,6 +68,10 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
 // writable, or the path is a folder.
 void CheckOutputWritable(const std::filesystem::path& path);
 
+// Refuses, in one line, an output whose extension is not the one of its format (`--png x.jpg`
+// wrote PNG data): `extension` such as ".png", compared without regard to case. Empty paths pass.
+void CheckExtension(const std::string& flag, const std::filesystem::path& path, const std::string& extension);
+
 // A flag and the path it names, e.g. {"--grid", "in.csv"}.
 struct NamedPath {
   std::string flag;

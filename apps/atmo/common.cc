@@ -1,6 +1,7 @@
 // Helpers shared by the subcommands of `atmo`: parameters, model options, output checks.
 #include <unistd.h>
 
+#include <cctype>
 #include <charconv>
 #include <cstdarg>
 #include <cstdio>
@@ -148,6 +149,16 @@ void CheckOutputsApart(const CommonOptions& common, std::vector<NamedPath> input
         throw Error(outputs[j].flag + " and " + out.flag + " name the same file '" + out.path.string() + "'");
       }
     }
+  }
+}
+
+void CheckExtension(const std::string& flag, const fs::path& path, const std::string& extension) {
+  if (path.empty()) return;
+  std::string actual = path.extension().string();
+  for (char& c : actual) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (actual != extension) {
+    throw Error(flag + " '" + path.string() + "' must end in " + extension + " (it is written as " +
+                extension.substr(1) + ")");
   }
 }
 

@@ -13,12 +13,15 @@
 // |e|, rel_mae, mean e: atmo::SummarizeRelativeErrors) are printed overall, per channel, per
 // sun-zenith band and per altitude; --csv, --json and --image write the details.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -34,6 +37,7 @@
 #include "atmo/parameters.h"
 #include "commands.h"
 #include "grid.h"
+#include "progress_bar.h"
 
 namespace atmo::cli {
 
@@ -167,10 +171,13 @@ glm::dvec3 SunAtZenith(double sun_zenith_deg) {
   return DirectionFromZenithAzimuth(glm::radians(sun_zenith_deg), 0.0);
 }
 
-// Evaluates both models on every point: rows[point * channels + channel].
+// Evaluates both models on every point: rows[point * channels + channel]. `progress(done, total)`
+// is called as configurations complete, one call at a time (a busy reporter is skipped, not waited for).
 std::vector<Row> Evaluate(const Model& model, const Model& reference, const std::vector<SamplePoint>& points,
-                          double floor) {
+                          double floor, const std::function<void(std::size_t, std::size_t)>& progress) {
   const std::size_t channels = model.channel_count();
+  std::atomic<std::size_t> done{0};
+  std::mutex reporting;
   std::vector<Row> rows(points.size() * channels);
   const std::vector<Sky> skies = GroupBySky(points);
   oneapi::tbb::parallel_for(std::size_t{0}, skies.size(), [&](std::size_t s) {
@@ -200,6 +207,11 @@ std::vector<Row> Evaluate(const Model& model, const Model& reference, const std:
         row.reference_standard_error = r_se[c];
         row.relative_error = RelativeError(l[c], r[c]);
         row.z = ErrorInStandardErrors(l[c], r[c], se[c], r_se[c]);
+      }
+      const std::size_t finished = done.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (reporting.try_lock()) {
+        progress(finished, points.size());
+        reporting.unlock();
       }
     });
     // The floor: relative to the brightest reference value of this sky, per channel.
@@ -602,9 +614,27 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   for (const std::string& path : {command.csv_path, command.json_path, command.image_path}) {
     if (!path.empty()) CheckOutputWritable(path);
   }
+  CheckExtension("--csv", command.csv_path, ".csv");
+  CheckExtension("--json", command.json_path, ".json");
+  CheckExtension("--image", command.image_path, ".png");
 
   const ModelOptions options = EffectiveOptions(common.options, common);
   const ModelOptions reference_options = EffectiveOptions(command.against_options, common);
+  const std::string model_text = Describe(common.model, options);
+  const std::string reference_text = Describe(command.against, reference_options);
+  const std::string preset = common.config.empty() ? common.preset : common.config;
+  const std::string hash = ParameterHashHex(parameters);
+  const std::string grid = command.grid == "standard" ? "standard" : command.grid;
+  const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
+  // The header comes before the work (a Monte Carlo reference takes minutes), the table after it.
+  std::string header = Format("atmo compare: %s against %s; parameters %s (hash %s); grid %s\n", model_text.c_str(),
+                              reference_text.c_str(), preset.c_str(), hash.c_str(), grid.c_str());
+  header += Format("%zu configurations x %zu channels = %zu rows; e = (M - R)/R, M: %s, R: %s\n", points.size(),
+                   wavelengths_nm.size(), points.size() * wavelengths_nm.size(), common.model.c_str(),
+                   command.against.c_str());
+  if (std::fwrite(header.data(), 1, header.size(), stdout) != header.size() || std::fflush(stdout) != 0) {
+    throw Error("cannot write to standard output");
+  }
   const auto start = std::chrono::steady_clock::now();
   const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -619,23 +649,16 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   }
 
   const auto evaluate_start = std::chrono::steady_clock::now();
-  const std::vector<Row> rows = Evaluate(*model, *reference, points, command.floor);
+  ProgressBar bar("compare: configurations");
+  const std::vector<Row> rows =
+      Evaluate(*model, *reference, points, command.floor,
+               [&bar](std::size_t done, std::size_t total) { bar.Update(static_cast<double>(done), static_cast<double>(total)); });
+  bar.Finish();
   const double evaluate_s = seconds_since(evaluate_start);
-  const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
   const Summaries summaries = SummarizeAll(points, rows, wavelengths_nm);
   const bool with_z = std::any_of(rows.begin(), rows.end(), [](const Row& row) { return !std::isnan(row.z); });
 
-  const std::string model_text = Describe(common.model, options);
-  const std::string reference_text = Describe(command.against, reference_options);
-  const std::string preset = common.config.empty() ? common.preset : common.config;
-  const std::string hash = ParameterHashHex(parameters);
-  const std::string grid = command.grid == "standard" ? "standard" : command.grid;
-
-  std::string report = Format("atmo compare: %s against %s; parameters %s (hash %s); grid %s\n",
-                              model_text.c_str(), reference_text.c_str(), preset.c_str(), hash.c_str(), grid.c_str());
-  report += Format("%zu configurations x %zu channels = %zu rows; e = (M - R)/R, M: %s, R: %s\n", points.size(),
-                   wavelengths_nm.size(), rows.size(), common.model.c_str(), command.against.c_str());
-  report += Format("excluded from the statistics: rows with R <= %g x the largest R of their sky (same altitude, "
+  std::string report = Format("excluded from the statistics: rows with R <= %g x the largest R of their sky (same altitude, "
                    "sun zenith, channel)\n",
                    command.floor);
   report += "sun zenith bands (deg): sun up < 90 <= twilight <= 100 < night\n";

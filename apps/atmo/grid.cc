@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -55,10 +56,26 @@ void CheckPoint(const SamplePoint& point, const std::string& where) {
   }
 }
 
-std::vector<SamplePoint> ReadGrid(const std::string& path) {
+// "-": standard input, at most as many bytes as a grid file may have.
+std::string ReadStandardInput() {
+  std::string text;
+  char buffer[65536];
+  while (std::cin.read(buffer, sizeof buffer) || std::cin.gcount() > 0) {
+    text.append(buffer, static_cast<std::size_t>(std::cin.gcount()));
+    if (text.size() > kMaxInputFileBytes) {
+      throw Error("the grid on standard input is larger than " + std::to_string(kMaxInputFileBytes >> 20) + " MiB");
+    }
+  }
+  return text;
+}
+
+std::vector<SamplePoint> ReadGrid(const std::string& given_path) {
   // A regular file of at most 64 MiB: "cannot read 'PATH': is a directory" (a folder was "an
-  // empty file"), a device or FIFO is refused (/dev/zero ended in std::bad_alloc).
-  const std::string text = ReadFileBounded(path);
+  // empty file"), a device or FIFO is refused (/dev/zero ended in std::bad_alloc). "-" reads
+  // standard input, named "<stdin>" in messages.
+  const bool from_stdin = given_path == "-";
+  const std::string path = from_stdin ? "<stdin>" : given_path;
+  const std::string text = from_stdin ? ReadStandardInput() : ReadFileBounded(path);
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
     throw Error(path + ": a NUL byte at byte " + std::to_string(nul + 1) + "; a grid is CSV text");
   }

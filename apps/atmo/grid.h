@@ -26,7 +26,7 @@ struct SamplePoint {
 void CheckPoint(const SamplePoint& point, const std::string& where);
 
 // Reads and checks a whole IN.csv grid before any model work, so a bad file fails fast; errors
-// name the file and line. Throws atmo::Error.
+// name the file and line. `path` "-" reads standard input. Throws atmo::Error.
 std::vector<SamplePoint> ReadGrid(const std::string& path);
 
 }  // namespace atmo::cli

@@ -1,7 +1,7 @@
 // atmo: the command line of the atmo sky library (docs/design.md §4).
 //
-//   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [--exr F] [--png F]
-//   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv | --altitude --sun-zenith
+//   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [-o NAME | --exr F --png F]
+//   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv|- | --altitude --sun-zenith|--sun-elevation
 //                --view-zenith --azimuth) [--out OUT.csv]
 //   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|IN.csv] [--csv F]
 //                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
@@ -12,15 +12,17 @@
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
 // of that instant and place; render also --until ISO --step DURATION [--mp4 F]: a time-lapse.
-// Shared by all: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
+// Shared by all but presets: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
 // This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
 // for a command line that does not parse, 1 for anything else.
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -56,6 +58,23 @@ const CLI::Validator kFinite(
       return {};
     },
     "FINITE", "FINITE");
+
+// An integer, checked before a range so that `--width abc` says so (CLI11's Range said "not in range").
+const CLI::Validator kInteger(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      (void)std::strtoll(text.c_str(), &end, 10);
+      if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not an integer";
+      return {};
+    },
+    "", "INTEGER");
+
+// "a, b, c": the names a --help lists.
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text;
+}
 
 const CLI::Validator kPositive(
     [](std::string& text) -> std::string {
@@ -103,9 +122,11 @@ CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::opti
 }
 
 void AddCommonOptions(CLI::App* app, CommonOptions& common) {
-  app->add_option("--model", common.model, "sky model (hillaire, ...)")->capture_default_str();
-  CLI::Option* preset = app->add_option("--preset", common.preset, "parameter preset (see `atmo presets`)")
-                            ->capture_default_str();
+  app->add_option("--model", common.model, "sky model: " + JoinNames(atmo::ModelNames()))->capture_default_str();
+  CLI::Option* preset =
+      app->add_option("--preset", common.preset, "parameter preset: " + JoinNames(atmo::PresetNames()) +
+                                                     " (`atmo presets` describes them)")
+          ->capture_default_str();
   CLI::Option* config =
       app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
   preset->excludes(config);
@@ -113,6 +134,7 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
       ->check(CLI::IsMember({"cpu", "gl"}))
       ->capture_default_str();
   app->add_option("--threads", common.threads, "worker threads (default: all cores)")
+      ->check(kInteger)
       ->check(CLI::Range(1, 1024));
   // Read as text: CLI11's unsigned conversion wrapped -1 to 2^64 - 1 and refused 20-digit seeds.
   app->add_option_function<std::string>(
@@ -129,12 +151,15 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
             return "'" + text + "' is not an integer in [0, 18446744073709551615]";
           },
           "SEED", "SEED"));
-  app->add_option("--option", common.options, "model setting KEY=VALUE (repeatable)")
+  app->add_option("--option", common.options,
+                  "model setting KEY=VALUE (repeatable); the keys are in docs/models/MODEL.md#options, and an "
+                  "unknown key's error lists the model's keys")
       ->expected(1)
       ->take_all();
   app->add_option("--spectral", common.spectral,
                   "resample the atmosphere to N wavelengths over 360-830 nm, each medium by its physics "
                   "(docs/spectral.md)")
+      ->check(kInteger)
       ->check(CLI::Range(3, 256));
 }
 
@@ -159,6 +184,37 @@ CLI::Option* AddSunOptions(CLI::App* app, atmo::cli::SunOptions& sun) {
   return date;
 }
 
+// Puts each flag of `app` into its help group (CLI11's default lumps them all under "Options").
+void GroupFlags(CLI::App* app) {
+  static const std::pair<const char*, const char*> kGroups[] = {
+      {"--model", "Model and atmosphere"}, {"--preset", "Model and atmosphere"}, {"--config", "Model and atmosphere"},
+      {"--option", "Model and atmosphere"}, {"--spectral", "Model and atmosphere"}, {"--table", "Model and atmosphere"},
+      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
+      {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
+      {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},
+      {"--yaw", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
+      {"--sun-elevation", "Observer and sun"}, {"--sun-azimuth", "Observer and sun"},
+      {"--sun-zenith", "Observer and sun"}, {"--view-zenith", "Observer and sun"}, {"--azimuth", "Observer and sun"},
+      {"--date", "Observer and sun"}, {"--latitude", "Observer and sun"}, {"--longitude", "Observer and sun"},
+      {"--refraction", "Observer and sun"}, {"--no-sun-disc", "Observer and sun"},
+      {"--sun-size", "Observer and sun"}, {"--no-ground", "Observer and sun"},
+      {"--exposure", "PNG display"}, {"--ev", "PNG display"}, {"--auto-exposure", "PNG display"},
+      {"--tonemap", "PNG display"}, {"--gamma", "PNG display"}, {"--per-channel", "PNG display"},
+      {"--no-dither", "PNG display"}, {"--png-bits", "PNG display"},
+      {"--until", "Time-lapse"}, {"--step", "Time-lapse"}, {"--mp4", "Time-lapse"}, {"--fps", "Time-lapse"},
+  };
+  for (CLI::Option* option : app->get_options()) {
+    if (option->get_lnames().empty() || option->check_lname("help")) continue;
+    option->group("Outputs and inputs");
+    for (const auto& [name, group] : kGroups) {
+      if (option->check_lname(std::string(name).substr(2))) option->group(group);
+    }
+  }
+}
+
+// Prints `atmo: warning: <message>` as one line on stderr.
+void PrintWarning(const std::string& message) { std::fprintf(stderr, "atmo: warning: %s\n", message.c_str()); }
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -177,9 +233,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   const std::string side_help = " in pixels";
   render_app->add_option("--width", render.width, "image width" + side_help)
+      ->check(kInteger)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   render_app->add_option("--height", render.height, "image height" + side_help)
+      ->check(kInteger)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
@@ -226,9 +284,20 @@ int main(int argc, char** argv) {
                     "angular diameter of the sun disc in degrees, in (0, 20] [default: the preset's]");
   render_app->add_flag("--no-ground", render.no_ground,
                        "leave the light reflected by the ground out (rays that meet it show only the air in front)");
-  render_app->add_option("--exr", render.exr_path, "linear EXR output (empty: none)")->capture_default_str();
-  render_app->add_option("--png", render.png_path, "tone-mapped PNG output (empty: none)")
-      ->capture_default_str();
+  CLI::Option* exr_flag =
+      render_app->add_option("--exr", render.exr_path, "linear EXR output, F.exr (empty: none)")->capture_default_str();
+  CLI::Option* png_flag = render_app->add_option("--png", render.png_path, "tone-mapped PNG output, F.png (empty: none)")
+                              ->capture_default_str();
+  std::string render_output;
+  bool no_exr = false;
+  bool no_png = false;
+  render_app
+      ->add_option("-o,--output", render_output,
+                   "NAME: write NAME.exr and NAME.png; NAME.exr or NAME.png: only that file (instead of --exr, --png)")
+      ->excludes(exr_flag)
+      ->excludes(png_flag);
+  render_app->add_flag("--no-exr", no_exr, "write no EXR (the same as --exr \"\")")->excludes(exr_flag);
+  render_app->add_flag("--no-png", no_png, "write no PNG (the same as --png \"\")")->excludes(png_flag);
   render_app->add_option("--unit", render.unit,
                          "what the EXR holds: luminance (linear sRGB, cd/m^2), radiance (W m^-2 sr^-1 nm^-1 per "
                          "wavelength) or relative (per unit solar irradiance x solar_irradiance)")
@@ -237,9 +306,9 @@ int main(int argc, char** argv) {
   render_app->add_flag("--xyz", render.xyz, "with --unit luminance: CIE 1931 XYZ channels instead of linear sRGB");
   render_app
       ->add_option_function<std::uint64_t>(
-          "--spp", [&render](const std::uint64_t& n) { render.spp = n; },
+          "--spp,--samples", [&render](const std::uint64_t& n) { render.spp = n; },
           "Monte Carlo paths per pixel, rendered progressively in passes of 4, 8, 16, ... "
-          "(model reference only) [default: its samples option]")
+          "(model reference only; --samples is the same flag, as in `atmo sample`) [default: its samples option]")
       ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
 
   // The sun from a date (sun_options.h) instead of --sun-elevation and --sun-azimuth, and the time-lapse.
@@ -300,14 +369,23 @@ int main(int argc, char** argv) {
   };
   for (CLI::Option* option : single) grid->excludes(option);
   // --date gives the single query's sun zenith (sun_options.h).
-  AddSunOptions(sample_app, sample.sun)->excludes(grid)->excludes(single[1]);
+  CLI::Option* sample_date = AddSunOptions(sample_app, sample.sun)->excludes(grid)->excludes(single[1]);
+  // The render convention for the sun's height; the azimuth stays the one between view and sun (docs/design.md §4).
+  std::optional<double> sample_sun_elevation;
+  AddOptionalNumber(sample_app, "--sun-elevation", sample_sun_elevation,
+                    "sun elevation in degrees [-90, 90], as in `atmo render`: the same as --sun-zenith 90-E "
+                    "(--azimuth stays relative to the sun)")
+      ->check(RangeOf(-90.0, 90.0))
+      ->excludes(grid)
+      ->excludes(single[1])
+      ->excludes(sample_date);
   // Monte Carlo settings: they become the model options samples= and target_rel_error= (models
   // that take no such option reject them).
   std::optional<std::uint64_t> sample_paths;
   std::optional<double> target_rel_error;
   sample_app->add_option_function<std::uint64_t>(
-      "--samples", [&sample_paths](const std::uint64_t& n) { sample_paths = n; },
-      "Monte Carlo paths per query (model reference)");
+      "--samples,--spp", [&sample_paths](const std::uint64_t& n) { sample_paths = n; },
+      "Monte Carlo paths per query (model reference; --spp is the same flag, as in `atmo render`)");
   AddOptionalNumber(sample_app, "--target-rel-error", target_rel_error,
                     "keep adding paths until standard error / radiance <= this (model reference)")
       ->check(RangeOf(0.0, 1.0));
@@ -336,25 +414,28 @@ int main(int argc, char** argv) {
             "colour scale of the --image: -PERCENT .. +PERCENT relative error")
       ->check(kPositive);
   compare_app->add_option("--image-size", compare.image_size, "--image fisheye diameter in pixels")
+      ->check(kInteger)
       ->check(CLI::Range(16, 4096))
       ->capture_default_str();
 
   atmo::cli::PresetsCommand presets;
   CLI::App* presets_app = app.add_subcommand("presets", "list the presets, or print one as JSON");
-  AddCommonOptions(presets_app, common);
   presets_app->add_option("--dump", presets.dump, "print this preset as JSON (accepted back by --config)");
 
   atmo::cli::BenchCommand bench;
   CLI::App* bench_app = app.add_subcommand("bench", "time the precomputation passes and a frame");
   AddCommonOptions(bench_app, common);
   CLI::Option* repeat = bench_app->add_option("--repeat", bench.repeat, "repetitions")
+                            ->check(kInteger)
                             ->check(CLI::Range(1, 100000))
                             ->capture_default_str();
   bench_app->add_flag("--quick", bench.quick, "3 repetitions")->excludes(repeat);
   bench_app->add_option("--width", bench.width, "frame width" + side_help)
+      ->check(kInteger)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   bench_app->add_option("--height", bench.height, "frame height" + side_help)
+      ->check(kInteger)
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   AddSunOptions(bench_app, bench.sun);  // the frame's sun from a date (sun_options.h)
@@ -364,6 +445,9 @@ int main(int argc, char** argv) {
       app.add_subcommand("precompute", "export the model's table (elek: NAME.exr, NAME.raw, NAME.json)");
   AddCommonOptions(precompute_app, common);
   precompute_app->add_option("--out", precompute.out, "output NAME (without extension)")->required();
+  // Only elek has an exportable table: the default model here.
+  precompute_app->get_option("--model")->default_str("elek")->description("sky model whose table is exported: elek "
+                                                                         "(the only one with a table)");
 
   atmo::cli::IlluminanceCommand illuminance;
   CLI::App* illuminance_app = app.add_subcommand(
@@ -385,11 +469,34 @@ int main(int argc, char** argv) {
     table_app->add_option("--table", table, "load the table NAME written by `atmo precompute` (model elek)");
   }
 
+  const std::string models = JoinNames(atmo::ModelNames());
+  const std::string preset_names = JoinNames(atmo::PresetNames());
+  const std::string lists = "\n\nModels: " + models + " (docs/models/MODEL.md, options under #options).\nPresets: " +
+                            preset_names + " (`atmo presets`).\nManual: docs/cli.md.";
+  const std::pair<CLI::App*, std::string> footers[] = {
+      {render_app, "Examples:\n  atmo render --camera fisheye --width 512 --height 512 -o allsky\n"
+                   "  atmo render --model reference --spp 64 --width 160 --height 90 -o ref" + lists},
+      {sample_app, "Examples:\n  atmo sample --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90\n"
+                   "  atmo sample --grid grid.csv --out radiance.csv   (--grid -: standard input)" + lists},
+      {compare_app, "Example:\n  atmo compare --model hillaire --option multiple_scattering_directions=2 --against "
+                    "hillaire" + lists},
+      {presets_app, "Examples:\n  atmo presets\n  atmo presets --dump earth > hazy.json" + lists},
+      {bench_app, "Example:\n  atmo bench --quick --width 320 --height 180" + lists},
+      {precompute_app, "Example:\n  atmo precompute --preset atmosphere-plus --out ap_table   (writes ap_table.exr, "
+                       ".raw, .json)" + lists},
+      {illuminance_app, "Example:\n  atmo illuminance --preset earth-spectral --sun-elevation 10 30 60" + lists},
+  };
+  for (const auto& [sub, footer] : footers) {
+    sub->footer(footer);
+    GroupFlags(sub);
+  }
+  app.footer("Run `atmo SUBCOMMAND --help` for its flags and an example." + lists.substr(1));
+
   try {
     app.parse(argc, argv);
     if (sample_app->parsed() && sample.grid_path.empty()) {
       for (CLI::Option* option : single) {
-        if (option->count() == 0 && !(option == single[1] && !sample.sun.date.empty())) {
+        if (option->count() == 0 && !(option == single[1] && (!sample.sun.date.empty() || sample_sun_elevation))) {
           throw CLI::RequiredError(option->get_name() + " (or --grid)");
         }
       }
@@ -410,6 +517,37 @@ int main(int argc, char** argv) {
     common.options.push_back(atmo::cli::Format("target_rel_error=%.17g", *target_rel_error));
   }
   if (!table.empty()) common.options.push_back("table=" + table);
+  if (sample_app->parsed() && sample_sun_elevation) sample.sun_zenith_deg = 90.0 - *sample_sun_elevation;
+  if (precompute_app->parsed() && precompute_app->get_option("--model")->count() == 0) common.model = "elek";
+  if (compare_app->parsed() && compare.image_path.empty()) {
+    for (const char* flag : {"--altitude", "--sun-zenith", "--image-range", "--image-size"}) {
+      if (compare_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the --image only");
+    }
+  }
+  if (render_app->parsed()) {
+    if (!render_output.empty()) {
+      std::string extension = std::filesystem::path(render_output).extension().string();
+      for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      render.exr_path = extension == ".png" ? std::string() : extension == ".exr" ? render_output : render_output + ".exr";
+      render.png_path = extension == ".exr" ? std::string() : extension == ".png" ? render_output : render_output + ".png";
+    }
+    if (no_exr) render.exr_path.clear();
+    if (no_png) render.png_path.clear();
+    // Flags that the chosen camera or outputs do not use: said, not silently ignored.
+    if (render.camera != "perspective") {
+      for (const char* flag : {"--fov", "--pitch"}) {
+        if (render_app->get_option(flag)->count() > 0) {
+          PrintWarning(std::string(flag) + " applies to the perspective camera only");
+        }
+      }
+    }
+    if (render.png_path.empty()) {
+      for (const char* flag : {"--exposure", "--ev", "--auto-exposure", "--tonemap", "--gamma", "--per-channel",
+                               "--no-dither", "--png-bits"}) {
+        if (render_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the PNG only");
+      }
+    }
+  }
 
   try {
     std::optional<oneapi::tbb::global_control> thread_limit;

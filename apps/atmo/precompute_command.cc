@@ -20,12 +20,19 @@ int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command)
   CheckOutputsApart(common, {}, {{"--out", files.exr}, {"--out", files.raw}, {"--out", files.json}});
   const AtmosphereParameters parameters = LoadParameters(common);
   for (const auto& path : {files.exr, files.raw, files.json}) CheckOutputWritable(path);
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   const auto start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double precompute_s = seconds_since(start);
+  const auto write_start = std::chrono::steady_clock::now();
   ExportElekTable(*model, command.out);
-  std::printf("wrote %s, %s, %s (elek, %s, precomputed in %.1f ms)\n", files.exr.string().c_str(),
-              files.raw.string().c_str(), files.json.string().c_str(), parameters.name.c_str(), ms);
+  const double write_s = seconds_since(write_start);
+  // The whole time and its parts, as `atmo render` reports them.
+  std::printf("wrote %s, %s, %s (elek, %s) in %.2f s: precompute %.2f s, write %.2f s\n", files.exr.string().c_str(),
+              files.raw.string().c_str(), files.json.string().c_str(), parameters.name.c_str(), seconds_since(start),
+              precompute_s, write_s);
   return 0;
 }
 

@@ -13,6 +13,7 @@ namespace {
 std::string PresetSource(const std::string& name) {
   static const std::map<std::string, std::string> kSources = {
       {"earth", "Earth, after Hillaire 2020 / Bruneton 2017"},
+      {"earth-spectral", "earth at 15 wavelengths, each medium from its physics (docs/spectral.md)"},
       {"atmosphere-plus", "Earth as in the Atmosphere Plus seed"},
       {"simple", "homogeneous half-space of the simple seed"},
   };

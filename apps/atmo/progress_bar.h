@@ -7,12 +7,14 @@
 
 #include <chrono>
 #include <cstdio>
+#include <string>
+#include <utility>
 
 namespace atmo::cli {
 
 class ProgressBar {
  public:
-  explicit ProgressBar(const char* label) : label_(label), enabled_(isatty(2) != 0) {}
+  explicit ProgressBar(std::string label) : label_(std::move(label)), enabled_(isatty(2) != 0) {}
   ~ProgressBar() { Finish(); }
 
   // Reports that `done` of `total` units are complete.
@@ -23,7 +25,7 @@ class ProgressBar {
     char bar[31] = {};
     for (int i = 0; i < 30; ++i) bar[i] = i < static_cast<int>(fraction * 30.0) ? '#' : ' ';
     const double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-    std::fprintf(stderr, "\r%s [%s] %3.0f%% %.1f s, ETA %.1f s ", label_, bar, 100.0 * fraction, elapsed, eta);
+    std::fprintf(stderr, "\r%s [%s] %3.0f%% %.1f s, ETA %.1f s ", label_.c_str(), bar, 100.0 * fraction, elapsed, eta);
     std::fflush(stderr);
     drawn_ = true;
   }
@@ -33,7 +35,7 @@ class ProgressBar {
   }
 
  private:
-  const char* label_;
+  std::string label_;
   bool enabled_;
   bool drawn_ = false;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();

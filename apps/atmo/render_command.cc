@@ -17,6 +17,7 @@
 #include "atmo/image.h"
 #include "atmo/render.h"
 #include "commands.h"
+#include "models/reference_model.h"
 #include "progress_bar.h"
 
 namespace atmo::cli {
@@ -65,6 +66,15 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
 }  // namespace
 
 int RunRender(const CommonOptions& common, const RenderCommand& command) {
+  // The success line reports the whole time and its parts (precompute, view, frame, write).
+  const auto command_start = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  double precompute_s = 0.0;
+  double view_s = 0.0;
+  double frame_s = 0.0;
+  double write_s = 0.0;
   CheckBackend(common, /*command_has_gl=*/true);
   CheckOutputsApart(common, {},
                     {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
@@ -142,6 +152,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // Fail fast, before precomputing anything, when an output cannot be written.
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
   if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
+  CheckExtension("--exr", command.exr_path, ".exr");
+  CheckExtension("--png", command.png_path, ".png");
   if (IsTimeLapse(command.sun)) TimeLapseInstants(command.sun, command.png_path);  // --until, --step, --mp4
 
   // --spp is the path count of a Monte Carlo model; deterministic models have nothing to sample.
@@ -150,7 +162,9 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                 "' is deterministic and takes no --spp");
   }
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
+  const auto precompute_start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, model_parameters);
+  precompute_s = seconds_since(precompute_start);
   const std::string model_name = model != nullptr ? std::string(model->name()) : common.model;
 
   const auto start = std::chrono::steady_clock::now();
@@ -171,9 +185,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
       {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
       {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
-      {"atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg)},
       {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
-      {"atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg)},
       {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
       {"atmo:sunAngularDiameterDeg", Format("%.10g", 2.0 * parameters.sun_angular_radius_rad * 180.0 / std::numbers::pi)},
       {"atmo:modelOptions", JoinOptions(common.options)},
@@ -187,6 +199,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     metadata.emplace_back(key, value);
   };
+  // Only what the camera uses: the field of view and pitch are the perspective camera's.
+  if (settings.camera.kind == CameraKind::kPerspective) {
+    set_metadata("atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg));
+    set_metadata("atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg));
+  }
   if (dated_sun) {
     for (const auto& [key, value] : SunMetadata(command.sun, *dated_sun)) set_metadata(key, value);
   }
@@ -196,6 +213,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // cd/m^2 (colour_space kLinearSrgb: a folded CPU frame).
   const auto write_to = [&](const std::string& exr_path, const std::string& png_path, const Image& image,
                             const Image* standard_error, double render_ms) {
+    const auto write_start = std::chrono::steady_clock::now();
     const bool is_colour = image.colour_space == ColourSpace::kLinearSrgb;
     std::vector<std::string> written;
     // The PNG's display image and exposure first, so that the EXR records the exposure too.
@@ -236,6 +254,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       WritePng(png_path, display, png_mapping);
       written.push_back(png_path);
     }
+    write_s += seconds_since(write_start);
     return written;
   };
   const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
@@ -244,15 +263,21 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // A frame of a deterministic CPU model. In luminance the channels are folded into linear sRGB
   // while the frame is rendered (RenderViewFolded): a spectral frame costs about a 3-channel one.
   const std::vector<glm::vec3> srgb_weights = ColourWeights(convert, ImageColour::kLinearSrgb);
-  const auto render_cpu = [&](const RenderSettings& frame) {
+  const auto render_cpu = [&](const RenderSettings& frame, const RowProgress& progress = {}) {
+    const auto view_start = std::chrono::steady_clock::now();
     const std::unique_ptr<SkyView> sky =
         model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+    view_s += seconds_since(view_start);
+    const auto frame_start = std::chrono::steady_clock::now();
+    Image image;
     if (unit != RadianceUnit::kLuminance) {
-      return RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance);
+      image = RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance, progress);
+    } else {
+      image = RenderViewFolded(*sky, frame.camera, frame.terms, srgb_weights, progress);
+      image.colour_space = ColourSpace::kLinearSrgb;
     }
-    Image folded = RenderViewFolded(*sky, frame.camera, frame.terms, srgb_weights);
-    folded.colour_space = ColourSpace::kLinearSrgb;
-    return folded;
+    frame_s += seconds_since(frame_start);
+    return image;
   };
 
   // --until: a time-lapse. The model and its tables do not depend on the sun: made once above, each
@@ -330,36 +355,55 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     ProgressiveSettings progressive;
     progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option
     set_metadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
-    ProgressBar progress("render");
+    // The bar's label says the whole job: paths per pixel and in total (the bar adds the ETA).
+    // Without --spp: the model's samples option.
+    const std::uint64_t spp = progressive.samples_per_pixel > 0
+                                  ? progressive.samples_per_pixel
+                                  : ReferenceSettings::FromOptions(ParseModelOptions(common.options)).samples;
+    const double paths = static_cast<double>(spp) * settings.camera.width * settings.camera.height;
+    ProgressBar progress(Format("render %llu paths per pixel (%.3g paths in all)", static_cast<unsigned long long>(spp),
+                                paths));
     progressive.on_progress = [&](double done, double total) { progress.Update(done, total); };
     progressive.on_pass = [&](const ProgressiveImage& pass) {
       set_metadata("atmo:samplesPerPixel", std::to_string(pass.samples_per_pixel));
       render_ms = elapsed_ms();
       written = write(pass.radiance, &pass.standard_error, render_ms);
     };
+    const auto passes_start = std::chrono::steady_clock::now();
     image = RenderProgressive(*model, settings, progressive).radiance;
+    frame_s = seconds_since(passes_start) - write_s;
     progress.Finish();
   } else {
+    // A long CPU frame (a per-pixel ray march, a large image) draws a bar over its rows.
+    ProgressBar progress("render rows");
+    const RowProgress rows = [&](int done, int total) { progress.Update(done, total); };
 #ifdef ATMO_HAVE_GL
     if (on_gl) {
       const gl::Context context;
+      const auto gl_start = std::chrono::steady_clock::now();
       image = RenderOnGl(context, common, model_parameters, settings);
+      frame_s = seconds_since(gl_start);
     } else {
-      image = render_cpu(settings);
+      image = render_cpu(settings, rows);
     }
 #else
-    image = render_cpu(settings);
+    image = render_cpu(settings, rows);
 #endif
-    render_ms = elapsed_ms();
+    progress.Finish();
+    render_ms = 1e3 * (view_s + frame_s);
     written = write(image, nullptr, render_ms);
   }
 
   std::string files;
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
-  std::printf("%s %s (%dx%d %s, %s, %s) in %.1f ms\n", written.empty() ? "rendered" : "wrote",
+  // The whole time and its parts; on the gl backend the tables are GPU passes of the frame's run.
+  const std::string parts =
+      on_gl ? Format("gl passes and read-back %.2f s, write %.2f s", frame_s, write_s)
+            : Format("precompute %.2f s, view %.2f s, frame %.2f s, write %.2f s", precompute_s, view_s, frame_s, write_s);
+  std::printf("%s %s (%dx%d %s, %s, %s) in %.2f s: %s\n", written.empty() ? "rendered" : "wrote",
               written.empty() ? "without writing a file" : files.c_str(), image.width, image.height,
-              std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(),
-              parameters.name.c_str(), render_ms);
+              std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(), parameters.name.c_str(),
+              seconds_since(command_start), parts.c_str());
   return 0;
 }
 

@@ -186,6 +186,7 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
     points.push_back(point);
   }
   if (!command.out_path.empty()) CheckOutputWritable(command.out_path);
+  CheckExtension("--out", command.out_path, ".csv");
 
   std::string csv;
 #ifdef ATMO_HAVE_GL

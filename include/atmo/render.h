@@ -58,8 +58,12 @@ Image Render(const Model& model, const RenderSettings& settings);
 // own pass (src/atmo/cpu/sun_disc.h), so that its energy in the image is the transmitted
 // irradiance at any resolution and it is round. Same errors as Render for the camera;
 // `solar_irradiance` has one value per channel of the view.
+// `progress`, when given, is called as rows complete with (rows done, rows in the image), the last
+// call with both equal; at most one call runs at a time (it may come from any worker thread, and a
+// row that finds a call running skips its own), so a slow callback never stalls the frame.
+using RowProgress = std::function<void(int rows_done, int rows_total)>;
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
-                 std::span<const double> solar_irradiance);
+                 std::span<const double> solar_irradiance, const RowProgress& progress = {});
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
 // (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the
@@ -67,7 +71,7 @@ Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& 
 // about the cost of a 3-channel frame, whatever the channel count. Throws as RenderView, and for
 // `weights` without one entry per channel of the view.
 Image RenderViewFolded(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
-                       std::span<const glm::vec3> weights);
+                       std::span<const glm::vec3> weights, const RowProgress& progress = {});
 
 // Progressive rendering of a Monte Carlo model (model `reference`): every pixel gets
 // `samples_per_pixel` paths (per channel) in passes, the first of `first_pass_samples` paths and

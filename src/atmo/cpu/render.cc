@@ -2,7 +2,9 @@
 // parallel with oneTBB.
 #include "atmo/render.h"
 
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
@@ -94,7 +96,10 @@ namespace {
 // The frame loop shared by RenderView and RenderViewFolded: camera rays per row (rows in
 // parallel), `evaluate(views, row)` writes `channels` values per pixel of the row.
 template <typename Evaluate>
-Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& evaluate) {
+Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& evaluate,
+                 const RowProgress& progress) {
+  std::atomic<int> rows_done{0};
+  std::mutex reporting;  // one progress call at a time; rows that find it busy do not wait
   const shared::CameraParameters camera = ToSharedCamera(camera_settings);
   const int width = camera_settings.width;
   const std::size_t nc = static_cast<std::size_t>(channels);
@@ -117,15 +122,21 @@ Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& ev
       }
       evaluate(views, std::span<float>(&image.pixels[static_cast<std::size_t>(y) * width * nc],
                                        static_cast<std::size_t>(width) * nc));
+      const int done = rows_done.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (progress && done < image.height && reporting.try_lock()) {
+        progress(done, image.height);
+        reporting.unlock();
+      }
     }
   });
+  if (progress) progress(image.height, image.height);
   return image;
 }
 
 }  // namespace
 
 Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
-                 std::span<const double> solar_irradiance) {
+                 std::span<const double> solar_irradiance, const RowProgress& progress) {
   ValidateCamera(camera_settings);
   const std::size_t n = sky.channel_count();
   CheckChannels(n);
@@ -140,13 +151,13 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
     for (std::size_t x = 0; x < views.size(); ++x) {
       for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
     }
-  });
+  }, progress);
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
   return image;
 }
 
 Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
-                       std::span<const glm::vec3> weights) {
+                       std::span<const glm::vec3> weights, const RowProgress& progress) {
   ValidateCamera(camera_settings);
   const std::size_t n = sky.channel_count();
   CheckChannels(n);
@@ -155,7 +166,7 @@ Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const 
   sky_terms.sun_disc = false;
   Image image = RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatchFolded(views, sky_terms, weights, row);
-  });
+  }, progress);
   if (terms.sun_disc) {
     // The disc pass with the disc's radiance folded by the same weights (solar irradiance 1: the
     // weights carry the units).

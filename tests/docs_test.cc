@@ -1,0 +1,299 @@
+// The manual against the program: every command of the README's examples runs and succeeds, and
+// every example output in docs/cli.md is what the current build prints.
+//
+// 1. README.md: each line of a ```sh block is a command (a trailing `\` joins the next line, a
+//    ` #` starts a comment). They run in order in one fresh folder (so that `printf ... > grid.csv`
+//    and `atmo presets --dump earth > hazy.json` feed the commands after them), `atmo` being the
+//    binary under test, and each must exit 0. The only commands left out are those of kSkipped,
+//    each with its reason; an entry that matches no README command fails the test, so the list
+//    cannot outlive the README. Commands with `--backend gl` run only where a GL context can be made.
+// 2. docs/cli.md: a ```sh block whose lines start with `$ ` is a transcript. `$ cat FILE` followed
+//    by lines writes them to FILE (the transcript shows the input it uses); `$ atmo ...` is run and
+//    its standard output then standard error must equal the lines that follow, line by line: the
+//    text exactly, each number within a relative 1e-6 (last-digit differences of FMA builds), and
+//    a number followed by ` s` or ` ms` (a timing) matching any number.
+// 3. Every `atmo:KEY` EXR attribute that render_command.cc and sun_options.cc write is named in
+//    docs/cli.md.
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cli_fixture.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using atmo::testing::Lines;
+using atmo::testing::ReadFile;
+using atmo::testing::WriteFile;
+
+// README commands that this test does not run, and why. Matched as a prefix of the command.
+struct Skipped {
+  const char* prefix;
+  const char* reason;
+};
+constexpr Skipped kSkipped[] = {
+    {"./scripts/install_deps.sh", "installs packages and builds the project (what ran this test)"},
+    {"ctest", "runs this test suite"},
+    {"./build/tests/atmo_tests", "runs this test suite"},
+    {"./build/bench/atmo_bench", "the Google Benchmark programs: about a minute"},
+    {"atmo compare --model hillaire --against reference", "a 16384-path reference on 4725 configurations: minutes"},
+    {"atmo compare --model elek", "the default 4096-path reference on 4725 configurations: minutes"},
+    {"atmo render --model reference", "44 million paths: about a minute on two cores"},
+    {"atmo render --option sky_view=off", "a per-pixel ray march of a 1280x720 frame: about 20 s on two cores"},
+    {"atmo render --date 2026-06-21T04:00+02:00 --until", "a 109-frame time-lapse: about a minute"},
+    {"atmo render --backend gl --model elek", "the elek table on the GL backend: 10 s under Mesa llvmpipe "
+                                              "(gl_elek_test.cc runs it on a small table)"},
+};
+
+std::string Trim(std::string text) {
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\r')) text.pop_back();
+  std::size_t start = 0;
+  while (start < text.size() && text[start] == ' ') ++start;
+  return text.substr(start);
+}
+
+// The command of a README line: the text before a ` #` that is outside quotes.
+std::string WithoutComment(const std::string& line) {
+  char quote = 0;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quote != 0) {
+      if (c == quote) quote = 0;
+    } else if (c == '\'' || c == '"') {
+      quote = c;
+    } else if (c == '#' && (i == 0 || line[i - 1] == ' ')) {
+      return Trim(line.substr(0, i));
+    }
+  }
+  return Trim(line);
+}
+
+// The ```sh blocks of a Markdown file, each as its lines.
+std::vector<std::vector<std::string>> ShellBlocks(const std::string& markdown) {
+  std::vector<std::vector<std::string>> blocks;
+  bool inside = false;
+  for (const std::string& raw : Lines(markdown)) {
+    const std::string line = Trim(raw);
+    if (!inside && line == "```sh") {
+      inside = true;
+      blocks.emplace_back();
+    } else if (inside && line == "```") {
+      inside = false;
+    } else if (inside) {
+      blocks.back().push_back(raw);
+    }
+  }
+  return blocks;
+}
+
+struct Output {
+  int exit_code = -1;
+  std::string text;  // stdout, then stderr
+  double seconds = 0.0;
+};
+
+// Runs a shell command line in `dir`, `atmo` at its start being the binary under test.
+Output RunShell(const fs::path& dir, std::string command) {
+  if (command.rfind("atmo ", 0) == 0 || command == "atmo") command = "'" ATMO_CLI_PATH "'" + command.substr(4);
+  const std::string line = "cd '" + dir.string() + "' && (timeout 120 " + command + ") >stdout.txt 2>stderr.txt";
+  const auto start = std::chrono::steady_clock::now();
+  const int status = std::system(line.c_str());
+  Output output;
+  output.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  output.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  output.text = ReadFile(dir / "stdout.txt") + ReadFile(dir / "stderr.txt");
+  return output;
+}
+
+bool HaveGlContext(const fs::path& dir) {
+#ifdef ATMO_HAVE_GL
+  return RunShell(dir, "atmo render --backend gl --width 4 --height 4 --no-exr --no-png").exit_code == 0;
+#else
+  (void)dir;
+  return false;
+#endif
+}
+
+class DocsTest : public atmo::testing::CliFixture {};
+
+TEST_F(DocsTest, EveryReadmeExampleRuns) {
+  const std::string readme = ReadFile(fs::path(ATMO_SOURCE_DIR) / "README.md");
+  ASSERT_FALSE(readme.empty());
+  const bool gl = HaveGlContext(dir_);
+  std::vector<int> skip_used(std::size(kSkipped), 0);
+  int ran = 0;
+  double total_s = 0.0;
+  for (const std::vector<std::string>& block : ShellBlocks(readme)) {
+    std::string pending;
+    for (const std::string& raw : block) {
+      std::string line = WithoutComment(raw);
+      if (!line.empty() && line.back() == '\\') {
+        line.pop_back();
+        pending += line + " ";
+        continue;
+      }
+      const std::string command = Trim(pending + line);
+      pending.clear();
+      if (command.empty()) continue;
+      const Skipped* skipped = nullptr;
+      for (std::size_t i = 0; i < std::size(kSkipped); ++i) {
+        if (command.rfind(kSkipped[i].prefix, 0) == 0) {
+          skipped = &kSkipped[i];
+          ++skip_used[i];
+        }
+      }
+      if (skipped != nullptr) {
+        std::printf("skipped (%s): %s\n", skipped->reason, command.c_str());
+        continue;
+      }
+      if (!gl && command.find("--backend gl") != std::string::npos) {
+        std::printf("skipped (no GL context here): %s\n", command.c_str());
+        continue;
+      }
+      const Output output = RunShell(dir_, command);
+      total_s += output.seconds;
+      ++ran;
+      std::printf("%5.2f s  %s\n", output.seconds, command.c_str());
+      EXPECT_EQ(output.exit_code, 0) << command << "\n" << output.text;
+    }
+  }
+  std::printf("%d README commands in %.1f s\n", ran, total_s);
+  EXPECT_GE(ran, 20);
+  for (std::size_t i = 0; i < std::size(kSkipped); ++i) {
+    EXPECT_GT(skip_used[i], 0) << "kSkipped entry '" << kSkipped[i].prefix << "' matches no README command";
+  }
+}
+
+// A line of text cut into numbers and the text between them.
+struct Token {
+  bool is_number = false;
+  double value = 0.0;
+  std::string text;
+};
+
+std::vector<Token> Tokenize(const std::string& line) {
+  std::vector<Token> tokens;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    const char c = line[i];
+    const bool starts_number = std::isdigit(static_cast<unsigned char>(c)) ||
+                               ((c == '-' || c == '.') && i + 1 < line.size() &&
+                                std::isdigit(static_cast<unsigned char>(line[i + 1])) &&
+                                (i == 0 || !std::isalnum(static_cast<unsigned char>(line[i - 1]))));
+    if (starts_number) {
+      char* end = nullptr;
+      const double value = std::strtod(line.c_str() + i, &end);
+      const std::size_t length = static_cast<std::size_t>(end - (line.c_str() + i));
+      if (length > 0) {
+        tokens.push_back({true, value, line.substr(i, length)});
+        i += length;
+        continue;
+      }
+    }
+    if (tokens.empty() || tokens.back().is_number) tokens.push_back({false, 0.0, ""});
+    tokens.back().text += c;
+    ++i;
+  }
+  return tokens;
+}
+
+// Whether `actual` is `expected` up to number tolerance and masked timings; `why` says where not.
+bool LineMatches(const std::string& expected, const std::string& actual, std::string& why) {
+  const std::vector<Token> e = Tokenize(expected);
+  const std::vector<Token> a = Tokenize(actual);
+  if (e.size() != a.size()) {
+    why = "a different layout";
+    return false;
+  }
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (e[i].is_number != a[i].is_number) {
+      why = "'" + e[i].text + "' against '" + a[i].text + "'";
+      return false;
+    }
+    if (!e[i].is_number) {
+      if (e[i].text != a[i].text) {
+        why = "'" + e[i].text + "' against '" + a[i].text + "'";
+        return false;
+      }
+      continue;
+    }
+    const bool timing = i + 1 < e.size() && (e[i + 1].text.rfind(" s", 0) == 0 || e[i + 1].text.rfind(" ms", 0) == 0);
+    if (timing) continue;
+    const double tolerance = 1e-6 * std::max(std::fabs(e[i].value), std::fabs(a[i].value)) + 1e-300;
+    if (!(std::fabs(e[i].value - a[i].value) <= tolerance)) {
+      why = "the number " + e[i].text + " is " + a[i].text;
+      return false;
+    }
+  }
+  return true;
+}
+
+TEST_F(DocsTest, CliExampleOutputsAreTheCurrentOnes) {
+  const std::string manual = ReadFile(fs::path(ATMO_SOURCE_DIR) / "docs" / "cli.md");
+  ASSERT_FALSE(manual.empty());
+  int transcripts = 0;
+  for (const std::vector<std::string>& block : ShellBlocks(manual)) {
+    if (block.empty() || block.front().rfind("$ ", 0) != 0) continue;  // not a transcript
+    // Each `$ ` line and the lines after it up to the next one.
+    for (std::size_t i = 0; i < block.size();) {
+      const std::string command = block[i].substr(2);
+      std::vector<std::string> expected;
+      for (++i; i < block.size() && block[i].rfind("$ ", 0) != 0; ++i) expected.push_back(block[i]);
+      if (command.rfind("cat ", 0) == 0) {
+        std::string text;
+        for (const std::string& line : expected) text += line + "\n";
+        WriteFile(dir_ / command.substr(4), text);
+        continue;
+      }
+      ++transcripts;
+      const Output output = RunShell(dir_, command);
+      const std::vector<std::string> actual = Lines(output.text);
+      std::string got;
+      for (const std::string& line : actual) got += line + "\n";
+      ASSERT_EQ(actual.size(), expected.size()) << "$ " << command << " printed:\n" << got;
+      for (std::size_t k = 0; k < expected.size(); ++k) {
+        std::string why;
+        EXPECT_TRUE(LineMatches(expected[k], actual[k], why))
+            << "$ " << command << ", line " << k + 1 << ": " << why << "\n  docs: " << expected[k]
+            << "\n  now:  " << actual[k];
+      }
+    }
+  }
+  EXPECT_GE(transcripts, 3) << "docs/cli.md has lost its example transcripts";
+}
+
+// Every EXR attribute the render command writes ("atmo:KEY" in its sources) is in cli.md's table.
+TEST(DocsExrAttributes, EveryWrittenAttributeIsDocumented) {
+  const fs::path source = fs::path(ATMO_SOURCE_DIR);
+  const std::string manual = ReadFile(source / "docs" / "cli.md");
+  int found = 0;
+  for (const char* file : {"render_command.cc", "sun_options.cc"}) {
+    const std::string code = ReadFile(source / "apps" / "atmo" / file);
+    for (std::size_t at = code.find("\"atmo:"); at != std::string::npos; at = code.find("\"atmo:", at + 1)) {
+      const std::size_t end = code.find('"', at + 1);
+      const std::string key = code.substr(at + 1, end - at - 1);
+      ++found;
+      EXPECT_NE(manual.find("`" + key + "`"), std::string::npos) << key << " (" << file << ") is not in docs/cli.md";
+    }
+  }
+  EXPECT_GE(found, 20);
+}
+
+TEST(DocsTokens, NumbersTimingsAndText) {
+  std::string why;
+  EXPECT_TRUE(LineMatches("a 7.762013469e-03,0.5", "a 7.7620134690e-03,0.5", why));
+  EXPECT_FALSE(LineMatches("a 7.762013469e-03", "a 7.762113469e-03", why));
+  EXPECT_TRUE(LineMatches("in 0.41 s: frame 61.3 ms", "in 12 s: frame 0.2 ms", why));
+  EXPECT_FALSE(LineMatches("wrote sky.exr", "wrote sky.png", why));
+  EXPECT_FALSE(LineMatches("1280x720", "1280x72", why));
+}
+
+}  // namespace
