@@ -230,7 +230,14 @@ struct MultipleScatteringRay {
 }  // namespace
 
 void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample_count, shared::Texture2D& table) {
-  const shared::ivec2 size(table.width, table.height);
+  shared::Texture2D* tables[] = {&table};
+  ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters>(&a, 1), sample_count, tables);
+}
+
+void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> batches, int sample_count,
+                                std::span<shared::Texture2D* const> tables) {
+  const shared::AtmosphereParameters& a = batches.front();  // the geometry and profiles of all
+  const shared::ivec2 size(tables.front()->width, tables.front()->height);
   ForEachRow(size.y, [&](int y) {
     std::vector<double> altitude(sample_count + 1);
     std::vector<double> weight(sample_count + 1);
@@ -258,8 +265,11 @@ void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample
       auto integrate = [&](const shared::DensityProfile& profile) {
         return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
       };
+      // The density integrals do not depend on the channels: once per texel for every batch.
       const vec3 integrals(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
-      table.at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(a, integrals)));
+      for (std::size_t b = 0; b < batches.size(); ++b) {
+        tables[b]->at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(batches[b], integrals)));
+      }
     }
   });
 }

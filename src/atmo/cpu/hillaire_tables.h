@@ -10,6 +10,8 @@
 // equals its per-texel kernel.
 #pragma once
 
+#include <span>
+
 #include "shared/shared.h"
 
 namespace atmo::cpu {
@@ -19,6 +21,12 @@ namespace atmo::cpu {
 // once in a loop that the compiler vectorises (glibc's libmvec exp).
 void ComputeTransmittanceTable(const shared::AtmosphereParameters& atmosphere, int sample_count,
                                shared::Texture2D& table);
+// The same for several channel batches of one atmosphere (same geometry and density profiles,
+// other coefficients: ToSharedParameters of each batch), tables[b] for batches[b], all sized
+// alike: the density integrals along each texel's ray, which do not depend on the channels, are
+// computed once for all batches.
+void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> batches, int sample_count,
+                                std::span<shared::Texture2D* const> tables);
 
 // Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,

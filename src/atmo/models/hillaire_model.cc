@@ -82,12 +82,6 @@ HillaireModel::HillaireModel(const AtmosphereParameters& parameters, const Hilla
   }
 }
 
-void HillaireModel::ComputeTransmittanceLut(Batch& batch) const {
-  const glm::ivec2 size = settings_.transmittance_lut;
-  batch.transmittance = shared::Texture2D(size.x, size.y);
-  cpu::ComputeTransmittanceTable(batch.atmosphere, settings_.transmittance_samples, batch.transmittance);
-}
-
 void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
   const glm::ivec2 size = settings_.multiple_scattering_lut;
   batch.multiple_scattering = shared::Texture2D(size.x, size.y);
@@ -103,7 +97,18 @@ void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
 
 void HillaireModel::Precompute() {
   auto start = Clock::now();
-  for (Batch& batch : batches_) ComputeTransmittanceLut(batch);
+  // All batches in one pass: the density integrals are shared (cpu::ComputeTransmittanceTables).
+  {
+    const glm::ivec2 size = settings_.transmittance_lut;
+    std::vector<shared::AtmosphereParameters> atmospheres;
+    std::vector<shared::Texture2D*> tables;
+    for (Batch& batch : batches_) {
+      batch.transmittance = shared::Texture2D(size.x, size.y);
+      atmospheres.push_back(batch.atmosphere);
+      tables.push_back(&batch.transmittance);
+    }
+    cpu::ComputeTransmittanceTables(atmospheres, settings_.transmittance_samples, tables);
+  }
   RecordPass("transmittance_lut", MillisecondsSince(start));
   start = Clock::now();
   for (Batch& batch : batches_) ComputeMultipleScatteringLut(batch);

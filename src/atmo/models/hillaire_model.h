@@ -81,7 +81,6 @@ class HillaireModel final : public Model {
   void AddGroundView(const Batch& batch, double r, double mu_s, shared::Texture2D& table) const;
 
  private:
-  void ComputeTransmittanceLut(Batch& batch) const;
   void ComputeMultipleScatteringLut(Batch& batch) const;
   void ComputeGroundIrradianceLut(Batch& batch) const;
 
