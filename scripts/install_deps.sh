@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs every Debian package atmo needs to build, test and benchmark.
-# Idempotent: safe to run again; uses sudo only when not already root. nodejs and npm are for
-# the KTX2 read-back test: configuring the build then installs the npm package ktx-parse into
-# <build>/node/node_modules (tests/CMakeLists.txt).
+# Idempotent: safe to run again; uses sudo only when not already root. node and npm are for the
+# KTX2 read-back test: configuring the build then installs the npm package ktx-parse into
+# <build>/node/node_modules (tests/CMakeLists.txt). They are tools, not libraries: a machine that
+# has them already (another distribution of Node.js, whose nodejs package bundles npm and
+# conflicts with Debian's npm) keeps them; only a machine without them gets Debian's.
 set -euo pipefail
 
 SUDO=""
@@ -17,8 +19,10 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
   libglfw3-dev xvfb xauth
-  nodejs npm
 )
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  PACKAGES+=(nodejs npm)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
