@@ -190,6 +190,9 @@ bool WritePngRows(const char* path, png_uint_32 width, png_uint_32 height, bool 
     return false;
   }
   png_init_io(png, file);
+  // zlib level 3 instead of libpng's 6: a dithered sky is noise to zlib, and level 6 spent ~0.5 s
+  // on a 1280x720 image for ~12 % smaller files. The image is the same (lossless either way).
+  png_set_compression_level(png, 3);
   png_set_IHDR(png, info, width, height, bit_depth, has_alpha ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   if (transfer != DisplayTransfer::kGamma) {
