@@ -33,6 +33,24 @@ glm::dvec3 TexelDirection(int face, int n, int i, int j) {
   return CubeFaceDirection(static_cast<CubeFace>(face), (i + 0.5) / n, (j + 0.5) / n);
 }
 
+// A cube of `size` texels per face, 3 channels in `colour_space`: fill(direction, rgb) sets each
+// texel from its centre's direction, in parallel over the rows of all faces.
+template <typename Fill>
+Cubemap FillCubemap(int size, ColourSpace colour_space, const Fill& fill) {
+  Cubemap out(size, 3);
+  for (Image& face : out.faces) face.colour_space = colour_space;
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, kCubeFaceCount * size), [&](const auto& rows) {
+    for (int row = rows.begin(); row < rows.end(); ++row) {
+      const int f = row / size;
+      const int j = row % size;
+      for (int i = 0; i < size; ++i) {
+        fill(TexelDirection(f, size, i, j), &out.faces[f].pixels[(static_cast<std::size_t>(j) * size + i) * 3]);
+      }
+    }
+  });
+  return out;
+}
+
 glm::dvec3 Texel(const Image& face, int i, int j) {
   const float* p = &face.pixels[(static_cast<std::size_t>(j) * face.width + i) * 3];
   return {p[0], p[1], p[2]};
@@ -249,55 +267,42 @@ Cubemap IrradianceCubemap(const Cubemap& radiance, int size, int source_size) {
                         CubeFaceDirection(face, 1.0, t1)}});
     }
   }
-  Cubemap out(size, 3);
-  for (Image& face : out.faces) face.colour_space = radiance.faces[0].colour_space;
-  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, kCubeFaceCount * size), [&](const auto& rows) {
-    for (int row = rows.begin(); row < rows.end(); ++row) {
-      const int f = row / size;
-      const int j = row % size;
-      for (int i = 0; i < size; ++i) {
-        const glm::dvec3 normal = TexelDirection(f, size, i, j);
-        const float nx = static_cast<float>(normal.x);
-        const float ny = static_cast<float>(normal.y);
-        const float nz = static_cast<float>(normal.z);
-        // float sums of at most 6 x 16^2 terms by default: ~1e-6 relative, far below the 1e-2
-        // the tests ask.
-        // The texel-centre quadrature of the kernel, sum of max(n.w, 0) dOmega, misses its exact
-        // integral pi by O(texel^2) (the kink at n.w = 0 most): dividing by it and multiplying by
-        // pi makes the weights integrate exactly, so a constant sky gives pi L to rounding.
-        // Float sums of 6 x 32^2 terms: ~1e-6 relative, far below what the tests ask. Bands of
-        // source rows wholly behind the normal are skipped: n.d is linear in the (unnormalised)
-        // face-plane direction d, so its largest value over a band is at one of its corners.
-        float r = 0.0f, g = 0.0f, b = 0.0f, kernel = 0.0f;
-        for (const Band& band : bands) {
-          bool seen = false;
-          for (const glm::dvec3& corner : band.corners) seen = seen || glm::dot(normal, corner) > 0.0;
-          if (!seen) continue;
-          const float* bx = dx.data();
-          const float* by = dy.data();
-          const float* bz = dz.data();
-          const float* br = lr.data();
-          const float* bg = lg.data();
-          const float* bb = lb.data();
-          const float* bw = w.data();
+  return FillCubemap(size, radiance.faces[0].colour_space, [&](const glm::dvec3& normal, float* p) {
+    const float nx = static_cast<float>(normal.x);
+    const float ny = static_cast<float>(normal.y);
+    const float nz = static_cast<float>(normal.z);
+    // The texel-centre quadrature of the kernel, sum of max(n.w, 0) dOmega, misses its exact
+    // integral pi by O(texel^2) (the kink at n.w = 0 most): dividing by it and multiplying by
+    // pi makes the weights integrate exactly, so a constant sky gives pi L to rounding.
+    // Float sums of 6 x 32^2 terms: ~1e-6 relative, far below what the tests ask. Bands of
+    // source rows wholly behind the normal are skipped: n.d is linear in the (unnormalised)
+    // face-plane direction d, so its largest value over a band is at one of its corners.
+    float r = 0.0f, g = 0.0f, b = 0.0f, kernel = 0.0f;
+    for (const Band& band : bands) {
+      bool seen = false;
+      for (const glm::dvec3& corner : band.corners) seen = seen || glm::dot(normal, corner) > 0.0;
+      if (!seen) continue;
+      const float* bx = dx.data();
+      const float* by = dy.data();
+      const float* bz = dz.data();
+      const float* br = lr.data();
+      const float* bg = lg.data();
+      const float* bb = lb.data();
+      const float* bw = w.data();
 #pragma omp simd reduction(+ : r, g, b, kernel)
-          for (std::size_t k = band.begin; k < band.end; ++k) {
-            const float c = std::max(nx * bx[k] + ny * by[k] + nz * bz[k], 0.0f);
-            r += c * br[k];
-            g += c * bg[k];
-            b += c * bb[k];
-            kernel += c * bw[k];
-          }
-        }
-        const float scale = static_cast<float>(kPi) / kernel;
-        float* p = &out.faces[f].pixels[(static_cast<std::size_t>(j) * size + i) * 3];
-        p[0] = r * scale;
-        p[1] = g * scale;
-        p[2] = b * scale;
+      for (std::size_t k = band.begin; k < band.end; ++k) {
+        const float c = std::max(nx * bx[k] + ny * by[k] + nz * bz[k], 0.0f);
+        r += c * br[k];
+        g += c * bg[k];
+        b += c * bb[k];
+        kernel += c * bw[k];
       }
     }
+    const float scale = static_cast<float>(kPi) / kernel;
+    p[0] = r * scale;
+    p[1] = g * scale;
+    p[2] = b * scale;
   });
-  return out;
 }
 
 glm::dvec3 SampleCubemap(const Cubemap& cube, const glm::dvec3& direction) {
@@ -364,43 +369,32 @@ std::vector<Cubemap> PrefilterSpecular(const Cubemap& radiance, const SpecularSe
       const int lo = static_cast<int>(lod);
       const int hi = std::min(lo + 1, static_cast<int>(max_lod));
       const double frac = hi == lo ? 0.0 : lod - lo;
- samples.push_back({glm::vec3(l), lo, hi, static_cast<float>(l.z * (1.0 - frac)), static_cast<float>(l.z * frac)});
+      samples.push_back({glm::vec3(l), lo, hi, static_cast<float>(l.z * (1.0 - frac)), static_cast<float>(l.z * frac)});
       weight_sum += l.z;
     }
     const int size = std::max(1, n >> m);
-    Cubemap out(size, 3);
-    for (Image& face : out.faces) face.colour_space = radiance.faces[0].colour_space;
-    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, kCubeFaceCount * size), [&](const auto& rows) {
-      for (int row = rows.begin(); row < rows.end(); ++row) {
-        const int f = row / size;
-        const int j = row % size;
-        for (int i = 0; i < size; ++i) {
-          const glm::dvec3 normal = TexelDirection(f, size, i, j);
-          const glm::dvec3 helper = std::abs(normal.y) < 0.999 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0);
-          const glm::dvec3 tangent = glm::normalize(glm::cross(helper, normal));
-          const glm::dvec3 bitangent = glm::cross(normal, tangent);
-          const glm::vec3 tf(tangent);
-          const glm::vec3 bf(bitangent);
-          const glm::vec3 nf(normal);
-          float acc[3] = {0.0f, 0.0f, 0.0f};
-          for (const Sample& sample : samples) {
-            const glm::vec3 l = sample.l.x * tf + sample.l.y * bf + sample.l.z * nf;
-            float s = 0.0f;
-            float t = 0.0f;
-            const int face = FaceCoordinates(l.x, l.y, l.z, s, t);
-            AccumulateBilinear(pyramid[sample.lo].faces[face], s, t, sample.weight_lo, acc);
-            if (sample.weight_hi > 0.0f) AccumulateBilinear(pyramid[sample.hi].faces[face], s, t, sample.weight_hi, acc);
-          }
-          const glm::dvec3 sum(acc[0], acc[1], acc[2]);
-          const glm::dvec3 mean = sum / weight_sum;
-          float* p = &out.faces[f].pixels[(static_cast<std::size_t>(j) * size + i) * 3];
-          p[0] = static_cast<float>(mean.x);
-          p[1] = static_cast<float>(mean.y);
-          p[2] = static_cast<float>(mean.z);
-        }
+    levels.push_back(FillCubemap(size, radiance.faces[0].colour_space, [&](const glm::dvec3& normal, float* p) {
+      const glm::dvec3 helper = std::abs(normal.y) < 0.999 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0);
+      const glm::dvec3 tangent = glm::normalize(glm::cross(helper, normal));
+      const glm::dvec3 bitangent = glm::cross(normal, tangent);
+      const glm::vec3 tf(tangent);
+      const glm::vec3 bf(bitangent);
+      const glm::vec3 nf(normal);
+      float acc[3] = {0.0f, 0.0f, 0.0f};
+      for (const Sample& sample : samples) {
+        const glm::vec3 l = sample.l.x * tf + sample.l.y * bf + sample.l.z * nf;
+        float s = 0.0f;
+        float t = 0.0f;
+        const int face = FaceCoordinates(l.x, l.y, l.z, s, t);
+        AccumulateBilinear(pyramid[sample.lo].faces[face], s, t, sample.weight_lo, acc);
+        if (sample.weight_hi > 0.0f) AccumulateBilinear(pyramid[sample.hi].faces[face], s, t, sample.weight_hi, acc);
       }
-    });
-    levels.push_back(std::move(out));
+      const glm::dvec3 sum(acc[0], acc[1], acc[2]);
+      const glm::dvec3 mean = sum / weight_sum;
+      p[0] = static_cast<float>(mean.x);
+      p[1] = static_cast<float>(mean.y);
+      p[2] = static_cast<float>(mean.z);
+    }));
   }
   return levels;
 }
