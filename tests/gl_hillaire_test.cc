@@ -715,19 +715,32 @@ constexpr const char* kSampleGrid =
     "0,45,60,90\n0,45,89,0\n0,45,30,180\n1000,80,89,0\n1000,80,45,120\n8000,95,80,0\n300000,60,100,10\n"
     "0,45,120,30\n";
 
-TEST_F(GlCliTest, SampleMatchesTheCpuBackend) {
+// Runs `sample` (its flags without --backend and --out) on both backends and returns the largest
+// relative difference of the radiance column; fails the test if either run fails or the CSVs do
+// not have `rows` rows.
+class GlSampleTest : public GlCliTest {
+ protected:
+  double SampleGlVersusCpu(const std::string& sample, std::size_t rows) const {
+    const atmo::testing::RunResult cpu = Run(sample + " --out cpu.csv");
+    const atmo::testing::RunResult gl = Run(sample + " --backend gl --out gl.csv");
+    EXPECT_EQ(cpu.exit_code, 0) << cpu.err;
+    EXPECT_EQ(gl.exit_code, 0) << gl.err;
+    const std::vector<double> a = RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv"));
+    const std::vector<double> b = RadianceColumn(atmo::testing::ReadFile(dir_ / "gl.csv"));
+    EXPECT_EQ(a.size(), rows);
+    EXPECT_EQ(b.size(), rows);
+    if (a.size() != rows || b.size() != rows) return 1e300;
+    const double worst = MaxRelativeDifference(a, b, 1e-6);
+    std::printf("atmo %s: gl vs cpu max rel %.3g\n", sample.c_str(), worst);
+    return worst;
+  }
+};
+
+TEST_F(GlSampleTest, SampleMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
   atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
   for (const char* model : {"--model hillaire", "--model elek --preset atmosphere-plus --option size=16x64x16"}) {
-    const atmo::testing::RunResult cpu = Run(std::string("sample ") + model + " --grid grid.csv --out cpu.csv");
-    const atmo::testing::RunResult gl = Run(std::string("sample --backend gl ") + model + " --grid grid.csv --out gl.csv");
-    ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
-    ASSERT_EQ(gl.exit_code, 0) << gl.err;
-    const std::vector<double> a = RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv"));
-    const std::vector<double> b = RadianceColumn(atmo::testing::ReadFile(dir_ / "gl.csv"));
-    ASSERT_EQ(a.size(), 8u * 3u);
-    const double worst = MaxRelativeDifference(a, b, 1e-6);
-    std::printf("atmo sample %s: gl vs cpu max rel %.3g\n", model, worst);
+    const double worst = SampleGlVersusCpu(std::string("sample ") + model + " --grid grid.csv", 8u * 3u);
     // Tolerance: the tables' float-vs-double differences (GlHillaire.SampleMatchesCpu, the elek
     // table tests in gl_elek_test.cc), including twilight (sun 95 degrees) where the values are
     // 1e-4 of the day's. Measured on llvmpipe: 7.1e-4 (hillaire), 1.5e-5 (elek).
@@ -827,20 +840,11 @@ TEST_F(GlCliTest, SpectralRenderMatchesTheCpuBackend) {
 }
 
 // `atmo sample --spectral 5` on GL: all five rows of every point, as the CPU's.
-TEST_F(GlCliTest, SpectralSampleMatchesTheCpuBackend) {
+TEST_F(GlSampleTest, SpectralSampleMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
   atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
   for (const char* model : {"--model hillaire", "--model elek --option size=16x64x16"}) {
-    const std::string sample = std::string("sample --spectral 5 ") + model + " --grid grid.csv ";
-    const atmo::testing::RunResult cpu = Run(sample + "--out cpu.csv");
-    const atmo::testing::RunResult gl = Run(sample + "--backend gl --out gl.csv");
-    ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
-    ASSERT_EQ(gl.exit_code, 0) << gl.err;
-    const std::vector<double> a = RadianceColumn(atmo::testing::ReadFile(dir_ / "cpu.csv"));
-    const std::vector<double> b = RadianceColumn(atmo::testing::ReadFile(dir_ / "gl.csv"));
-    ASSERT_EQ(a.size(), 8u * 5u);
-    const double worst = MaxRelativeDifference(a, b, 1e-6);
-    std::printf("atmo sample --spectral 5 %s: gl vs cpu max rel %.3g\n", model, worst);
+    const double worst = SampleGlVersusCpu(std::string("sample --spectral 5 ") + model + " --grid grid.csv", 8u * 5u);
     // Tolerance: SampleMatchesTheCpuBackend's (2e-3). Measured on llvmpipe: 6.8e-4 (hillaire),
     // 4.0e-5 (elek).
     EXPECT_LT(worst, SamplerSlack(*GetSharedContext().context) * 2e-3) << model;

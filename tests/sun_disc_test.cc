@@ -18,6 +18,7 @@
 #include "cpu/camera.h"
 #include "cpu/sun_disc.h"
 #include "shared/shared.h"
+#include "sun_disc_integral.h"
 
 namespace atmo {
 namespace {
@@ -176,26 +177,7 @@ double ImageEnergy(const Image& image, const Camera& camera, int channel) {
   return sum;
 }
 
-// The transmitted direct irradiance int L T dOmega over the disc, by the midpoint rule on a polar
-// grid uniform in solid angle (t = cos(theta) and the azimuth about the sun).
-std::vector<double> DiscIrradiance(const SkyView& sky, int rings = 300, int sectors = 300) {
-  const glm::dvec3 s = sky.sun_direction();
-  const glm::dvec3 e1 = glm::normalize(glm::cross(s, glm::dvec3(0.3, 0.4, 0.866)));
-  const glm::dvec3 e2 = glm::cross(s, e1);
-  const double alpha = sky.sun_angular_radius_rad();
-  const double cos_alpha = std::cos(alpha);
-  const double cell = 2.0 * kPi * (1.0 - cos_alpha) / (rings * sectors);
-  std::vector<double> sum(3, 0.0), l(3);
-  for (int i = 0; i < rings; ++i) {
-    const double t = cos_alpha + (1.0 - cos_alpha) * (i + 0.5) / rings;
-    for (int j = 0; j < sectors; ++j) {
-      const double phi = 2.0 * kPi * (j + 0.5) / sectors;
-      sky.SunDiscRadiance(t * s + std::sqrt(1.0 - t * t) * (std::cos(phi) * e1 + std::sin(phi) * e2), l);
-      for (int c = 0; c < 3; ++c) sum[c] += l[c] * cell;
-    }
-  }
-  return sum;
-}
+using atmo::testing::DiscIrradiance;
 
 class SunDiscImage : public ::testing::Test {
  protected:
