@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
@@ -197,6 +199,74 @@ TEST_F(CompareTest, StandardGridHasEveryConfiguration) {
   for (const char* label : {"sun up (<90)", "twilight (90-100)", "altitude 100000 m"}) {
     EXPECT_NE(r.out.find(label), std::string::npos) << label;
   }
+}
+
+// The twilight grid: the standard altitudes, views and azimuths, the sun from 90 to 108 degrees
+// every 2; the rows past 100 degrees go to the night band.
+TEST_F(CompareTest, TwilightGridMovesTheSunTo108Degrees) {
+  const RunResult r = Run("compare --model hillaire --against hillaire --grid twilight --csv out.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("6750 configurations x 3 channels = 20250 rows"), std::string::npos) << r.out;
+  std::map<double, std::size_t> per_sun;
+  for (const CompareRow& row : ReadCompareCsv(dir_ / "out.csv")) ++per_sun[row.sun_zenith_deg];
+  ASSERT_EQ(per_sun.size(), 10u);
+  double expected = 90.0;
+  for (const auto& [sun, count] : per_sun) {
+    EXPECT_DOUBLE_EQ(sun, expected);
+    EXPECT_EQ(count, 5u * 27u * 5u * kChannels);
+    expected += 2.0;
+  }
+  EXPECT_NE(r.out.find("night (>100)"), std::string::npos) << r.out;
+}
+
+// The space grid: for every observer (100-1000 km), views set by tangent altitude across the limb
+// (r sin(theta) - r_ground in the list, below the atmosphere's top), then into the ground past the
+// planet's horizon, and the nadir. Views across the limb see sky (R > 0 with the sun up); every
+// ground view is darker than the limb's brightest.
+TEST_F(CompareTest, SpaceGridSamplesTheLimbByTangentAltitude) {
+  const RunResult r = Run("compare --model hillaire --against hillaire --grid space --csv out.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2975 configurations"), std::string::npos) << r.out;
+  constexpr double kGround = 6360e3;  // earth
+  constexpr double kTop = 6460e3;
+  const std::set<double> tangents = {80e3, 60e3, 40e3, 30e3, 20e3, 15e3, 10e3, 5e3, 2e3, 1e3, 500.0};
+  std::map<double, std::set<double>> views;
+  std::size_t limb_rows = 0;
+  for (const CompareRow& row : ReadCompareCsv(dir_ / "out.csv")) {
+    EXPECT_GE(row.altitude_m, 100e3);
+    EXPECT_LE(row.altitude_m, 1000e3);
+    views[row.altitude_m].insert(row.view_zenith_deg);
+    const double r_observer = kGround + row.altitude_m;
+    const double sine = std::sin(row.view_zenith_deg * std::numbers::pi / 180.0);
+    const double tangent = r_observer * sine - kGround;
+    if (tangent > 0.0) {  // across the limb: the tangent altitude is one of the list, inside the air
+      EXPECT_LT(kGround + tangent, kTop);
+      const auto nearest = tangents.lower_bound(tangent - 1.0);
+      ASSERT_NE(nearest, tangents.end()) << tangent;
+      EXPECT_NEAR(*nearest, tangent, 0.05) << row.view_zenith_deg;  // the CSV prints 10 digits
+      if (row.sun_zenith_deg < 60.0) {
+        EXPECT_GT(row.reference, 0.0) << row.altitude_m << " " << row.view_zenith_deg;
+        ++limb_rows;
+      }
+    }
+  }
+  EXPECT_GT(limb_rows, 0u);
+  ASSERT_EQ(views.size(), 5u);
+  for (const auto& [altitude, set] : views) EXPECT_EQ(set.size(), 17u) << altitude;  // 11 + 5 + nadir
+}
+
+TEST_F(CompareTest, MarkdownTableHasTheSummaryRows) {
+  const RunResult r = Run("compare --model hillaire --against hillaire --grid grid.csv --markdown table.md");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = Lines(ReadFile(dir_ / "table.md"));
+  ASSERT_GE(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "| group | rows | excluded | median abs(e) | p95 abs(e) | max abs(e) | rel_mae | mean e |");
+  EXPECT_EQ(lines[1], "|---|---:|---:|---:|---:|---:|---:|---:|");
+  EXPECT_EQ(lines[2].rfind("| overall | ", 0), 0u) << lines[2];
+  // A model against itself: every error 0.
+  EXPECT_NE(lines[2].find("| 0% | 0% | 0% | 0% | 0% |"), std::string::npos) << lines[2];
+  EXPECT_NE(ReadFile(dir_ / "table.md").find("Largest |e|"), std::string::npos);
+  ExpectOneErrorLine(Run("compare --model hillaire --against hillaire --grid grid.csv --markdown t.txt"), ".md");
 }
 
 TEST_F(CompareTest, ImageWritesAPng) {

@@ -160,13 +160,14 @@ int RunSample(const CommonOptions& common, const SampleCommand& command);
 struct CompareCommand {
   std::string against = "reference";
   std::vector<std::string> against_options;  // KEY=VALUE for the reference model
-  std::string grid = "standard";             // "standard" or an IN.csv path (as `atmo sample`)
+  std::string grid = "standard";  // "standard", "twilight", "space" or an IN.csv path (as `atmo sample`)
   // Rows with R <= floor x the largest R of their sky (altitude, sun zenith, channel) are left
   // out of the relative statistics.
   double floor = 1e-4;
   std::string csv_path;    // empty: none
-  std::string json_path;   // empty: none
-  std::string image_path;  // empty: none
+  std::string json_path;      // empty: none
+  std::string markdown_path;  // empty: none
+  std::string image_path;     // empty: none
   double image_altitude_m = 0.0;
   double image_sun_zenith_deg = 60.0;
   double image_range_percent = 10.0;  // colour scale: -range .. +range

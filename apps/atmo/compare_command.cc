@@ -59,17 +59,78 @@ const std::vector<double> kStandardViewZenithsDeg = {0.0,  10.0, 20.0, 30.0, 40.
                                                      100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0, 180.0};
 const std::vector<double> kStandardAzimuthsDeg = {0.0, 45.0, 90.0, 135.0, 180.0};
 
-std::vector<SamplePoint> StandardGrid() {
+std::vector<SamplePoint> ProductGrid(const std::vector<double>& altitudes_m, const std::vector<double>& sun_zeniths_deg,
+                                     const std::vector<double>& view_zeniths_deg, const std::vector<double>& azimuths_deg) {
   std::vector<SamplePoint> points;
-  for (double altitude : kStandardAltitudesM) {
-    for (double sun : kStandardSunZenithsDeg) {
-      for (double view : kStandardViewZenithsDeg) {
+  for (double altitude : altitudes_m) {
+    for (double sun : sun_zeniths_deg) {
+      for (double view : view_zeniths_deg) {
+        for (double azimuth : azimuths_deg) points.push_back({altitude, sun, view, azimuth, ""});
+      }
+    }
+  }
+  return points;
+}
+
+// The twilight grid: the standard grid's altitudes, views and azimuths with the sun from the
+// horizontal to the end of nautical twilight (108°) every 2°: 5 x 10 x 27 x 5 = 6750
+// configurations. Where the sun is below the horizon the sky is lit by light that scattered high
+// in the still-sunlit air; multiple scattering carries all of it in the Earth's shadow.
+const std::vector<double> kTwilightSunZenithsDeg = {90.0, 92.0, 94.0, 96.0, 98.0, 100.0, 102.0, 104.0, 106.0, 108.0};
+
+// The space grid: observers from 100 to 1000 km, which see the atmosphere as a bright limb
+// around the planet. A fixed list of view zeniths would miss the limb, which moves with
+// altitude, so the views are set per altitude by the ray's tangent altitude h_t (the closest
+// approach to the planet's centre, r sin(theta) = r_ground + h_t for theta > 90°): 11 tangent
+// altitudes from 80 km to 0.5 km across the limb, then 5 views that meet the ground at angles
+// past the planet's horizon (0.25° to 30°) and the nadir. Views above the limb see only space
+// (R = 0, below the floor) and are left out. Tangent altitudes above the atmosphere's top are
+// dropped. 5 altitudes x 7 sun zeniths x 17 views x 5 azimuths = 2975 configurations on `earth`.
+const std::vector<double> kSpaceAltitudesM = {100e3, 200e3, 400e3, 700e3, 1000e3};
+const std::vector<double> kSpaceSunZenithsDeg = {0.0, 30.0, 60.0, 80.0, 90.0, 100.0, 110.0};
+const std::vector<double> kSpaceTangentAltitudesM = {80e3, 60e3, 40e3, 30e3, 20e3, 15e3, 10e3, 5e3, 2e3, 1e3, 500.0};
+const std::vector<double> kSpaceBelowHorizonDeg = {0.25, 1.0, 3.0, 10.0, 30.0};
+
+std::vector<SamplePoint> SpaceGrid(const AtmosphereParameters& parameters) {
+  if (parameters.geometry != Geometry::kSpherical) {
+    throw Error("--grid space needs a spherical planet (this atmosphere is a flat half-space)");
+  }
+  const double ground = parameters.ground_radius_m;
+  const double top = parameters.top_radius_m;
+  constexpr double kDegrees = 180.0 / std::numbers::pi;
+  std::vector<SamplePoint> points;
+  for (double altitude : kSpaceAltitudesM) {
+    const double r = ground + altitude;
+    std::vector<double> views;
+    for (double tangent : kSpaceTangentAltitudesM) {
+      if (ground + tangent >= std::min(r, top)) continue;
+      views.push_back(180.0 - std::asin((ground + tangent) / r) * kDegrees);
+    }
+    const double horizon = 180.0 - std::asin(ground / r) * kDegrees;
+    for (double below : kSpaceBelowHorizonDeg) views.push_back(std::min(180.0, horizon + below));
+    views.push_back(180.0);
+    for (double sun : kSpaceSunZenithsDeg) {
+      for (double view : views) {
         for (double azimuth : kStandardAzimuthsDeg) points.push_back({altitude, sun, view, azimuth, ""});
       }
     }
   }
   return points;
 }
+
+// `--grid NAME|IN.csv`: a named grid, or a file (write ./standard for a file of that name).
+std::vector<SamplePoint> GridFor(const std::string& grid, const AtmosphereParameters& parameters) {
+  if (grid == "standard") {
+    return ProductGrid(kStandardAltitudesM, kStandardSunZenithsDeg, kStandardViewZenithsDeg, kStandardAzimuthsDeg);
+  }
+  if (grid == "twilight") {
+    return ProductGrid(kStandardAltitudesM, kTwilightSunZenithsDeg, kStandardViewZenithsDeg, kStandardAzimuthsDeg);
+  }
+  if (grid == "space") return SpaceGrid(parameters);
+  return ReadGrid(grid);
+}
+
+bool IsNamedGrid(const std::string& grid) { return grid == "standard" || grid == "twilight" || grid == "space"; }
 
 // ---------------------------------------------------------------------------------------------
 // Sun-zenith bands of the summary. A configuration belongs to exactly one.
@@ -320,6 +381,29 @@ std::string Table(const Summaries& s, bool with_z) {
                    Percent(g.errors.max_abs).c_str(), Percent(g.errors.rel_mae).c_str(),
                    Percent(g.errors.mean).c_str());
     if (with_z) text += Format(" %10s %10s", Number(g.z.median_abs).c_str(), Number(g.z.p95_abs).c_str());
+    text += "\n";
+  };
+  line(s.overall);
+  for (const GroupSummary& g : s.channels) line(g);
+  for (const GroupSummary& g : s.bands) line(g);
+  for (const GroupSummary& g : s.altitudes) line(g);
+  return text;
+}
+
+// The same table in Markdown, as docs/accuracy.md shows it ("abs(e)" for "|e|", which would end a
+// cell), with the largest |e| row after it.
+std::string MarkdownTable(const Summaries& s, bool with_z) {
+  std::string text = "| group | rows | excluded | median abs(e) | p95 abs(e) | max abs(e) | rel_mae | mean e |";
+  if (with_z) text += " median abs(z) | p95 abs(z) |";
+  text += "\n|---|---:|---:|---:|---:|---:|---:|---:|";
+  if (with_z) text += "---:|---:|";
+  text += "\n";
+  const auto line = [&](const GroupSummary& g) {
+    text += Format("| %s | %zu | %zu | %s | %s | %s | %s | %s |", g.label.c_str(), g.errors.count, g.excluded,
+                   Percent(g.errors.median_abs).c_str(), Percent(g.errors.p95_abs).c_str(),
+                   Percent(g.errors.max_abs).c_str(), Percent(g.errors.rel_mae).c_str(),
+                   Percent(g.errors.mean).c_str());
+    if (with_z) text += Format(" %s | %s |", Number(g.z.median_abs).c_str(), Number(g.z.p95_abs).c_str());
     text += "\n";
   };
   line(s.overall);
@@ -604,18 +688,22 @@ Image ErrorImage(const Model& model, const Model& reference, const CompareComman
 
 int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   CheckBackend(common);
-  CheckOutputsApart(common, {{"--grid", command.grid == "standard" ? std::string() : command.grid}},
-                    {{"--csv", command.csv_path}, {"--json", command.json_path}, {"--image", command.image_path}});
+  CheckOutputsApart(common, {{"--grid", IsNamedGrid(command.grid) ? std::string() : command.grid}},
+                    {{"--csv", command.csv_path},
+                     {"--json", command.json_path},
+                     {"--markdown", command.markdown_path},
+                     {"--image", command.image_path}});
   if (!(command.floor >= 0.0 && command.floor <= 1.0)) {
     throw Error(Format("--floor %g is outside [0, 1]", command.floor));
   }
   const AtmosphereParameters parameters = LoadParameters(common);
-  const std::vector<SamplePoint> points = command.grid == "standard" ? StandardGrid() : ReadGrid(command.grid);
-  for (const std::string& path : {command.csv_path, command.json_path, command.image_path}) {
+  const std::vector<SamplePoint> points = GridFor(command.grid, parameters);
+  for (const std::string& path : {command.csv_path, command.json_path, command.markdown_path, command.image_path}) {
     if (!path.empty()) CheckOutputWritable(path);
   }
   CheckExtension("--csv", command.csv_path, ".csv");
   CheckExtension("--json", command.json_path, ".json");
+  CheckExtension("--markdown", command.markdown_path, ".md");
   CheckExtension("--image", command.image_path, ".png");
 
   const ModelOptions options = EffectiveOptions(common.options, common);
@@ -624,7 +712,7 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   const std::string reference_text = Describe(command.against, reference_options);
   const std::string preset = common.config.empty() ? common.preset : common.config;
   const std::string hash = ParameterHashHex(parameters);
-  const std::string grid = command.grid == "standard" ? "standard" : command.grid;
+  const std::string& grid = command.grid;
   const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
   // The header comes before the work (a Monte Carlo reference takes minutes), the table after it.
   std::string header = Format("atmo compare: %s against %s; parameters %s (hash %s); grid %s\n", model_text.c_str(),
@@ -666,17 +754,24 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   report += '\n';
   report += Table(summaries, with_z);
   const std::size_t worst = WorstRow(rows);
+  std::string largest;
   if (worst < rows.size()) {
     const std::size_t channels = wavelengths_nm.size();
     const SamplePoint& p = points[worst / channels];
     const Row& row = rows[worst];
-    report += Format("\nlargest |e|: %s at altitude %.10g m, sun zenith %.10g, view zenith %.10g, azimuth %.10g, "
+    largest = Format("largest |e|: %s at altitude %.10g m, sun zenith %.10g, view zenith %.10g, azimuth %.10g, "
                      "%.10g nm (M = %.4e, R = %.4e)\n",
                      Percent(row.relative_error).c_str(), p.altitude_m, p.sun_zenith_deg, p.view_zenith_deg,
                      p.azimuth_deg, wavelengths_nm[worst % channels], row.radiance, row.reference);
+    report += "\n" + largest;
   }
 
   if (!command.csv_path.empty()) WriteText(command.csv_path, Csv(points, rows, wavelengths_nm));
+  if (!command.markdown_path.empty()) {
+    std::string markdown = MarkdownTable(summaries, with_z);
+    if (!largest.empty()) markdown += "\nL" + largest.substr(1);
+    WriteText(command.markdown_path, markdown);
+  }
   if (!command.json_path.empty()) {
     nlohmann::ordered_json j;
     j["atmo_version"] = ATMO_VERSION;

@@ -3,7 +3,7 @@
 //   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [-o NAME | --exr F --png F]
 //   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv|- | --altitude --sun-zenith|--sun-elevation
 //                --view-zenith --azimuth) [--out OUT.csv]
-//   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|IN.csv] [--csv F]
+//   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|twilight|space|IN.csv] [--csv F]
 //                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
 //   atmo presets [--dump NAME]
 //   atmo bench   [--repeat N | --quick] [--width W --height H]
@@ -398,13 +398,16 @@ int main(int argc, char** argv) {
   compare_app->add_option("--against-option", compare.against_options, "reference model setting KEY=VALUE (repeatable)")
       ->expected(1)
       ->take_all();
-  compare_app->add_option("--grid", compare.grid, "'standard' or a CSV like `atmo sample --grid`")
+  compare_app->add_option("--grid", compare.grid,
+                          "'standard', 'twilight' (sun 90-108), 'space' (observers 100-1000 km) or a CSV like "
+                          "`atmo sample --grid`")
       ->capture_default_str();
   AddNumber(compare_app, "--floor", compare.floor,
             "leave out rows whose reference is at most FLOOR x the largest of their sky")
       ->check(RangeOf(0.0, 1.0));
   compare_app->add_option("--csv", compare.csv_path, "per-row CSV output (one row per configuration and channel)");
   compare_app->add_option("--json", compare.json_path, "summary JSON output");
+  compare_app->add_option("--markdown", compare.markdown_path, "the summary table as Markdown (docs/accuracy.md)");
   compare_app->add_option("--image", compare.image_path, "false-colour relative-error fisheye PNG");
   AddNumber(compare_app, "--altitude", compare.image_altitude_m, "observer altitude of the --image in metres")
       ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
