@@ -2,10 +2,12 @@
 // scattering against an independent quadrature, orders, export/load, options, robustness, and the
 // measurements that docs/models/elek.md quotes (ElekMeasurements.*, which print their figures).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -99,6 +101,12 @@ TEST(ElekTables, EqualThePerTexelKernels) {
                                                      model->settings().gather_azimuths);
     cpu::ElekScattering gather;
     cpu::ComputeElekGatherTable(matrix, model->settings().gather_rows, batch.orders[0], false, gather);
+    // earth's albedo 0.3: the ground's reflection of the sun joins the gather (option ground=auto).
+    ASSERT_TRUE(model->settings().UsesGround(model->parameters()));
+    const shared::Texture2D irradiance = cpu::ComputeElekGroundIrradiance(batch.atmosphere, batch.transmittance,
+                                                                          nullptr, grid, model->settings().gather_azimuths);
+    cpu::AddElekGatheredGround(
+        matrix, cpu::ComputeElekGroundRadianceTable(batch.atmosphere, batch.transmittance, irradiance, grid), gather);
     double worst = 0.0;
     for (int z = 0; z < grid.size.z; ++z) {
       for (int y = 0; y < grid.size.y; ++y) {
@@ -137,6 +145,91 @@ TEST(ElekTables, EqualThePerTexelKernels) {
       }
     }
   }
+}
+
+// --- The ground (option ground) --------------------------------------------------------------------
+
+// The sky's irradiance on the ground that feeds the next order (ComputeElekGroundSkyIrradiance,
+// from the table at h = 0) against the hemisphere integral of the model's own rendered sky of that
+// order, integral of L cos(theta) d(omega) by a midpoint rule (1 degree in zenith, 2 in azimuth),
+// at the sun cosines of the table's slices. With mie=rgb the rendered sky is the table's exactly.
+TEST(ElekGround, SkyIrradianceIsTheHemisphereIntegralOfTheModelsOwnSky) {
+  const AtmosphereParameters p = Preset("earth");
+  const auto model = MakeElek(p, {{"orders", "1"}, {"mie", "rgb"}, {"size", "32x128x32"}});
+  const ElekModel::Batch& batch = model->batches()[0];
+  const cpu::ElekGrid grid = model->grid();
+  const shared::Texture2D table = cpu::ComputeElekGroundIrradiance(batch.atmosphere, batch.transmittance,
+                                                                     &batch.orders[0], grid, 64);
+  int checked = 0;
+  for (int z = 0; z < grid.size.z; ++z) {
+    double h, mu, mu_s;
+    shared::GetElekHMuMuSFromUvw(batch.atmosphere, grid.mapping,
+                                 shared::GetElekUvwFromTexel(grid.size, glm::ivec3(0, 0, z)), h, mu, mu_s);
+    if (mu_s < 0.1) continue;  // sun zenith <= 84 degrees: a sky bright enough to compare
+    const auto sky = model->View(0.0, glm::dvec3(std::sqrt(1.0 - mu_s * mu_s), 0.0, mu_s));
+    constexpr int kZenith = 90;
+    constexpr int kAzimuth = 180;
+    glm::dvec3 e(0.0);
+    std::array<double, 3> l{};
+    for (int i = 0; i < kZenith; ++i) {
+      const double theta = (i + 0.5) * (std::numbers::pi / 2.0) / kZenith;
+      const double d_omega = std::sin(theta) * (std::numbers::pi / 2.0 / kZenith) * (2.0 * std::numbers::pi / kAzimuth);
+      for (int j = 0; j < kAzimuth; ++j) {
+        const double phi = (j + 0.5) * 2.0 * std::numbers::pi / kAzimuth;
+        sky->Radiance(glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)), l);
+        e += glm::dvec3(l[0], l[1], l[2]) * (std::cos(theta) * d_omega);
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(table.at(z, 0)[c] / e[c], 1.0, 0.01) << "sun cosine " << mu_s << ", channel " << c;
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 8);
+}
+
+// The ground's light enters at order 2 in proportion to the albedo (the reflection of the direct
+// sun is linear in it), only adds light, and leaves order 1 alone. ground=off, whatever the albedo,
+// gives the seed's tables bit for bit (those of albedo 0).
+TEST(ElekGround, FeedsOrderTwoInProportionToTheAlbedo) {
+  const auto tables = [](double albedo, const char* ground) {
+    AtmosphereParameters p = Preset("earth");
+    p.ground_albedo.assign(3, albedo);
+    return MakeElek(p, {{"size", "8x64x16"}, {"orders", "2"}, {"ground", ground}});
+  };
+  const auto seed = tables(0.0, "auto");
+  const auto off = tables(0.3, "off");
+  const auto low = tables(0.3, "auto");
+  const auto high = tables(0.6, "on");
+  EXPECT_FALSE(seed->settings().UsesGround(seed->parameters()));
+  EXPECT_FALSE(off->settings().UsesGround(off->parameters()));
+  const auto& o = seed->batches()[0].orders;
+  EXPECT_EQ(off->batches()[0].orders[1].rayleigh.texels, o[1].rayleigh.texels);
+  EXPECT_EQ(off->batches()[0].orders[1].mie.texels, o[1].mie.texels);
+  EXPECT_EQ(low->batches()[0].orders[0].rayleigh.texels, o[0].rayleigh.texels);
+  double largest_gain = 0.0;  // over texels of at least 1 % of the table's largest value
+  double worst_linearity = 0.0;
+  double brightest = 0.0;
+  for (const auto& t : o[1].rayleigh.texels) brightest = std::max({brightest, double(t.x), double(t.y), double(t.z)});
+  const auto& lo = low->batches()[0].orders[1];
+  const auto& hi = high->batches()[0].orders[1];
+  for (std::size_t i = 0; i < o[1].rayleigh.texels.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      for (shared::Texture3D cpu::ElekScattering::*part : {&cpu::ElekScattering::rayleigh, &cpu::ElekScattering::mie}) {
+        const double base = (o[1].*part).texels[i][c];
+        const double d_low = (lo.*part).texels[i][c] - base;
+        const double d_high = (hi.*part).texels[i][c] - base;
+        EXPECT_GE(d_low, -1e-6 * base);
+        if (base <= 0.0) continue;
+        if (base > 0.01 * brightest) largest_gain = std::max(largest_gain, d_low / base);
+        if (d_low > 1e-3 * base) worst_linearity = std::max(worst_linearity, std::abs(d_high / (2.0 * d_low) - 1.0));
+      }
+    }
+  }
+  EXPECT_GT(largest_gain, 0.05);        // the ground matters: over 5 % of order 2 somewhere
+  EXPECT_LT(worst_linearity, 1e-4);     // float tables
+  std::printf("albedo 0.3 adds up to %.1f %% to order 2 (texels above 1 %% of its largest); linear in the albedo to %.1e\n", 100.0 * largest_gain,
+              worst_linearity);
 }
 
 // --- Single scattering against an independent quadrature -------------------------------------------

@@ -294,4 +294,62 @@ void ComputeElekPhaseGatherTables(const shared::AtmosphereParameters& atmosphere
   });
 }
 
+shared::Texture2D ComputeElekGroundIrradiance(const shared::AtmosphereParameters& atmosphere,
+                                              const shared::Texture2D& transmittance, const ElekScattering* order,
+                                              const ElekGrid& grid, int azimuth_count) {
+  const int depth = grid.size.z;
+  shared::Texture2D table(depth, 1);
+  ParallelFor(depth, [&](int z) {
+    const double mu_s = SunCosineOfSlice(atmosphere, grid, z);
+    const vec3 e = order == nullptr
+                       ? shared::ComputeElekGroundDirectIrradiance(atmosphere, transmittance, mu_s)
+                       : shared::ComputeElekGroundSkyIrradiance(atmosphere, order->rayleigh, order->mie, grid.mapping,
+                                                                mu_s, shared::kElekGroundIntervals, azimuth_count);
+    table.at(z, 0) = glm::vec3(e);
+  });
+  return table;
+}
+
+shared::Texture3D ComputeElekGroundRadianceTable(const shared::AtmosphereParameters& atmosphere,
+                                                 const shared::Texture2D& transmittance,
+                                                 const shared::Texture2D& ground_irradiance, const ElekGrid& grid) {
+  const glm::ivec3 size = grid.size;
+  shared::Texture3D table(size.x, size.y, size.z);
+  ParallelFor(size.y, [&](int y) {
+    for (int z = 0; z < size.z; ++z) {
+      for (int x = 0; x < size.x; ++x) {
+        const vec3 l = shared::ComputeElekGroundRadianceTexel(atmosphere, transmittance, ground_irradiance, grid.mapping,
+                                                              ivec3(size.x, size.y, size.z), ivec3(x, y, z));
+        Store(table, x, y, z, l);
+      }
+    }
+  });
+  return table;
+}
+
+void AddElekGatheredGround(const std::vector<glm::dvec2>& matrix, const shared::Texture3D& ground,
+                           ElekScattering& gather) {
+  const int w = ground.width;
+  const int rows = ground.height;
+  const int d = ground.depth;
+  const int gather_rows = gather.rayleigh.height;
+  ParallelFor(d * gather_rows, [&](int index) {
+    const int z = index / gather_rows;
+    const int y = index % gather_rows;
+    std::vector<glm::dvec3> r_sum(w, glm::dvec3(0.0)), m_sum(w, glm::dvec3(0.0));
+    for (int j = 0; j < rows; ++j) {
+      const glm::dvec2 m = matrix[static_cast<std::size_t>(y) * rows + j];
+      for (int x = 0; x < w; ++x) {
+        const glm::dvec3 l = ground.at(x, j, z);
+        r_sum[x] += m.x * l;
+        m_sum[x] += m.y * l;
+      }
+    }
+    for (int x = 0; x < w; ++x) {
+      Store(gather.rayleigh, x, y, z, glm::dvec3(gather.rayleigh.at(x, y, z)) + r_sum[x]);
+      Store(gather.mie, x, y, z, glm::dvec3(gather.mie.at(x, y, z)) + m_sum[x]);
+    }
+  });
+}
+
 }  // namespace atmo::cpu

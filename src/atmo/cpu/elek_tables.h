@@ -59,4 +59,21 @@ void ComputeElekPhaseGatherTables(const shared::AtmosphereParameters& atmosphere
                                   const ElekScattering& single, bool coupled, int point_count, int azimuth_count,
                                   ElekScattering& out_0, ElekScattering& out_pi);
 
+// The ground (option ground, elek.glsl "The ground"): the ground's irradiance per unit solar
+// irradiance at the sun cosines of the grid's D slices, a D x 1 table: from the sun when `order`
+// is null (E^(0)), from that order's table otherwise (E^(j)).
+shared::Texture2D ComputeElekGroundIrradiance(const shared::AtmosphereParameters& atmosphere,
+                                              const shared::Texture2D& transmittance, const ElekScattering* order,
+                                              const ElekGrid& grid, int azimuth_count);
+
+// L_g (ComputeElekGroundRadianceTexel) of every texel of the grid, from a ground irradiance table.
+shared::Texture3D ComputeElekGroundRadianceTable(const shared::AtmosphereParameters& atmosphere,
+                                                 const shared::Texture2D& transmittance,
+                                                 const shared::Texture2D& ground_irradiance, const ElekGrid& grid);
+
+// gather_c[x, y, z] += sum_j M_c[y][j] L_g[x, j, z]: the ground's light, gathered with the same
+// (normalised) matrix as the air's, feeds both components (it has not scattered in the air yet).
+void AddElekGatheredGround(const std::vector<glm::dvec2>& matrix, const shared::Texture3D& ground,
+                           ElekScattering& gather);
+
 }  // namespace atmo::cpu

@@ -206,6 +206,79 @@ void main() {
 }
 )glsl";
 
+// The ground (option ground; cpu::ComputeElekGroundIrradiance): E at the sun cosine of slice x of
+// a table `table_depth` deep, from the sun (`direct`) or from one order's table.
+constexpr const char* kGroundIrradianceMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D ground_irradiance;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform sampler3D rayleigh_table;
+uniform sampler3D mie_table;
+uniform bool direct;
+uniform int mapping;
+uniform int azimuth_count;
+
+void main() {
+  ivec2 size = imageSize(ground_irradiance);  // (D, 1)
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(texel, size))) return;
+  float h;
+  float mu;
+  float mu_s;
+  GetElekHMuMuSFromUvw(atmosphere, mapping, GetElekUvwFromTexel(ivec3(2, 2, size.x), ivec3(0, 0, texel.x)), h, mu,
+      mu_s);
+  vec3 e = direct ? ComputeElekGroundDirectIrradiance(atmosphere, transmittance_texture, mu_s)
+                  : ComputeElekGroundSkyIrradiance(atmosphere, rayleigh_table, mie_table, mapping, mu_s,
+                        kElekGroundIntervals, azimuth_count);
+  imageStore(ground_irradiance, texel, vec4(e, 1.0));
+}
+)glsl";
+
+// L_g per texel (cpu::ComputeElekGroundRadianceTable).
+constexpr const char* kGroundRadianceMain = R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image3D ground_radiance;
+uniform sampler2D transmittance_texture;
+uniform sampler2D ground_irradiance;
+uniform int mapping;
+
+void main() {
+  ivec3 size = imageSize(ground_radiance);
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  imageStore(ground_radiance, texel, ElekStoredTexel(ComputeElekGroundRadianceTexel(atmosphere,
+      transmittance_texture, ground_irradiance, mapping, size, texel)));
+}
+)glsl";
+
+// gather_c += sum_j M_c[y][j] L_g[x, j, z] / sum_j M_c[y][j] (cpu::AddElekGatheredGround).
+constexpr const char* kGroundGatherMain = R"glsl(
+layout(rgba32f, binding = 0) uniform image3D gather_rayleigh;
+layout(rgba32f, binding = 1) uniform image3D gather_mie;
+layout(rgba32f, binding = 2) uniform readonly image2D gather_matrix;
+layout(rgba32f, binding = 3) uniform readonly image3D ground_radiance;
+
+void main() {
+  ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
+  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(texel, size))) return;
+  int rows = imageSize(ground_radiance).y;
+  vec2 row_sum = vec2(0.0);
+  vec3 rayleigh_sum = vec3(0.0);
+  vec3 mie_sum = vec3(0.0);
+  for (int j = 0; j < rows; ++j) {
+    vec2 m = imageLoad(gather_matrix, ivec2(j, texel.y)).xy;
+    vec3 l = imageLoad(ground_radiance, ivec3(texel.x, j, texel.z)).rgb;
+    rayleigh_sum += m.x * l;
+    mie_sum += m.y * l;
+    row_sum += m;
+  }
+  imageStore(gather_rayleigh, texel,
+      ElekStoredTexel(imageLoad(gather_rayleigh, texel).rgb + rayleigh_sum / row_sum.x));
+  imageStore(gather_mie, texel, ElekStoredTexel(imageLoad(gather_mie, texel).rgb + mie_sum / row_sum.y));
+}
+)glsl";
+
 // total = order (first_order) or total + order, in the CPU's order of float additions.
 constexpr const char* kSumMain = R"glsl(
 layout(rgba32f, binding = 0) uniform image3D total_rayleigh;
@@ -278,11 +351,14 @@ struct ElekPrograms {
   const ComputeProgram* phase_weights = nullptr;
   const ComputeProgram* phase_gather = nullptr;
   const ComputeProgram* sum = nullptr;
+  const ComputeProgram* ground_irradiance = nullptr;
+  const ComputeProgram* ground_radiance = nullptr;
+  const ComputeProgram* ground_gather = nullptr;
 };
 
 std::string Table3D(const char* main_source) { return std::string(kTable3DHeader) + main_source; }
 
-ElekPrograms GetElekPrograms(const Context& context, const ElekSettings& settings, double& compile_ms) {
+ElekPrograms GetElekPrograms(const Context& context, const ElekSettings& settings, bool ground, double& compile_ms) {
   ElekPrograms p;
   p.single = &ElekProgram(context, Table3D(kSingleMain), "elek single scattering", compile_ms);
   p.sum = &ElekProgram(context, Table3D(kSumMain), "elek sum", compile_ms);
@@ -293,6 +369,11 @@ ElekPrograms GetElekPrograms(const Context& context, const ElekSettings& setting
     if (settings.phase_gather) {
       p.phase_weights = &ElekProgram(context, Table3D(kPhaseWeightsMain), "elek phase gather weights", compile_ms);
       p.phase_gather = &ElekProgram(context, Table3D(kPhaseGatherMain), "elek phase gather", compile_ms);
+    }
+    if (ground) {
+      p.ground_irradiance = &ElekProgram(context, kGroundIrradianceMain, "elek ground irradiance", compile_ms);
+      p.ground_radiance = &ElekProgram(context, Table3D(kGroundRadianceMain), "elek ground radiance", compile_ms);
+      p.ground_gather = &ElekProgram(context, Table3D(kGroundGatherMain), "elek ground gather", compile_ms);
     }
   }
   return p;
@@ -341,10 +422,14 @@ ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::Atmospher
   CheckSettings(settings);
   context.MakeCurrent();
   double compile_ms = 0.0;
-  const ElekPrograms p = GetElekPrograms(context, settings, compile_ms);
+  // The ground term where this batch's albedo is above 0 (ElekSettings::UsesGround; a batch of
+  // albedo 0 would add 0).
+  const bool ground = settings.ground != "off" && settings.orders >= 2 &&
+                      (km.ground_albedo.x > 0.0 || km.ground_albedo.y > 0.0 || km.ground_albedo.z > 0.0);
+  const ElekPrograms p = GetElekPrograms(context, settings, ground, compile_ms);
   if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
-  for (const ComputeProgram* program :
-       {p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights, p.phase_gather}) {
+  for (const ComputeProgram* program : {p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights,
+                                        p.phase_gather, p.ground_irradiance, p.ground_radiance, p.ground_gather}) {
     if (program != nullptr) SetAtmosphereUniforms(*program, "atmosphere", km);
   }
   const shared::ivec3 size = settings.size;
@@ -411,6 +496,33 @@ ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::Atmospher
       DispatchCompute3D(*p.gather, gather_size);
     }
     timer.Stop("elek_gather_" + std::to_string(k) + "_lut");
+    if (ground) {
+      // The ground's light of k - 1 events: the reflection of E^(k-2) (the sun itself for k = 2).
+      const GpuTexture irradiance = GpuTexture::Make2D({size.z, 1});
+      p.ground_irradiance->SetInt("direct", k == 2 ? 1 : 0);
+      p.ground_irradiance->SetInt("mapping", settings.mapping);
+      p.ground_irradiance->SetInt("azimuth_count", settings.gather_azimuths);
+      const ElekScatteringGl& source = tables.orders[k == 2 ? 0 : k - 3];
+      BindSamplers(*p.ground_irradiance, {{"transmittance_texture", &tables.transmittance},
+                                          {"rayleigh_table", &source.rayleigh},
+                                          {"mie_table", &source.mie}});
+      irradiance.BindImage(0);
+      DispatchCompute2D(*p.ground_irradiance, irradiance.size2());
+      const GpuTexture radiance = GpuTexture::Make3D(size);
+      p.ground_radiance->SetInt("mapping", settings.mapping);
+      BindSamplers(*p.ground_radiance,
+                   {{"transmittance_texture", &tables.transmittance}, {"ground_irradiance", &irradiance}});
+      radiance.BindImage(0);
+      DispatchCompute3D(*p.ground_radiance, size);
+      for (const ElekScatteringGl* gather : {&gather_0, phase ? &gather_pi : nullptr}) {
+        if (gather == nullptr) continue;
+        glBindImageTexture(0, gather->rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(1, gather->mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        BindInputImages({&matrix, &radiance});
+        DispatchCompute3D(*p.ground_gather, gather_size);
+      }
+      timer.Stop("elek_ground_" + std::to_string(k) + "_lut");
+    }
     const ElekScatteringGl& slice_pi = phase ? gather_pi : gather_0;
     tables.orders.push_back(MakeScattering(size));
     BindSamplers(*p.scatter, {{"gather_rayleigh_0", &gather_0.rayleigh},

@@ -1,5 +1,6 @@
 #include "models/elek_model.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -50,6 +51,7 @@ ElekSettings ElekSettings::FromOptions(const ModelOptions& options) {
     else if (key == "gather") s.phase_gather = Choice(key, value, {"seed", "phase"}) == "phase";
     else if (key == "coupling") s.coupled = Choice(key, value, {"separate", "total"}) == "total";
     else if (key == "mie") s.mie_per_channel = Choice(key, value, {"alpha", "rgb"}) == "rgb";
+    else if (key == "ground") s.ground = Choice(key, value, {"auto", "on", "off"});
     else if (key == "gather_rows") s.gather_rows = ParseIntOption(key, value, 2, 4096);
     else if (key == "gather_points") {
       s.gather_points = ParseIntOption(key, value, 1, 4);
@@ -62,7 +64,7 @@ ElekSettings ElekSettings::FromOptions(const ModelOptions& options) {
       s.table = value;
     } else {
       throw Error("unknown option '" + key + "' for model elek (known: size, mapping, orders, samples, steps, "
-                  "rayleigh_phase, gather, coupling, mie, gather_rows, gather_points, gather_azimuths, "
+                  "rayleigh_phase, gather, coupling, mie, ground, gather_rows, gather_points, gather_azimuths, "
                   "transmittance_lut, transmittance_samples, table)");
     }
   }
@@ -83,12 +85,18 @@ std::vector<std::pair<std::string, std::string>> ElekSettings::TableOptions() co
       {"rayleigh_phase", rayleigh_phase},
       {"gather", phase_gather ? "phase" : "seed"},
       {"coupling", coupled ? "total" : "separate"},
+      {"ground", ground},
       {"gather_rows", i(gather_rows)},
       {"gather_points", i(gather_points)},
       {"gather_azimuths", i(gather_azimuths)},
       {"transmittance_lut", i(transmittance_lut.x) + "x" + i(transmittance_lut.y)},
       {"transmittance_samples", i(transmittance_samples)},
   };
+}
+
+bool ElekSettings::UsesGround(const AtmosphereParameters& parameters) const {
+  if (ground == "off") return false;
+  return std::any_of(parameters.ground_albedo.begin(), parameters.ground_albedo.end(), [](double a) { return a > 0.0; });
 }
 
 ElekModel::ElekModel(const AtmosphereParameters& parameters, const ElekSettings& settings)
@@ -131,6 +139,7 @@ void ElekModel::ComputeTables(Batch& batch) const {
                                           settings_.gather_points, settings_.gather_azimuths);
     RecordPass("elek_gather_matrix_lut", MillisecondsSince(start));
   }
+  const bool ground = settings_.UsesGround(parameters());
   for (int k = 2; k <= settings_.orders; ++k) {
     start = Clock::now();
     cpu::ElekScattering gather_0, gather_pi;
@@ -143,6 +152,17 @@ void ElekModel::ComputeTables(Batch& batch) const {
       cpu::ComputeElekGatherTable(matrix, settings_.gather_rows, batch.orders[k - 2], settings_.coupled, gather_0);
     }
     RecordPass("elek_gather_" + std::to_string(k) + "_lut", MillisecondsSince(start));
+    if (ground) {
+      // The ground's light of k - 1 events: the reflection of E^(k-2) (the sun itself for k = 2).
+      start = Clock::now();
+      const shared::Texture2D irradiance = cpu::ComputeElekGroundIrradiance(
+          batch.atmosphere, batch.transmittance, k == 2 ? nullptr : &batch.orders[k - 3], g, settings_.gather_azimuths);
+      const shared::Texture3D radiance =
+          cpu::ComputeElekGroundRadianceTable(batch.atmosphere, batch.transmittance, irradiance, g);
+      cpu::AddElekGatheredGround(matrix, radiance, gather_0);
+      if (phase) cpu::AddElekGatheredGround(matrix, radiance, gather_pi);
+      RecordPass("elek_ground_" + std::to_string(k) + "_lut", MillisecondsSince(start));
+    }
     start = Clock::now();
     cpu::ElekScattering order;
     cpu::ComputeElekMultipleScatteringTable(batch.atmosphere, gather_0, phase ? gather_pi : gather_0, g, order);

@@ -44,6 +44,9 @@ struct ElekSettings {
   bool phase_gather = false;                  // gather=phase
   bool coupled = false;                       // coupling=total
   bool mie_per_channel = false;               // mie=rgb
+  // The Lambertian ground feeding the next order (elek.glsl, "The ground"): auto | on | off; auto
+  // is on when any channel's albedo is above 0.
+  std::string ground = "auto";
   int gather_rows = 64;
   int gather_points = 4;
   int gather_azimuths = 64;
@@ -56,6 +59,9 @@ struct ElekSettings {
   // The settings that define the table's content, as "key=value" pairs in a fixed order (written
   // into exported manifests and compared on load).
   std::vector<std::pair<std::string, std::string>> TableOptions() const;
+  // Whether the ground term is computed for these parameters (off where every albedo is 0: it
+  // would add nothing).
+  bool UsesGround(const AtmosphereParameters& parameters) const;
 };
 
 class ElekModel final : public Model {

@@ -336,6 +336,68 @@ vec4 ComputeElekPhaseGatherWeightTexel(IN(AtmosphereParameters) atmosphere, int 
   return weight;
 }
 
+// --- The ground (option ground) -----------------------------------------------------------------
+//
+// An idealised Lambertian planet of albedo rho lit by the sun and the sky, whose reflection feeds
+// the next order (as Bruneton 2017's ground irradiance does; the seed itself has none). All ground
+// points are at h = 0, so the ground's irradiance per unit solar irradiance is a function of the
+// sun cosine there alone, E(mu_s), kept as a D x 1 table at the sun cosines of the table's slices.
+// Light of j scattering events ending in the air (order j's table, j >= 1; j = 0: the sun itself)
+// reaches the ground as E^(j), and the ground sends L_g = T(P, G) rho / pi E^(j)(mu_s_G) towards
+// every P whose ray meets it at G. The gather of order k >= 2 reads I^(k-1) + L_g[E^(k-2)]: light of
+// k - 1 events either way. mu_s_G comes from the table's canonical form (view and sun in one
+// vertical plane on the same side), as every other node's sun cosine does.
+
+const int kElekGroundIntervals = 16;  // of mu_w in the sky's irradiance on the ground
+
+// E^(0): the sun's irradiance on the ground per unit solar irradiance (0 once it has set).
+vec3 ComputeElekGroundDirectIrradiance(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, Number mu_s) {
+  return GetTransmittanceToSun(atmosphere, transmittance_texture, atmosphere.bottom_radius, mu_s) * max(mu_s, 0.0);
+}
+
+// E^(j), j >= 1: the sky of order j's table over the ground's upper hemisphere,
+//   E(mu_s) = int_0^1 mu_w int_0^2pi L(mu_w, phi) dphi dmu_w,  L = p_R(nu) I_R + p_M(nu) I_M,
+// whose azimuth integral is the azimuth-integrated phase K(mu_s, mu_w) of the gather. The mu_w
+// integral: 4-point Gauss-Legendre on each of `interval_count` equal intervals of (0, 1) (the
+// weight mu_w takes the integrand to 0 at the horizon, where the table changes fastest).
+vec3 ComputeElekGroundSkyIrradiance(IN(AtmosphereParameters) atmosphere, IN(Texture3D) rayleigh_table,
+    IN(Texture3D) mie_table, int mapping, Number mu_s, int interval_count, int azimuth_count) {
+  vec3 sum = vec3(0.0);
+  for (int i = 0; i < interval_count; ++i) {
+    for (int q = 0; q < 4; ++q) {
+      Number mu_w = (Number(i) + GetElekGaussNode(4, q)) / Number(interval_count);
+      Number weight = GetElekGaussWeight(4, q) / Number(interval_count) * mu_w;
+      vec3 i_r = GetElekTableValue(atmosphere, rayleigh_table, mapping, 0.0, mu_w, mu_s);
+      vec3 i_m = GetElekTableValue(atmosphere, mie_table, mapping, 0.0, mu_w, mu_s);
+      Number k_r = GetElekAzimuthIntegratedPhase(atmosphere.rayleigh_phase, 0.0, mu_s, mu_w, azimuth_count);
+      Number k_m = GetElekAzimuthIntegratedPhase(atmosphere.mie_phase, atmosphere.mie_g, mu_s, mu_w, azimuth_count);
+      sum += weight * (k_r * i_r + k_m * i_m);
+    }
+  }
+  return sum;
+}
+
+// L_g of texel `texel`: what the ground sends back along the texel's ray, T(P, G) rho / pi E(mu_s_G)
+// with E read from `ground_irradiance` (D x 1, texel z at the sun cosine of slice z, linear in the
+// table's w); 0 for a ray that misses the ground.
+vec3 ComputeElekGroundRadianceTexel(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, IN(Texture2D) ground_irradiance, int mapping,
+    IN(ivec3) texture_size, IN(ivec3) texel) {
+  Number r;
+  Number mu;
+  Number mu_s;
+  Number t_max;
+  GetElekTexelRay(atmosphere, mapping, texture_size, texel, r, mu, mu_s, t_max);
+  if (!RayIntersectsGround(atmosphere, r, mu)) return vec3(0.0);
+  Number nu = GetElekCanonicalNu(mu, mu_s);
+  Number mu_s_ground = ClampCosine((r * mu_s + t_max * nu) / atmosphere.bottom_radius);
+  vec3 to_ground = GetTransmittance(atmosphere, transmittance_texture, r, mu, t_max, true);
+  Number w = GetElekUvwFromHMuMuS(atmosphere, mapping, 0.0, 0.0, mu_s_ground).z;
+  vec2 coord = vec2(GetTextureCoordFromUnitRange(w, textureSize(ground_irradiance, 0).x), 0.5);
+  return to_ground * atmosphere.ground_albedo * (1.0 / kPi) * vec3(texture(ground_irradiance, coord));
+}
+
 // Radiance per unit solar irradiance from the factored table (RGB = I_R, the Mie channel
 // `mie_first` = I_M of the batch's first channel), the Mie of the other channels rebuilt with
 // Bruneton 2008's ratio: I_M(l) = I_M(l0) I_R(l) / I_R(l0) * beta_R(l0) / beta_R(l) * beta_M(l) / beta_M(l0).
