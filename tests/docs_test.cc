@@ -49,6 +49,10 @@ constexpr Skipped kSkipped[] = {
     {"atmo render --model reference", "44 million paths: about a minute on two cores"},
     {"atmo render --option sky_view=off", "a per-pixel ray march of a 1280x720 frame: about 20 s on two cores"},
     {"atmo render --date 2026-06-21T04:00+02:00 --until", "a 109-frame time-lapse: about a minute"},
+    {"cmake --install build", "installs this build outside the test folder (the package_install test "
+                              "installs into build/package_test/prefix)"},
+    {"cmake -S myproject", "a project of the reader's (package_cmake_consumer_build builds tests/consumer)"},
+    {"c++ -std=c++20 main.cc", "the reader's program (package_pkg_config builds tests/consumer/main.cc so)"},
     {"atmo render --backend gl --model elek", "the elek table on the GL backend: 10 s under Mesa llvmpipe "
                                               "(gl_elek_test.cc runs it on a small table)"},
 };

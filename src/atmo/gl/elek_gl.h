@@ -1,4 +1,5 @@
-// Model elek computed on the GL backend: configuration gl_f32_rgb (STYLE.md).
+// Model elek computed on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend
+// (the public entry points, with the model options by name, are in include/atmo/gl/elek_gl.h).
 //
 // The table of one batch of three channels is built by compute passes that call the per-texel
 // kernels of src/atmo/shared/elek.glsl in float, with the atmosphere in km, and the tables stay on
@@ -31,6 +32,7 @@
 
 #include <vector>
 
+#include "atmo/gl/elek_gl.h"  // the public entry points (options by name)
 #include "atmo/image.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"

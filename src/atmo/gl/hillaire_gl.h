@@ -1,4 +1,5 @@
-// Model hillaire on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend.
+// Model hillaire on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend
+// (the public entry points, with the model options by name, are in include/atmo/gl/hillaire_gl.h).
 //
 // Every table and every per-pixel or per-direction evaluation is a GL compute pass whose main()
 // calls the shared per-texel kernels of src/atmo/shared in float, with the atmosphere in km
@@ -38,6 +39,7 @@
 #include <glm/glm.hpp>
 
 #include "atmo/aerial_perspective.h"
+#include "atmo/gl/hillaire_gl.h"  // the public entry points (options by name)
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
