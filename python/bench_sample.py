@@ -16,11 +16,17 @@ The ratios module / C++ are printed; the target (docs/python.md) is sample <= 2 
 """
 
 import argparse
+import os
+import sys
 import time
 
 import numpy as np
 
-import atmo
+# The source folder python/ holds the package's pure-Python half only: import the built package
+# (PYTHONPATH), not python/atmo beside this script.
+if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
+    del sys.path[0]
+import atmo  # noqa: E402
 
 
 def best_of(repeat, function):

@@ -21,7 +21,9 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <list>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -111,6 +113,29 @@ class PyModel {
   const Model& model() const { return *model_; }
   const AtmosphereParameters& parameters() const { return parameters_; }
 
+  // The model's view for an observer altitude and a sun zenith (the sun at compass azimuth 0),
+  // kept for the next calls: a view builds per-view tables (hillaire's sky-view tables, a few
+  // ms), which repeated queries from one observer need not pay again. The last kViewCacheSize
+  // views are kept; safe to call from several threads.
+  std::shared_ptr<const SkyView> View(double altitude_m, double sun_zenith_deg) const {
+    const std::pair<double, double> key(altitude_m, sun_zenith_deg);
+    {
+      std::lock_guard<std::mutex> lock(views_mutex_);
+      for (auto it = views_.begin(); it != views_.end(); ++it) {
+        if (std::memcmp(&it->first, &key, sizeof key) == 0) {
+          views_.splice(views_.begin(), views_, it);  // most recently used first
+          return views_.front().second;
+        }
+      }
+    }
+    std::shared_ptr<const SkyView> view =
+        model_->View(altitude_m, DirectionFromZenithAzimuth(glm::radians(sun_zenith_deg), 0.0));
+    std::lock_guard<std::mutex> lock(views_mutex_);
+    views_.emplace_front(key, view);
+    if (views_.size() > kViewCacheSize) views_.pop_back();
+    return view;
+  }
+
   // The model for a Monte Carlo frame in physical units: its images multiply the radiance by the
   // model's own solar_irradiance (RenderProgressive), so that is 1 there, as `atmo render` makes it.
   const Model& UnitIrradianceModel() const {
@@ -127,6 +152,9 @@ class PyModel {
   ModelOptions options_;
   std::unique_ptr<Model> model_;
   mutable std::unique_ptr<Model> unit_irradiance_model_;
+  static constexpr std::size_t kViewCacheSize = 8;
+  mutable std::mutex views_mutex_;
+  mutable std::list<std::pair<std::pair<double, double>, std::shared_ptr<const SkyView>>> views_;
 };
 
 // The points of a sample that share an altitude and a sun zenith: one SkyView.
@@ -204,8 +232,7 @@ py::tuple Sample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Ar
     // Groups in parallel (each builds its view's tables), and each group's points in parallel.
     oneapi::tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
       const PointGroup& group = groups[g];
-      const std::unique_ptr<SkyView> sky =
-          self.model().View(group.altitude_m, DirectionFromZenithAzimuth(glm::radians(group.sun_zenith_deg), 0.0));
+      const std::shared_ptr<const SkyView> sky = self.View(group.altitude_m, group.sun_zenith_deg);
       oneapi::tbb::parallel_for(
           oneapi::tbb::blocked_range<std::size_t>(0, group.indices.size(), 256),
           [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
@@ -287,8 +314,7 @@ FloatArray RadianceBatch(const PyModel& self, double altitude_m, double sun_zeni
   float* data = out.mutable_data();
   {
     py::gil_scoped_release release;
-    const std::unique_ptr<SkyView> sky =
-        self.model().View(altitude_m, DirectionFromZenithAzimuth(glm::radians(sun_zenith_deg), 0.0));
+    const std::shared_ptr<const SkyView> sky = self.View(altitude_m, sun_zenith_deg);
     const RadianceTerms terms{sun_disc, ground};
     // Chunks of directions in parallel, as a frame's rows are.
     oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
@@ -311,8 +337,7 @@ double TimeRadianceBatch(const PyModel& self, double altitude_m, double sun_zeni
   const std::size_t nc = self.parameters().channel_count();
   const glm::dvec3* views = reinterpret_cast<const glm::dvec3*>(directions.data());
   py::gil_scoped_release release;
-  const std::unique_ptr<SkyView> sky =
-      self.model().View(altitude_m, DirectionFromZenithAzimuth(glm::radians(sun_zenith_deg), 0.0));
+  const std::shared_ptr<const SkyView> sky = self.View(altitude_m, sun_zenith_deg);
   std::vector<float> out(n * nc);
   const RadianceTerms terms{false, false};
   double best = std::numeric_limits<double>::infinity();
