@@ -9,10 +9,13 @@ hillaire (preset earth, its sky-view table):
     unit direction vectors, in chunks on oneTBB's threads as a frame uses it, timed inside C++
     (atmo._atmo.Model.time_radiance_batch), the view's tables made before the clock starts;
   - module radiance_batch: the same call through Python (directions in, float32 array out);
+  - C++ sample loop: the computation behind Model.sample (EvaluateSample in python/bindings.cc)
+    called from C++ on the same angles, without the Python layer;
   - module sample: Model.sample(0, 60, view_zenith, azimuth) from the angles, i.e. what `atmo
     sample` computes (double radiance, transmittance and standard error per point), including
     broadcasting, the directions' trigonometry and the view's tables.
-The ratios module / C++ are printed; the target (docs/python.md) is sample <= 2 x RadianceBatch.
+The ratios to the C++ RadianceBatch are printed, and the module's sample against its C++ loop
+(docs/python.md discusses the figures).
 """
 
 import argparse
@@ -56,6 +59,8 @@ def main():
 
     cpp = model._model.time_radiance_batch(0.0, 60.0, directions, args.repeat, True)
     cpp_serial = model._model.time_radiance_batch(0.0, 60.0, directions, max(1, args.repeat // 2), False)
+    n = args.count
+    cpp_sample = model._model.time_sample(np.zeros(n), np.full(n, 60.0), view_zenith, azimuth, args.repeat)
     batch = best_of(args.repeat, lambda: model.radiance_batch(0.0, 60.0, directions))
     sample = best_of(args.repeat, lambda: model.sample(0.0, 60.0, view_zenith, azimuth))
     sample32 = best_of(args.repeat, lambda: model.sample(0.0, 60.0, view_zenith, azimuth, dtype=np.float32))
@@ -65,8 +70,10 @@ def main():
     print(f"  C++ RadianceBatch (oneTBB chunks)      {cpp * 1e3:9.2f} ms")
     print(f"  C++ RadianceBatch (one thread)         {cpp_serial * 1e3:9.2f} ms")
     print(f"  module radiance_batch                  {batch * 1e3:9.2f} ms   {batch / cpp:5.2f} x C++")
+    print(f"  C++ sample loop (EvaluateSample)       {cpp_sample * 1e3:9.2f} ms   {cpp_sample / cpp:5.2f} x C++")
     print(f"  module sample (float64)                {sample * 1e3:9.2f} ms   {sample / cpp:5.2f} x C++")
     print(f"  module sample (float32)                {sample32 * 1e3:9.2f} ms   {sample32 / cpp:5.2f} x C++")
+    print(f"  module sample / C++ sample loop        {sample / cpp_sample:9.2f}")
 
 
 if __name__ == "__main__":

@@ -191,8 +191,66 @@ std::vector<PointGroup> GroupPoints(const double* altitude_m, const double* sun_
 }
 
 // Per point and channel: radiance, transmittance and the standard error of the radiance, in the
-// unit of `atmo sample --unit`. Luminance has one "channel": cd/m^2 and the luminous
-// transmittance (apps/atmo/sample_command.cc).
+// unit of `atmo sample --unit`, into outputs of n x (channels) doubles (one "channel" for
+// luminance: cd/m^2 and the luminous transmittance, apps/atmo/sample_command.cc). `shape` is the
+// points' array shape, for error messages. Runs on oneTBB's threads; call it without the GIL.
+void EvaluateSample(const PyModel& self, const double* alt, const double* sz, const double* vz, const double* az,
+                    std::size_t n, RadianceUnit unit, const std::vector<std::size_t>& shape, double* out_radiance,
+                    double* out_transmittance, double* out_error) {
+  const AtmosphereParameters& parameters = self.parameters();
+  const std::size_t nc = parameters.channel_count();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(alt[i]) && std::isfinite(sz[i]) && std::isfinite(vz[i]) && std::isfinite(az[i]) &&
+          std::fabs(alt[i]) <= kMaxAltitude_m && sz[i] >= 0.0 && sz[i] <= 180.0 && vz[i] >= 0.0 && vz[i] <= 180.0)) {
+      CheckPoint(alt[i], sz[i], vz[i], az[i], "sample " + IndexText(i, shape) + ": ");
+    }
+  }
+  const SpectralConversion convert(parameters.wavelengths_nm);
+  std::vector<double> luminance_weights(nc);
+  double weight_sum = 0.0;
+  for (std::size_t c = 0; c < nc; ++c) {
+    luminance_weights[c] = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
+    weight_sum += luminance_weights[c];
+  }
+  const std::vector<PointGroup> groups = GroupPoints(alt, sz, n);
+  // Groups in parallel (each builds its view's tables), and each group's points in parallel.
+  oneapi::tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
+    const PointGroup& group = groups[g];
+    const std::shared_ptr<const SkyView> sky = self.View(group.altitude_m, group.sun_zenith_deg);
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, group.indices.size(), 256),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+          std::vector<double> l(nc), t(nc), e(nc);
+          for (std::size_t k = range.begin(); k < range.end(); ++k) {
+            const std::size_t i = group.indices[k];
+            const glm::dvec3 view = DirectionFromZenithAzimuth(glm::radians(vz[i]), glm::radians(az[i]));
+            std::fill(e.begin(), e.end(), 0.0);
+            sky->RadianceEstimate(view, l, e);
+            sky->Transmittance(view, t);
+            if (unit == RadianceUnit::kLuminance) {
+              // As `atmo sample --unit luminance`: independent channel estimates add their
+              // weighted variances.
+              double luminous_transmittance = 0.0, variance = 0.0;
+              for (std::size_t c = 0; c < nc; ++c) {
+                luminous_transmittance += luminance_weights[c] * t[c];
+                variance += (luminance_weights[c] * e[c]) * (luminance_weights[c] * e[c]);
+              }
+              out_radiance[i] = convert.Luminance(l);
+              out_transmittance[i] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
+              out_error[i] = std::sqrt(variance);
+              continue;
+            }
+            for (std::size_t c = 0; c < nc; ++c) {
+              const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
+              out_radiance[i * nc + c] = scale * l[c];
+              out_transmittance[i * nc + c] = t[c];
+              out_error[i * nc + c] = scale * e[c];
+            }
+          }
+        });
+  });
+}
+
 py::tuple Sample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Array view_zenith_deg, Array azimuth_deg,
                  const std::string& unit_name, const std::vector<std::size_t>& shape) {
   const std::size_t n = static_cast<std::size_t>(altitude_m.size());
@@ -200,9 +258,7 @@ py::tuple Sample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Ar
     if (static_cast<std::size_t>(a->size()) != n) throw Error("sample: the four arrays must have one size");
   }
   const RadianceUnit unit = ParseRadianceUnit(unit_name);
-  const AtmosphereParameters& parameters = self.parameters();
-  const std::size_t nc = parameters.channel_count();
-  const std::size_t out_channels = unit == RadianceUnit::kLuminance ? 1 : nc;
+  const std::size_t out_channels = unit == RadianceUnit::kLuminance ? 1 : self.parameters().channel_count();
   Array radiance({n, out_channels});
   Array transmittance({n, out_channels});
   Array standard_error({n, out_channels});
@@ -215,58 +271,31 @@ py::tuple Sample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Ar
   double* out_error = standard_error.mutable_data();
   {
     py::gil_scoped_release release;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!(std::isfinite(alt[i]) && std::isfinite(sz[i]) && std::isfinite(vz[i]) && std::isfinite(az[i]) &&
-            std::fabs(alt[i]) <= kMaxAltitude_m && sz[i] >= 0.0 && sz[i] <= 180.0 && vz[i] >= 0.0 && vz[i] <= 180.0)) {
-        CheckPoint(alt[i], sz[i], vz[i], az[i], "sample " + IndexText(i, shape) + ": ");
-      }
-    }
-    const SpectralConversion convert(parameters.wavelengths_nm);
-    std::vector<double> luminance_weights(nc);
-    double weight_sum = 0.0;
-    for (std::size_t c = 0; c < nc; ++c) {
-      luminance_weights[c] = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
-      weight_sum += luminance_weights[c];
-    }
-    const std::vector<PointGroup> groups = GroupPoints(alt, sz, n);
-    // Groups in parallel (each builds its view's tables), and each group's points in parallel.
-    oneapi::tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
-      const PointGroup& group = groups[g];
-      const std::shared_ptr<const SkyView> sky = self.View(group.altitude_m, group.sun_zenith_deg);
-      oneapi::tbb::parallel_for(
-          oneapi::tbb::blocked_range<std::size_t>(0, group.indices.size(), 256),
-          [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
-            std::vector<double> l(nc), t(nc), e(nc);
-            for (std::size_t k = range.begin(); k < range.end(); ++k) {
-              const std::size_t i = group.indices[k];
-              const glm::dvec3 view = DirectionFromZenithAzimuth(glm::radians(vz[i]), glm::radians(az[i]));
-              std::fill(e.begin(), e.end(), 0.0);
-              sky->RadianceEstimate(view, l, e);
-              sky->Transmittance(view, t);
-              if (unit == RadianceUnit::kLuminance) {
-                // As `atmo sample --unit luminance`: independent channel estimates add their
-                // weighted variances.
-                double luminous_transmittance = 0.0, variance = 0.0;
-                for (std::size_t c = 0; c < nc; ++c) {
-                  luminous_transmittance += luminance_weights[c] * t[c];
-                  variance += (luminance_weights[c] * e[c]) * (luminance_weights[c] * e[c]);
-                }
-                out_radiance[i] = convert.Luminance(l);
-                out_transmittance[i] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
-                out_error[i] = std::sqrt(variance);
-                continue;
-              }
-              for (std::size_t c = 0; c < nc; ++c) {
-                const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
-                out_radiance[i * nc + c] = scale * l[c];
-                out_transmittance[i * nc + c] = t[c];
-                out_error[i * nc + c] = scale * e[c];
-              }
-            }
-          });
-    });
+    EvaluateSample(self, alt, sz, vz, az, n, unit, shape, out_radiance, out_transmittance, out_error);
   }
   return py::make_tuple(radiance, transmittance, standard_error);
+}
+
+// The benchmark's C++ side of `sample` (python/bench_sample.py): seconds of the best of `repeats`
+// runs of EvaluateSample on the four arrays (of one size) into fresh C++ outputs, the work of
+// Model.sample without its Python layer and NumPy arrays.
+double TimeSample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Array view_zenith_deg,
+                  Array azimuth_deg, int repeats) {
+  const std::size_t n = static_cast<std::size_t>(altitude_m.size());
+  for (const Array* a : {&sun_zenith_deg, &view_zenith_deg, &azimuth_deg}) {
+    if (static_cast<std::size_t>(a->size()) != n) throw Error("the four arrays must have one size");
+  }
+  const std::size_t nc = self.parameters().channel_count();
+  py::gil_scoped_release release;
+  double best = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < std::max(repeats, 1); ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<double> radiance(n * nc), transmittance(n * nc), standard_error(n * nc);
+    EvaluateSample(self, altitude_m.data(), sun_zenith_deg.data(), view_zenith_deg.data(), azimuth_deg.data(), n,
+                   RadianceUnit::kRelative, {n}, radiance.data(), transmittance.data(), standard_error.data());
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return best;
 }
 
 // The view directions of a camera's pixel centres (H x W x 3, local frame x east, y north, z up),
@@ -636,6 +665,8 @@ PYBIND11_MODULE(_atmo, m) {
            py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
       .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
            py::arg("sun_disc"), py::arg("ground"))
+      .def("time_sample", &TimeSample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
+           py::arg("azimuth_deg"), py::arg("repeats"))
       .def("time_radiance_batch", &TimeRadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"),
            py::arg("directions"), py::arg("repeats"), py::arg("parallel"))
       .def(
