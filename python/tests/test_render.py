@@ -85,14 +85,30 @@ def test_spectral_frames(cli):
     np.testing.assert_allclose(xyz.image[..., 1], y, rtol=1e-4, atol=1e-3)
 
 
-def test_render_matches_atmo_render_exr(tmp_path, earth, cli):
+@pytest.mark.parametrize("cli_args,model_kwargs,render_kwargs", [
+    (["--camera", "equirect", "--width", "64", "--height", "32", "--sun-elevation", "15", "--sun-azimuth", "200"],
+     {}, dict(width=64, height=32, camera="equirect", sun_elevation_deg=15.0, sun_azimuth_deg=200.0)),
+    (["--camera", "fisheye", "--width", "40", "--height", "40", "--sun-elevation", "5", "--xyz"],
+     {}, dict(width=40, height=40, camera="fisheye", sun_elevation_deg=5.0, xyz=True)),
+    (["--camera", "cubemap", "--face-size", "12", "--no-ground"],
+     {}, dict(width=12, camera="cubemap", ground=False)),
+    (["--spectral", "8", "--unit", "radiance", "--width", "48", "--height", "27", "--pitch", "-5", "--fov", "60",
+      "--altitude", "3000"],
+     dict(spectral=8), dict(width=48, height=27, unit="radiance", pitch_deg=-5.0, fov_deg=60.0, altitude_m=3000.0)),
+    (["--unit", "relative", "--width", "32", "--height", "18", "--yaw", "90", "--no-sun-disc"],
+     {}, dict(width=32, height=18, unit="relative", yaw_deg=90.0, sun_disc=False)),
+])
+def test_render_matches_atmo_render_exr(tmp_path, cli, cli_args, model_kwargs, render_kwargs):
+    # The frame `atmo render` writes into its EXR, bit for bit: the same library calls.
     exr = tmp_path / "cli.exr"
-    cli("render", "--camera", "equirect", "--width", "64", "--height", "32", "--sun-elevation", "15",
-        "--sun-azimuth", "200", "--exr", str(exr), "--no-png")
-    printed, _, names, metadata = atmo.read_exr(exr)
-    image = earth.render(64, 32, "equirect", sun_elevation_deg=15.0, sun_azimuth_deg=200.0)
-    assert names == ("R", "G", "B") and metadata["atmo:unit"] == "luminance"
-    np.testing.assert_array_equal(image, printed)
+    cli("render", *cli_args, "--exr", str(exr), "--no-png")
+    printed, printed_alpha, names, metadata = atmo.read_exr(exr)
+    frame = atmo.Model("hillaire", preset="earth", **model_kwargs).render(full=True, **render_kwargs)
+    assert names == frame.channel_names
+    assert metadata["atmo:unit"] == render_kwargs.get("unit", "luminance")
+    np.testing.assert_array_equal(frame.image, printed)
+    if frame.alpha is not None:
+        np.testing.assert_array_equal(frame.alpha, printed_alpha)
 
 
 def test_monte_carlo_frame_has_standard_errors_that_fall_as_one_over_root_n():
