@@ -31,6 +31,7 @@
 #include <vector>
 
 #include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/colour.h"
@@ -627,6 +628,17 @@ void WritePngArray(const std::string& path, const FloatArray& array, const std::
   WritePng(path, image, mapping);
 }
 
+// `atmo --threads N`: at most N worker threads for everything that follows; 0 lifts the limit.
+void SetThreads(int threads) {
+  static std::unique_ptr<oneapi::tbb::global_control> limit;
+  if (threads < 0 || threads > 1024) throw Error("threads must be in 0..1024 (got " + std::to_string(threads) + ")");
+  limit.reset();
+  if (threads > 0) {
+    limit = std::make_unique<oneapi::tbb::global_control>(oneapi::tbb::global_control::max_allowed_parallelism,
+                                                          static_cast<std::size_t>(threads));
+  }
+}
+
 }  // namespace
 }  // namespace atmo::python
 
@@ -698,6 +710,7 @@ PYBIND11_MODULE(_atmo, m) {
     return AutoExposureEv100(FromArray(image, alpha));
   }, py::arg("image"), py::arg("alpha") = py::none());
   m.def("exposure_from_ev100", &ExposureFromEv100);
+  m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);
   m.def("preset_json", [](const std::string& name) { return ToJson(Preset(name)); });

@@ -37,6 +37,7 @@ __all__ = [
     "camera_directions",
     "sun_direction",
     "model_names",
+    "set_threads",
     "preset_names",
     "preset",
     "CAMERAS",
@@ -392,6 +393,14 @@ def camera_directions(width: int, height: int, camera: str = "perspective", *, f
 def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     """Unit direction towards the sun from its elevation and compass azimuth (degrees)."""
     return np.asarray(_atmo.sun_direction(float(elevation_deg), float(azimuth_deg)))
+
+
+def set_threads(threads: int) -> None:
+    """At most `threads` worker threads for the module's work from now on, as `atmo --threads`;
+    0 restores oneTBB's default (all cores)."""
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
+        raise ValueError(f"threads must be an integer (got {threads!r})")
+    _atmo.set_threads(int(threads))
 
 
 def model_names() -> list:

@@ -254,3 +254,18 @@ def test_radiance_batch_is_the_float_path_of_sample(earth):
     with_disc = earth.radiance_batch(0.0, 50.0, np.stack([sun, directions[0]]), sun_disc=True)
     without = earth.radiance_batch(0.0, 50.0, np.stack([sun, directions[0]]))
     assert np.all(with_disc[0] > 100 * without[0]) and np.array_equal(with_disc[1], without[1])
+
+
+def test_results_do_not_depend_on_the_thread_count(earth):
+    rng = np.random.default_rng(6)
+    args = (rng.choice([0.0, 900.0], 3000), rng.choice([20.0, 70.0], 3000), rng.uniform(0, 180, 3000),
+            rng.uniform(-180, 180, 3000))
+    everywhere = earth.sample(*args).radiance
+    atmo.set_threads(1)
+    try:
+        one = earth.sample(*args).radiance
+    finally:
+        atmo.set_threads(0)
+    np.testing.assert_array_equal(one, everywhere)
+    with pytest.raises(ValueError, match="threads"):
+        atmo.set_threads(-1)
