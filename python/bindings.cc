@@ -140,6 +140,7 @@ class PyModel {
   // The model for a Monte Carlo frame in physical units: its images multiply the radiance by the
   // model's own solar_irradiance (RenderProgressive), so that is 1 there, as `atmo render` makes it.
   const Model& UnitIrradianceModel() const {
+    std::lock_guard<std::mutex> lock(unit_irradiance_mutex_);
     if (!unit_irradiance_model_) {
       AtmosphereParameters ones = parameters_;
       ones.solar_irradiance.assign(ones.channel_count(), 1.0);
@@ -152,6 +153,7 @@ class PyModel {
   AtmosphereParameters parameters_;
   ModelOptions options_;
   std::unique_ptr<Model> model_;
+  mutable std::mutex unit_irradiance_mutex_;
   mutable std::unique_ptr<Model> unit_irradiance_model_;
   static constexpr std::size_t kViewCacheSize = 8;
   mutable std::mutex views_mutex_;

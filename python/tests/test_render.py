@@ -125,3 +125,21 @@ def test_monte_carlo_frame_has_standard_errors_that_fall_as_one_over_root_n():
     # The estimates agree within their errors: |difference| < 5 sigma nearly everywhere.
     sigma = np.sqrt(few.standard_error[sky] ** 2 + many.standard_error[sky] ** 2)
     assert np.mean(np.abs(few.image[sky] - many.image[sky]) < 5 * sigma + 1e-12) > 0.95
+
+
+def test_monte_carlo_frame_matches_atmo_render_with_its_seed(tmp_path, cli):
+    # The reference frame depends only on the seed, the pixel's direction and the path count: the
+    # module's frame (luminance, from the model of unit solar irradiance) is the CLI's, and so
+    # are the standard-error channels of the EXR.
+    exr = tmp_path / "mc.exr"
+    cli("render", "--model", "reference", "--seed", "5", "--spp", "8", "--camera", "equirect", "--width", "8",
+        "--height", "4", "--exr", str(exr), "--no-png")
+    printed, _, names, _ = atmo.read_exr(exr)
+    frame = atmo.Model("reference", seed=5).render(8, 4, "equirect", spp=8, full=True)
+    assert names == ("R", "G", "B", "R.stderr", "G.stderr", "B.stderr")
+    np.testing.assert_array_equal(frame.image, printed[..., :3])
+    np.testing.assert_array_equal(frame.standard_error, printed[..., 3:])
+    frame.write_exr(tmp_path / "module.exr")
+    again, _, again_names, _ = atmo.read_exr(tmp_path / "module.exr")
+    assert again_names == names
+    np.testing.assert_array_equal(again, printed)
