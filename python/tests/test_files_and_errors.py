@@ -1,9 +1,7 @@
 """EXR/PNG writing through atmo's atomic writers, and the errors bad input raises."""
 
 import math
-import os
 import struct
-import zlib
 
 import numpy as np
 import pytest
