@@ -1,0 +1,416 @@
+"""atmo: physically based sky and atmosphere models from Python (docs/python.md).
+
+    import atmo, numpy as np
+    m = atmo.Model("hillaire", preset="earth")
+    r = m.sample(0.0, 60.0, np.linspace(0, 90, 91), 90.0)   # NumPy broadcasting
+    r.radiance.shape, r.transmittance.shape                  # (91, 3): per channel
+    img = m.render(512, 256, camera="equirect", sun_elevation_deg=20)   # float32 H x W x 3, cd/m^2
+    atmo.write_exr("env.exr", img)
+    atmo.write_png("env.png", img)
+
+The quantities are those of the command line: `Model.sample` gives what `atmo sample` prints
+(radiance in sr^-1 per unit solar irradiance, the transmittance to the top of the atmosphere, the
+standard error of Monte Carlo estimates), `Model.render` what `atmo render` writes into its EXR.
+Errors in the input raise ValueError with atmo's one-line message.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from typing import Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _atmo
+
+__all__ = [
+    "Model",
+    "SampleResult",
+    "Frame",
+    "write_exr",
+    "read_exr",
+    "write_png",
+    "auto_exposure_ev100",
+    "exposure_from_ev100",
+    "camera_directions",
+    "sun_direction",
+    "model_names",
+    "set_threads",
+    "preset_names",
+    "preset",
+    "CAMERAS",
+    "UNITS",
+]
+
+__version__ = _atmo.version
+CAMERAS = ("perspective", "fisheye", "equirect", "cubemap")
+UNITS = ("relative", "radiance", "luminance")
+
+
+def _option_text(key: str, value) -> str:
+    """A model option as the KEY=VALUE text of `--option`: booleans as on/off, floats exactly."""
+    if isinstance(value, (bool, np.bool_)):
+        return "on" if value else "off"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    if isinstance(value, str):
+        return value
+    raise ValueError(f"option {key}: expected a string, number or bool, got {type(value).__name__}")
+
+
+@dataclass(frozen=True)
+class SampleResult:
+    """What `Model.sample` returns: arrays of shape (..., channels), in the unit asked for.
+
+    radiance: relative (sr^-1 per unit solar irradiance), spectral radiance (W m^-2 sr^-1 nm^-1)
+      or luminance (cd/m^2, one channel); transmittance: unitless, to the top of the atmosphere
+      (luminous for unit luminance), 0 where the ray meets the ground; standard_error: of the
+      radiance, 0 for deterministic models.
+    """
+
+    radiance: np.ndarray
+    transmittance: np.ndarray
+    standard_error: np.ndarray
+    channel_names: tuple
+    wavelengths_nm: tuple
+    unit: str
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The extras of `Model.render(..., full=True)`: the image and how to write it."""
+
+    image: np.ndarray  # float32 H x W x C
+    alpha: Optional[np.ndarray]  # float32 H x W (fisheye), else None
+    channel_names: tuple
+    colour_space: str  # "linear_srgb", "xyz" or "" (per-channel values)
+    envmap: str  # "latlong", "cube" or ""
+    standard_error: Optional[np.ndarray]  # Monte Carlo models: float32 H x W x C, else None
+    metadata: dict
+
+    def write_exr(self, path: Union[str, os.PathLike]) -> None:
+        """The frame as `atmo render` writes its EXR (with the standard-error channels of a Monte
+        Carlo frame)."""
+        image, names = self.image, list(self.channel_names)
+        if self.standard_error is not None:
+            image = np.concatenate([image, self.standard_error], axis=-1)
+            names += [n + ".stderr" for n in self.channel_names]
+        write_exr(path, image, alpha=self.alpha, channel_names=names, colour_space=self.colour_space,
+                  envmap=self.envmap, metadata=self.metadata)
+
+    def write_png(self, path: Union[str, os.PathLike], **mapping) -> None:
+        """The frame tone-mapped (see `write_png`); needs a colour frame (3 channels)."""
+        write_png(path, self.image, alpha=self.alpha, **mapping)
+
+
+class Model:
+    """A sky model with its precomputed tables.
+
+    Model(name="hillaire", preset="earth")            # a preset (atmo.preset_names())
+    Model("elek", config="my.json")                     # a JSON file as `atmo --config`
+    Model("hillaire", config={"preset": "earth", "mie": {"phase_g": 0.7}})   # a dict: the same JSON
+    Model("hillaire", options={"sky_view": "off"})      # `--option KEY=VALUE`
+    Model("hillaire", preset="earth", spectral=16)      # `--spectral 16`: 16 wavelengths
+    Model("reference", options={"samples": 4096}, seed=1)
+    """
+
+    def __init__(self, name: str = "hillaire", preset: Optional[str] = None,
+                 config: Union[None, str, os.PathLike, Mapping] = None,
+                 options: Optional[Mapping[str, object]] = None, spectral: int = 0,
+                 seed: Optional[int] = None):
+        if preset is not None and config is not None:
+            raise ValueError("give preset or config, not both")
+        config_path = config_json = None
+        if isinstance(config, Mapping):
+            config_json = json.dumps(config)
+        elif config is not None:
+            config_path = os.fspath(config)
+        elif preset is None:
+            preset = "earth"
+        if isinstance(spectral, bool) or not isinstance(spectral, (int, np.integer)):
+            raise ValueError(f"spectral must be an integer (got {spectral!r})")
+        if spectral != 0 and not 3 <= spectral <= 256:
+            raise ValueError(f"spectral {spectral}: the wavelength count must be in [3, 256]")
+        texts = {}
+        for key, value in (options or {}).items():
+            texts[str(key)] = _option_text(str(key), value)
+        if seed is not None:
+            if "seed" in texts:
+                raise ValueError("give the seed once: seed= or options['seed']")
+            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+                raise ValueError(f"seed must be an integer in [0, 2^64 - 1] (got {seed!r})")
+            texts["seed"] = str(int(seed))
+        self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts)
+        self._options = dict(texts)
+
+    # --- what the model is ---------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self._model.name
+
+    @property
+    def preset(self) -> str:
+        """The preset the parameters came from ("custom" for a config without one)."""
+        return self._model.preset
+
+    @property
+    def channel_count(self) -> int:
+        return self._model.channel_count
+
+    @property
+    def wavelengths_nm(self) -> np.ndarray:
+        """The wavelength of each channel, nm."""
+        return np.asarray(self._model.wavelengths_nm)
+
+    @property
+    def channel_names(self) -> tuple:
+        """R, G, B for 3 channels (as the EXR names them), else the wavelengths ("550nm")."""
+        if self.channel_count == 3:
+            return ("R", "G", "B")
+        return tuple(f"{w:g}nm" for w in self._model.wavelengths_nm)
+
+    @property
+    def solar_irradiance(self) -> np.ndarray:
+        """The preset's per-channel solar irradiance that relative images are multiplied by."""
+        return np.asarray(self._model.solar_irradiance)
+
+    @property
+    def solar_spectral_irradiance(self) -> np.ndarray:
+        """The solar spectral irradiance at each channel's wavelength, W m^-2 nm^-1."""
+        return np.asarray(self._model.solar_spectral_irradiance)
+
+    @property
+    def exposure(self) -> float:
+        """The preset's display exposure (`atmo render`'s PNG default for a relative RGB frame)."""
+        return self._model.exposure
+
+    @property
+    def observer_altitude_m(self) -> float:
+        return self._model.observer_altitude_m
+
+    @property
+    def top_altitude_m(self) -> float:
+        """Altitude of the top of the atmosphere above the ground, m."""
+        return self._model.top_altitude_m
+
+    @property
+    def monte_carlo(self) -> bool:
+        return self._model.monte_carlo
+
+    @property
+    def options(self) -> dict:
+        return dict(self._options)
+
+    def parameters(self) -> dict:
+        """The atmosphere as the JSON of docs/parameters.md (`atmo presets --dump`)."""
+        return json.loads(self._model.parameters_json())
+
+    def __repr__(self) -> str:
+        return f"atmo.Model({self.name!r}, preset={self.preset!r}, channels={self.channel_count})"
+
+    # --- queries -------------------------------------------------------------------------------
+    def sample(self, altitude_m, sun_zenith_deg, view_zenith_deg, azimuth_deg, unit: str = "relative",
+               dtype=np.float64) -> SampleResult:
+        """Radiance, transmittance and standard error, as `atmo sample` computes them.
+
+        The four arguments are scalars or arrays, broadcast together with NumPy's rules; the
+        results have shape broadcast_shape + (channels,). Angles in degrees: the sun at compass
+        azimuth 0, the view at `azimuth_deg` (the azimuth between view and sun). `unit`:
+        "relative" (sr^-1 per unit solar irradiance, per channel), "radiance" (W m^-2 sr^-1 nm^-1
+        per channel) or "luminance" (cd/m^2, one channel; the transmittance is the luminous one).
+        Points that share an altitude and sun zenith share one view of the model.
+        """
+        if unit not in UNITS:
+            raise ValueError(f"unknown unit '{unit}' (use relative, radiance or luminance)")
+        dtype = np.dtype(dtype)
+        if dtype not in (np.float64, np.float32):
+            raise ValueError(f"dtype must be float64 or float32 (got {dtype})")
+        try:
+            arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64)
+                                           for a in (altitude_m, sun_zenith_deg, view_zenith_deg, azimuth_deg)))
+        except ValueError as error:
+            raise ValueError(f"sample: the arguments do not broadcast together ({error})") from None
+        shape = arrays[0].shape
+        flat = [np.ascontiguousarray(a).reshape(-1) for a in arrays]
+        radiance, transmittance, standard_error = self._model.sample(*flat, unit, list(shape))
+        channels = radiance.shape[1]
+
+        def shaped(a):
+            return a.reshape(shape + (channels,)).astype(dtype, copy=False)
+
+        luminance = unit == "luminance"
+        return SampleResult(
+            radiance=shaped(radiance), transmittance=shaped(transmittance),
+            standard_error=shaped(standard_error),
+            channel_names=("luminance",) if luminance else self.channel_names,
+            wavelengths_nm=() if luminance else tuple(self._model.wavelengths_nm), unit=unit)
+
+    def radiance_batch(self, altitude_m: float, sun_zenith_deg: float, directions, sun_disc: bool = False,
+                       ground: bool = False) -> np.ndarray:
+        """SkyView::RadianceBatch (the renderer's float32 path): directions (..., 3), unit vectors
+        in the local frame (x east, y north, z up; 0 vectors give 0), the sun at compass azimuth
+        0. Returns float32 (..., channels), relative radiance, plus the sun disc and the lit
+        ground when asked."""
+        d = np.asarray(directions, dtype=np.float64)
+        if d.ndim < 1 or d.shape[-1] != 3:
+            raise ValueError("radiance_batch: directions must have shape (..., 3)")
+        out = self._model.radiance_batch(float(altitude_m), float(sun_zenith_deg),
+                                         np.ascontiguousarray(d.reshape(-1, 3)), bool(sun_disc), bool(ground))
+        return out.reshape(d.shape[:-1] + (out.shape[1],))
+
+    # --- images --------------------------------------------------------------------------------
+    def render(self, width: int = 1280, height: Optional[int] = None, camera: str = "perspective", *,
+               fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
+               sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0,
+               altitude_m: Optional[float] = None, sun_disc: bool = True, ground: bool = True,
+               unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False):
+        """One frame as `atmo render` renders it (same defaults), as a float32 H x W x C array.
+
+        camera: perspective (fov_deg, yaw_deg, pitch_deg), fisheye (all-sky; 0 outside the
+        circle), equirect (lat-long environment map) or cubemap (width is the face size; the six
+        faces stacked vertically as OpenEXR lays them out, 6 width x width). yaw_deg defaults to
+        the sun azimuth (0, north up, for the fisheye). unit: luminance (linear sRGB in cd/m^2, or
+        CIE XYZ with xyz=True), radiance (W m^-2 sr^-1 nm^-1 per wavelength) or relative (the
+        channels x the preset's solar_irradiance). spp: paths per pixel of a Monte Carlo model.
+        With full=True, returns a Frame (alpha, channel names, EXR metadata, standard error).
+        """
+        if camera not in CAMERAS:
+            raise ValueError(f"unknown camera '{camera}' (use {', '.join(CAMERAS)})")
+        if unit not in UNITS:
+            raise ValueError(f"unknown unit '{unit}' (use relative, radiance or luminance)")
+        for name, value in (("width", width), ("height", height), ("spp", spp)):
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer))):
+                raise ValueError(f"{name} must be an integer (got {value!r})")
+        if spp < 0:
+            raise ValueError(f"spp must be >= 0 (got {spp})")
+        if camera == "cubemap":
+            if height is not None and height != 6 * width:
+                raise ValueError(f"camera cubemap: width is the face size and height 6 x width (got {width}x{height})")
+            height = 6 * width
+        elif height is None:
+            height = {"equirect": max(width // 2, 1), "fisheye": width}.get(camera, max(width * 9 // 16, 1))
+        if yaw_deg is None:
+            yaw_deg = 0.0 if camera == "fisheye" else sun_azimuth_deg
+        if altitude_m is None:
+            altitude_m = self.observer_altitude_m
+        image, alpha, names, colour_space, envmap, standard_error = self._model.render(
+            camera, int(width), int(height), float(fov_deg), float(yaw_deg), float(pitch_deg), float(altitude_m),
+            float(sun_elevation_deg), float(sun_azimuth_deg), bool(sun_disc), bool(ground), unit, bool(xyz),
+            int(spp))
+        if not full:
+            return image
+        metadata = {
+            "atmo:version": __version__,
+            "atmo:model": self.name,
+            "atmo:backend": "cpu",
+            "atmo:preset": self.preset,
+            "atmo:parameterHash": self._model.parameter_hash,
+            "atmo:unit": unit,
+            "atmo:camera": camera,
+            "atmo:sunElevationDeg": f"{sun_elevation_deg:.10g}",
+            "atmo:sunAzimuthDeg": f"{sun_azimuth_deg:.10g}",
+            "atmo:altitudeM": f"{altitude_m:.10g}",
+            "atmo:wavelengthsNm": ", ".join(f"{w:.10g}" for w in self._model.wavelengths_nm),
+            "atmo:cameraYawDeg": f"{yaw_deg:.10g}",
+            "atmo:terms": ("sun_disc " if sun_disc else "") + ("ground" if ground else ""),
+            "atmo:modelOptions": " ".join(f"{k}={v}" for k, v in sorted(self._options.items())),
+            "atmo:writer": "atmo Python module",
+        }
+        if camera == "perspective":
+            metadata["atmo:cameraFovDeg"] = f"{fov_deg:.10g}"
+            metadata["atmo:cameraPitchDeg"] = f"{pitch_deg:.10g}"
+        return Frame(image=image, alpha=alpha, channel_names=tuple(names), colour_space=colour_space,
+                     envmap=envmap, standard_error=standard_error, metadata=metadata)
+
+
+# --- files -------------------------------------------------------------------------------------
+def _image_array(image) -> np.ndarray:
+    a = np.asarray(image, dtype=np.float32)
+    if a.ndim == 2:
+        a = a[:, :, None]
+    if a.ndim != 3:
+        raise ValueError(f"an image must be an H x W x C (or H x W) array (got shape {a.shape})")
+    return np.ascontiguousarray(a)
+
+
+def _alpha_array(alpha) -> Optional[np.ndarray]:
+    return None if alpha is None else np.ascontiguousarray(np.asarray(alpha, dtype=np.float32))
+
+
+def write_exr(path: Union[str, os.PathLike], image, *, alpha=None, channel_names: Optional[Sequence[str]] = None,
+              colour_space: Optional[str] = None, envmap: Optional[str] = None,
+              metadata: Optional[Mapping[str, str]] = None) -> None:
+    """A float32 EXR (ZIP) of an H x W x C array, written atomically (a temporary file renamed over
+    the target). channel_names: default R, G, B for 3 channels, else C0..Cn-1; alpha: H x W,
+    written as A; colour_space: "linear_srgb" or "xyz" (the chromaticities attribute); envmap:
+    "latlong" or "cube"; metadata: string attributes."""
+    write_exr_path = os.fspath(path)
+    _atmo.write_exr(write_exr_path, _image_array(image), _alpha_array(alpha), list(channel_names or []),
+                    colour_space or "", envmap or "",
+                    [(str(k), str(v)) for k, v in (metadata or {}).items()])
+
+
+def read_exr(path: Union[str, os.PathLike]):
+    """(image H x W x C float32, alpha H x W or None, channel names, metadata dict) of an EXR."""
+    image, alpha, names, metadata = _atmo.read_exr(os.fspath(path))
+    return image, alpha, tuple(names), metadata
+
+
+def write_png(path: Union[str, os.PathLike], image, *, alpha=None, exposure: Optional[float] = None,
+              ev100: Optional[float] = None, tonemap: str = "exp", gamma: Optional[float] = None,
+              per_channel: bool = False, dither: bool = True, bits: int = 8) -> None:
+    """A tone-mapped PNG of a linear sRGB H x W x 3 array, written atomically, as `atmo render`
+    writes it: exposure (a multiplier) or ev100, by default auto-exposure; tonemap "exp", "aces"
+    or "none"; gamma: the bare power instead of the sRGB curve; per_channel: the curve per channel
+    instead of on luminance; 8 or 16 bits."""
+    _atmo.write_png(os.fspath(path), _image_array(image), _alpha_array(alpha), exposure, ev100, tonemap, gamma,
+                    bool(per_channel), bool(dither), int(bits))
+
+
+def auto_exposure_ev100(image, alpha=None) -> float:
+    """The EV100 of `atmo render --auto-exposure` for a linear sRGB image (include/atmo/image.h)."""
+    return _atmo.auto_exposure_ev100(_image_array(image), _alpha_array(alpha))
+
+
+def exposure_from_ev100(ev100: float) -> float:
+    return _atmo.exposure_from_ev100(float(ev100))
+
+
+def camera_directions(width: int, height: int, camera: str = "perspective", *, fov_deg: float = 90.0,
+                      yaw_deg: float = 0.0, pitch_deg: float = 0.0) -> np.ndarray:
+    """The unit view direction of each pixel centre of a camera (H x W x 3, x east, y north, z up),
+    as the renderer forms them; 0 where it sees nothing (outside a fisheye's circle)."""
+    if camera not in CAMERAS[:3]:
+        raise ValueError(f"unknown camera '{camera}' (use perspective, fisheye or equirect)")
+    return _atmo.camera_directions(camera, int(width), int(height), float(fov_deg), float(yaw_deg),
+                                   float(pitch_deg))
+
+
+def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
+    """Unit direction towards the sun from its elevation and compass azimuth (degrees)."""
+    return np.asarray(_atmo.sun_direction(float(elevation_deg), float(azimuth_deg)))
+
+
+def set_threads(threads: int) -> None:
+    """At most `threads` worker threads for the module's work from now on, as `atmo --threads`;
+    0 restores oneTBB's default (all cores)."""
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
+        raise ValueError(f"threads must be an integer (got {threads!r})")
+    _atmo.set_threads(int(threads))
+
+
+def model_names() -> list:
+    return list(_atmo.model_names())
+
+
+def preset_names() -> list:
+    return list(_atmo.preset_names())
+
+
+def preset(name: str) -> dict:
+    """A preset's parameters as the JSON of docs/parameters.md (edit it and pass it as config=)."""
+    return json.loads(_atmo.preset_json(name))

@@ -1,0 +1,720 @@
+// atmo._atmo: the compiled half of the Python module `atmo` (docs/python.md).
+//
+// The pure-Python package (python/atmo/__init__.py) broadcasts the NumPy arguments and calls
+// these functions with flat, contiguous float64 arrays. Everything here calls the library the way
+// the command line does, so that the numbers agree with `atmo sample` and `atmo render`:
+//   - parameters from a preset, a JSON file or a JSON text (LoadParameters of apps/atmo/common.cc),
+//     --spectral N through atmo::MakeSpectral, model options as the KEY=VALUE strings of --option;
+//   - samples as apps/atmo/sample_command.cc computes them: points grouped by (altitude, sun
+//     zenith), one SkyView per group, SkyView::RadianceEstimate and SkyView::Transmittance per point,
+//     in double precision, the same unit conversions;
+//   - frames as apps/atmo/render_command.cc renders them: RenderViewFolded into linear sRGB for
+//     luminance, RenderView per channel otherwise, RenderProgressive for Monte Carlo models.
+// The work runs with the GIL released, on oneTBB's threads. atmo::Error becomes ValueError with
+// the library's one-line message.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/global_control.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/colour.h"
+#include "atmo/cubemap.h"
+#include "atmo/error.h"
+#include "atmo/image.h"
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/spectrum.h"
+#include "cpu/camera.h"
+#include "shared/shared.h"
+
+namespace py = pybind11;
+
+namespace atmo::python {
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+// "[2, 1]" for the multi-index of flat index `flat` in an array of `shape`.
+std::string IndexText(std::size_t flat, const std::vector<std::size_t>& shape) {
+  std::vector<std::size_t> index(shape.size());
+  for (std::size_t d = shape.size(); d-- > 0;) {
+    const std::size_t extent = shape[d] == 0 ? 1 : shape[d];
+    index[d] = flat % extent;
+    flat /= extent;
+  }
+  std::string text = "[";
+  for (std::size_t d = 0; d < index.size(); ++d) text += (d > 0 ? ", " : "") + std::to_string(index[d]);
+  return text + "]";
+}
+
+std::string FormatNumber(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
+// The checks of `atmo sample` on one point (apps/atmo/grid.cc CheckPoint): finite values, an
+// altitude within kMaxAltitude_m, zenith angles in [0, 180] degrees.
+void CheckPoint(double altitude_m, double sun_zenith_deg, double view_zenith_deg, double azimuth_deg,
+                const std::string& where) {
+  const std::pair<const char*, double> values[] = {{"altitude_m", altitude_m},
+                                                   {"sun_zenith_deg", sun_zenith_deg},
+                                                   {"view_zenith_deg", view_zenith_deg},
+                                                   {"azimuth_deg", azimuth_deg}};
+  for (const auto& [name, value] : values) {
+    if (!std::isfinite(value)) throw Error(where + name + " is not a finite number");
+  }
+  if (!(std::fabs(altitude_m) <= kMaxAltitude_m)) {
+    throw Error(where + "altitude_m " + FormatNumber(altitude_m) + " is outside [-1e+11, 1e+11] m");
+  }
+  for (const auto& [name, value] : {values[1], values[2]}) {
+    if (value < 0.0 || value > 180.0) throw Error(where + name + " " + FormatNumber(value) + " is outside [0, 180]");
+  }
+}
+
+// A model and the parameters it was made from.
+class PyModel {
+ public:
+  // Exactly one source of parameters: a preset name, a JSON file or a JSON text (the Python layer
+  // turns a dict into JSON text). spectral 0: as they are.
+  PyModel(const std::string& name, const std::optional<std::string>& preset, const std::optional<std::string>& config_path,
+          const std::optional<std::string>& config_json, int spectral, const ModelOptions& options)
+      : options_(options) {
+    py::gil_scoped_release release;
+    if (config_json) {
+      parameters_ = FromJson(*config_json);
+    } else if (config_path) {
+      parameters_ = LoadParametersFile(*config_path);
+    } else {
+      parameters_ = Preset(preset.value_or("earth"));
+    }
+    if (spectral != 0) parameters_ = MakeSpectral(parameters_, spectral);
+    model_ = CreateModel(name, parameters_, options_);
+  }
+
+  const Model& model() const { return *model_; }
+  const AtmosphereParameters& parameters() const { return parameters_; }
+
+  // The model's view for an observer altitude and a sun zenith (the sun at compass azimuth 0),
+  // kept for the next calls: a view builds per-view tables (hillaire's sky-view tables, a few
+  // ms), which repeated queries from one observer need not pay again. The last kViewCacheSize
+  // views are kept; safe to call from several threads.
+  std::shared_ptr<const SkyView> View(double altitude_m, double sun_zenith_deg) const {
+    const std::pair<double, double> key(altitude_m, sun_zenith_deg);
+    {
+      std::lock_guard<std::mutex> lock(views_mutex_);
+      for (auto it = views_.begin(); it != views_.end(); ++it) {
+        if (std::memcmp(&it->first, &key, sizeof key) == 0) {
+          views_.splice(views_.begin(), views_, it);  // most recently used first
+          return views_.front().second;
+        }
+      }
+    }
+    std::shared_ptr<const SkyView> view =
+        model_->View(altitude_m, DirectionFromZenithAzimuth(glm::radians(sun_zenith_deg), 0.0));
+    std::lock_guard<std::mutex> lock(views_mutex_);
+    views_.emplace_front(key, view);
+    if (views_.size() > kViewCacheSize) views_.pop_back();
+    return view;
+  }
+
+  // The model for a Monte Carlo frame in physical units: its images multiply the radiance by the
+  // model's own solar_irradiance (RenderProgressive), so that is 1 there, as `atmo render` makes it.
+  const Model& UnitIrradianceModel() const {
+    std::lock_guard<std::mutex> lock(unit_irradiance_mutex_);
+    if (!unit_irradiance_model_) {
+      AtmosphereParameters ones = parameters_;
+      ones.solar_irradiance.assign(ones.channel_count(), 1.0);
+      unit_irradiance_model_ = CreateModel(model_->name(), ones, options_);
+    }
+    return *unit_irradiance_model_;
+  }
+
+ private:
+  AtmosphereParameters parameters_;
+  ModelOptions options_;
+  std::unique_ptr<Model> model_;
+  mutable std::mutex unit_irradiance_mutex_;
+  mutable std::unique_ptr<Model> unit_irradiance_model_;
+  static constexpr std::size_t kViewCacheSize = 8;
+  mutable std::mutex views_mutex_;
+  mutable std::list<std::pair<std::pair<double, double>, std::shared_ptr<const SkyView>>> views_;
+};
+
+// The points of a sample that share an altitude and a sun zenith: one SkyView.
+struct PointGroup {
+  double altitude_m = 0.0;
+  double sun_zenith_deg = 0.0;
+  std::vector<std::size_t> indices;
+};
+
+std::vector<PointGroup> GroupPoints(const double* altitude_m, const double* sun_zenith_deg, std::size_t n) {
+  std::vector<PointGroup> groups;
+  // Keys by bit pattern (the values are finite; -0 and +0 land in two groups of equal views).
+  struct KeyHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& k) const {
+      return std::hash<std::uint64_t>()(k.first * 0x9E3779B97F4A7C15ull ^ k.second);
+    }
+  };
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::size_t, KeyHash> group_of;
+  std::pair<std::uint64_t, std::uint64_t> last_key{};
+  std::size_t last_group = std::numeric_limits<std::size_t>::max();
+  for (std::size_t i = 0; i < n; ++i) {
+    std::pair<std::uint64_t, std::uint64_t> key;
+    std::memcpy(&key.first, &altitude_m[i], sizeof(double));
+    std::memcpy(&key.second, &sun_zenith_deg[i], sizeof(double));
+    if (last_group == std::numeric_limits<std::size_t>::max() || key != last_key) {  // runs are common
+      const auto [found, inserted] = group_of.emplace(key, groups.size());
+      if (inserted) groups.push_back({altitude_m[i], sun_zenith_deg[i], {}});
+      last_key = key;
+      last_group = found->second;
+    }
+    groups[last_group].indices.push_back(i);
+  }
+  return groups;
+}
+
+// Per point and channel: radiance, transmittance and the standard error of the radiance, in the
+// unit of `atmo sample --unit`, into outputs of n x (channels) doubles (one "channel" for
+// luminance: cd/m^2 and the luminous transmittance, apps/atmo/sample_command.cc). `shape` is the
+// points' array shape, for error messages. Runs on oneTBB's threads; call it without the GIL.
+void EvaluateSample(const PyModel& self, const double* alt, const double* sz, const double* vz, const double* az,
+                    std::size_t n, RadianceUnit unit, const std::vector<std::size_t>& shape, double* out_radiance,
+                    double* out_transmittance, double* out_error) {
+  const AtmosphereParameters& parameters = self.parameters();
+  const std::size_t nc = parameters.channel_count();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(alt[i]) && std::isfinite(sz[i]) && std::isfinite(vz[i]) && std::isfinite(az[i]) &&
+          std::fabs(alt[i]) <= kMaxAltitude_m && sz[i] >= 0.0 && sz[i] <= 180.0 && vz[i] >= 0.0 && vz[i] <= 180.0)) {
+      CheckPoint(alt[i], sz[i], vz[i], az[i], "sample " + IndexText(i, shape) + ": ");
+    }
+  }
+  const SpectralConversion convert(parameters.wavelengths_nm);
+  std::vector<double> luminance_weights(nc);
+  double weight_sum = 0.0;
+  for (std::size_t c = 0; c < nc; ++c) {
+    luminance_weights[c] = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
+    weight_sum += luminance_weights[c];
+  }
+  const std::vector<PointGroup> groups = GroupPoints(alt, sz, n);
+  // Groups in parallel (each builds its view's tables), and each group's points in parallel.
+  oneapi::tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
+    const PointGroup& group = groups[g];
+    const std::shared_ptr<const SkyView> sky = self.View(group.altitude_m, group.sun_zenith_deg);
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, group.indices.size(), 256),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+          std::vector<double> l(nc), t(nc), e(nc);
+          for (std::size_t k = range.begin(); k < range.end(); ++k) {
+            const std::size_t i = group.indices[k];
+            const glm::dvec3 view = DirectionFromZenithAzimuth(glm::radians(vz[i]), glm::radians(az[i]));
+            std::fill(e.begin(), e.end(), 0.0);
+            sky->RadianceEstimate(view, l, e);
+            sky->Transmittance(view, t);
+            if (unit == RadianceUnit::kLuminance) {
+              // As `atmo sample --unit luminance`: independent channel estimates add their
+              // weighted variances.
+              double luminous_transmittance = 0.0, variance = 0.0;
+              for (std::size_t c = 0; c < nc; ++c) {
+                luminous_transmittance += luminance_weights[c] * t[c];
+                variance += (luminance_weights[c] * e[c]) * (luminance_weights[c] * e[c]);
+              }
+              out_radiance[i] = convert.Luminance(l);
+              out_transmittance[i] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
+              out_error[i] = std::sqrt(variance);
+              continue;
+            }
+            for (std::size_t c = 0; c < nc; ++c) {
+              const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
+              out_radiance[i * nc + c] = scale * l[c];
+              out_transmittance[i * nc + c] = t[c];
+              out_error[i * nc + c] = scale * e[c];
+            }
+          }
+        });
+  });
+}
+
+py::tuple Sample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Array view_zenith_deg, Array azimuth_deg,
+                 const std::string& unit_name, const std::vector<std::size_t>& shape) {
+  const std::size_t n = static_cast<std::size_t>(altitude_m.size());
+  for (const Array* a : {&sun_zenith_deg, &view_zenith_deg, &azimuth_deg}) {
+    if (static_cast<std::size_t>(a->size()) != n) throw Error("sample: the four arrays must have one size");
+  }
+  const RadianceUnit unit = ParseRadianceUnit(unit_name);
+  const std::size_t out_channels = unit == RadianceUnit::kLuminance ? 1 : self.parameters().channel_count();
+  Array radiance({n, out_channels});
+  Array transmittance({n, out_channels});
+  Array standard_error({n, out_channels});
+  const double* alt = altitude_m.data();
+  const double* sz = sun_zenith_deg.data();
+  const double* vz = view_zenith_deg.data();
+  const double* az = azimuth_deg.data();
+  double* out_radiance = radiance.mutable_data();
+  double* out_transmittance = transmittance.mutable_data();
+  double* out_error = standard_error.mutable_data();
+  {
+    py::gil_scoped_release release;
+    EvaluateSample(self, alt, sz, vz, az, n, unit, shape, out_radiance, out_transmittance, out_error);
+  }
+  return py::make_tuple(radiance, transmittance, standard_error);
+}
+
+// The benchmark's C++ side of `sample` (python/bench_sample.py): seconds of the best of `repeats`
+// runs of EvaluateSample on the four arrays (of one size) into fresh C++ outputs, the work of
+// Model.sample without its Python layer and NumPy arrays.
+double TimeSample(const PyModel& self, Array altitude_m, Array sun_zenith_deg, Array view_zenith_deg,
+                  Array azimuth_deg, int repeats) {
+  const std::size_t n = static_cast<std::size_t>(altitude_m.size());
+  for (const Array* a : {&sun_zenith_deg, &view_zenith_deg, &azimuth_deg}) {
+    if (static_cast<std::size_t>(a->size()) != n) throw Error("the four arrays must have one size");
+  }
+  const std::size_t nc = self.parameters().channel_count();
+  py::gil_scoped_release release;
+  double best = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < std::max(repeats, 1); ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<double> radiance(n * nc), transmittance(n * nc), standard_error(n * nc);
+    EvaluateSample(self, altitude_m.data(), sun_zenith_deg.data(), view_zenith_deg.data(), azimuth_deg.data(), n,
+                   RadianceUnit::kRelative, {n}, radiance.data(), transmittance.data(), standard_error.data());
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return best;
+}
+
+// The view directions of a camera's pixel centres (H x W x 3, local frame x east, y north, z up),
+// as the renderer forms them; 0 where the camera sees nothing (outside a fisheye's circle).
+Array CameraDirections(const std::string& kind, int width, int height, double fov_deg, double yaw_deg, double pitch_deg) {
+  Camera camera;
+  camera.kind = ParseCameraKind(kind);
+  camera.width = width;
+  camera.height = height;
+  camera.fov_deg = fov_deg;
+  camera.yaw_deg = yaw_deg;
+  camera.pitch_deg = pitch_deg;
+  ValidateCamera(camera);
+  Array out({static_cast<std::size_t>(height), static_cast<std::size_t>(width), std::size_t{3}});
+  double* data = out.mutable_data();
+  const shared::CameraParameters shared_camera = ToSharedCamera(camera);
+  std::vector<glm::dvec3> row(static_cast<std::size_t>(width));
+  for (int y = 0; y < height; ++y) {
+    if (shared_camera.kind == shared::kCameraPerspective) {
+      PerspectiveRowDirections(shared_camera, y, row);
+    } else {
+      for (int x = 0; x < width; ++x) {
+        shared::vec3 direction;
+        const bool seen = shared::GetCameraRayDirection(shared_camera, shared::vec2(x + 0.5, y + 0.5), direction);
+        row[x] = seen ? glm::dvec3(direction) : glm::dvec3(0.0);
+      }
+    }
+    for (int x = 0; x < width; ++x) {
+      for (int k = 0; k < 3; ++k) data[(static_cast<std::size_t>(y) * width + x) * 3 + k] = row[x][k];
+    }
+  }
+  return out;
+}
+
+// SkyView::RadianceBatch on directions (N x 3, unit or 0) for one observer and sun: float32 N x C.
+FloatArray RadianceBatch(const PyModel& self, double altitude_m, double sun_zenith_deg, Array directions,
+                         bool sun_disc, bool ground) {
+  if (directions.ndim() != 2 || directions.shape(1) != 3) throw Error("radiance_batch: directions must be N x 3");
+  CheckPoint(altitude_m, sun_zenith_deg, 0.0, 0.0, "radiance_batch: ");
+  const std::size_t n = static_cast<std::size_t>(directions.shape(0));
+  const std::size_t nc = self.parameters().channel_count();
+  FloatArray out({n, nc});
+  const glm::dvec3* views = reinterpret_cast<const glm::dvec3*>(directions.data());
+  static_assert(sizeof(glm::dvec3) == 3 * sizeof(double));
+  float* data = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    const std::shared_ptr<const SkyView> sky = self.View(altitude_m, sun_zenith_deg);
+    const RadianceTerms terms{sun_disc, ground};
+    // Chunks of directions in parallel, as a frame's rows are.
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+                              [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                                sky->RadianceBatch(std::span<const glm::dvec3>(views + range.begin(), range.size()),
+                                                   terms, std::span<float>(data + range.begin() * nc, range.size() * nc));
+                              });
+  }
+  return out;
+}
+
+// The benchmark's C++ side (python/bench_sample.py): seconds of the best of `repeats` runs of
+// SkyView::RadianceBatch over `directions` (N x 3) in chunks on oneTBB's threads, as a frame
+// uses it, for one observer and sun; the view's tables are made before the clock starts. With
+// `parallel` false: one call on the calling thread.
+double TimeRadianceBatch(const PyModel& self, double altitude_m, double sun_zenith_deg, Array directions, int repeats,
+                         bool parallel) {
+  if (directions.ndim() != 2 || directions.shape(1) != 3) throw Error("directions must be N x 3");
+  const std::size_t n = static_cast<std::size_t>(directions.shape(0));
+  const std::size_t nc = self.parameters().channel_count();
+  const glm::dvec3* views = reinterpret_cast<const glm::dvec3*>(directions.data());
+  py::gil_scoped_release release;
+  const std::shared_ptr<const SkyView> sky = self.View(altitude_m, sun_zenith_deg);
+  std::vector<float> out(n * nc);
+  const RadianceTerms terms{false, false};
+  double best = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < std::max(repeats, 1); ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    if (parallel) {
+      oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+                                [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                                  sky->RadianceBatch(std::span<const glm::dvec3>(views + range.begin(), range.size()),
+                                                     terms, std::span<float>(out.data() + range.begin() * nc,
+                                                                             range.size() * nc));
+                                });
+    } else {
+      sky->RadianceBatch(std::span<const glm::dvec3>(views, n), terms, out);
+    }
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return best;
+}
+
+// An Image as an H x W x C float32 array (copied).
+FloatArray ToArray(const Image& image) {
+  FloatArray out({static_cast<std::size_t>(image.height), static_cast<std::size_t>(image.width),
+                  static_cast<std::size_t>(image.channels)});
+  std::memcpy(out.mutable_data(), image.pixels.data(), image.pixels.size() * sizeof(float));
+  return out;
+}
+
+py::object AlphaOf(const Image& image) {
+  if (image.alpha.empty()) return py::none();
+  FloatArray alpha({static_cast<std::size_t>(image.height), static_cast<std::size_t>(image.width)});
+  std::memcpy(alpha.mutable_data(), image.alpha.data(), image.alpha.size() * sizeof(float));
+  return alpha;
+}
+
+std::string ColourSpaceName(ColourSpace space) {
+  switch (space) {
+    case ColourSpace::kLinearSrgb: return "linear_srgb";
+    case ColourSpace::kCieXyz: return "xyz";
+    case ColourSpace::kUnspecified: break;
+  }
+  return "";
+}
+
+ColourSpace ParseColourSpace(const std::string& name) {
+  if (name.empty()) return ColourSpace::kUnspecified;
+  if (name == "linear_srgb") return ColourSpace::kLinearSrgb;
+  if (name == "xyz") return ColourSpace::kCieXyz;
+  throw Error("unknown colour space '" + name + "' (use linear_srgb, xyz or none)");
+}
+
+// CIE XYZ of a linear sRGB image, per pixel (as `atmo render --xyz`).
+Image LinearSrgbImageToXyz(const Image& rgb) {
+  Image xyz = rgb;
+  const std::size_t pixels = static_cast<std::size_t>(rgb.width) * rgb.height;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const glm::dvec3 v = LinearSrgbToXyz(glm::dvec3(rgb.pixels[3 * p], rgb.pixels[3 * p + 1], rgb.pixels[3 * p + 2]));
+    for (int k = 0; k < 3; ++k) xyz.pixels[3 * p + k] = static_cast<float>(v[k]);
+  }
+  xyz.channel_names = {"X", "Y", "Z"};
+  xyz.colour_space = ColourSpace::kCieXyz;
+  return xyz;
+}
+
+struct RenderRequest {
+  std::string camera = "perspective";
+  int width = 1280;
+  int height = 720;
+  double fov_deg = 90.0;
+  double yaw_deg = 0.0;
+  double pitch_deg = 10.0;
+  double altitude_m = 0.0;
+  double sun_elevation_deg = 10.0;
+  double sun_azimuth_deg = 180.0;
+  bool sun_disc = true;
+  bool ground = true;
+  std::string unit = "luminance";
+  bool xyz = false;
+  std::uint64_t spp = 0;  // Monte Carlo models; 0: their samples option
+};
+
+// One frame as `atmo render` makes it on the CPU backend. Returns (image H x W x C, alpha H x W or
+// None, channel names, colour space, standard error H x W x C or None).
+py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
+  const RadianceUnit unit = ParseRadianceUnit(request.unit);
+  if (request.xyz && unit != RadianceUnit::kLuminance) throw Error("xyz needs unit luminance");
+  const AtmosphereParameters& parameters = self.parameters();
+  const bool cubemap = request.camera == "cubemap";
+  Image image;
+  Image standard_error;
+  {
+    py::gil_scoped_release release;
+    if (!std::isfinite(request.altitude_m)) throw Error("altitude must be a finite number");
+    const SpectralConversion convert(parameters.wavelengths_nm);
+    const std::vector<glm::vec3> srgb_weights = ColourWeights(convert, ImageColour::kLinearSrgb);
+    const std::vector<double> ones(parameters.channel_count(), 1.0);
+    // The models answer per unit solar irradiance: a relative frame multiplies by the preset's
+    // solar_irradiance, physical units bring in the solar spectrum through the conversion.
+    const std::vector<double>& irradiance = unit == RadianceUnit::kRelative ? parameters.solar_irradiance : ones;
+    const RadianceTerms terms{request.sun_disc, request.ground};
+    const ImageColour colour = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
+                               : request.xyz                   ? ImageColour::kXyz
+                                                               : ImageColour::kLinearSrgb;
+    const Model& model = self.model();
+    if (cubemap) {
+      if (IsMonteCarlo(model)) throw Error("camera cubemap needs a deterministic model, not " + std::string(model.name()));
+      if (request.width < 1 || request.width > kMaxImageSide) {
+        throw Error("cubemap face size must be in 1.." + std::to_string(kMaxImageSide) + " (got " +
+                    std::to_string(request.width) + ")");
+      }
+      const std::unique_ptr<SkyView> sky =
+          model.View(request.altitude_m, SunDirection(request.sun_elevation_deg, request.sun_azimuth_deg));
+      Cubemap cube = unit == RadianceUnit::kLuminance ? RenderCubemapFolded(*sky, request.width, terms, srgb_weights)
+                                                      : RenderCubemap(*sky, request.width, terms, irradiance);
+      image = CubemapExrImage(cube);
+      if (unit == RadianceUnit::kLuminance) {
+        image.colour_space = ColourSpace::kLinearSrgb;
+        if (request.xyz) image = LinearSrgbImageToXyz(image);
+      } else if (unit == RadianceUnit::kRadiance) {
+        const EnvMap envmap = image.envmap;
+        image = ConvertImage(image, convert, ImageColour::kSpectral);
+        image.envmap = envmap;
+      }
+    } else {
+      RenderSettings settings;
+      settings.camera.kind = ParseCameraKind(request.camera);
+      settings.camera.width = request.width;
+      settings.camera.height = request.height;
+      settings.camera.fov_deg = request.fov_deg;
+      settings.camera.yaw_deg = request.yaw_deg;
+      settings.camera.pitch_deg = request.pitch_deg;
+      settings.altitude_m = request.altitude_m;
+      settings.sun_elevation_deg = request.sun_elevation_deg;
+      settings.sun_azimuth_deg = request.sun_azimuth_deg;
+      settings.terms = terms;
+      ValidateCamera(settings.camera);
+      if (!std::isfinite(settings.sun_elevation_deg) || !std::isfinite(settings.sun_azimuth_deg)) {
+        throw Error("the sun elevation and azimuth must be finite");
+      }
+      if (IsMonteCarlo(model)) {
+        // Progressive, as `atmo render` renders it; in physical units from the model of unit
+        // solar irradiance, then converted.
+        ProgressiveSettings progressive;
+        progressive.samples_per_pixel = request.spp;
+        const Model& source = unit == RadianceUnit::kRelative ? model : self.UnitIrradianceModel();
+        const ProgressiveImage result = RenderProgressive(source, settings, progressive);
+        image = result.radiance;
+        standard_error = result.standard_error;
+        if (unit != RadianceUnit::kRelative) {
+          image = ConvertImage(image, convert, colour);
+          standard_error = ConvertStandardError(standard_error, convert, colour);
+        }
+      } else {
+        if (request.spp != 0) {
+          throw Error("spp is the number of Monte Carlo paths per pixel of model reference; model '" +
+                      std::string(model.name()) + "' is deterministic and takes no spp");
+        }
+        const std::unique_ptr<SkyView> sky =
+            model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
+        if (unit == RadianceUnit::kLuminance) {
+          image = RenderViewFolded(*sky, settings.camera, settings.terms, srgb_weights);
+          image.colour_space = ColourSpace::kLinearSrgb;
+          if (request.xyz) image = LinearSrgbImageToXyz(image);
+        } else {
+          image = RenderView(*sky, settings.camera, settings.terms, irradiance);
+          if (unit == RadianceUnit::kRadiance) {
+            const EnvMap envmap = image.envmap;
+            image = ConvertImage(image, convert, ImageColour::kSpectral);
+            image.envmap = envmap;
+          }
+        }
+      }
+    }
+  }
+  std::vector<std::string> names = image.channel_names;
+  if (names.empty()) {
+    for (int c = 0; c < image.channels; ++c) {
+      names.push_back(image.channels == 3 ? std::string(1, "RGB"[c]) : "C" + std::to_string(c));
+    }
+  }
+  const std::string envmap = image.envmap == EnvMap::kLatLong ? "latlong" : image.envmap == EnvMap::kCube ? "cube" : "";
+  return py::make_tuple(ToArray(image), AlphaOf(image), names, ColourSpaceName(image.colour_space), envmap,
+                        standard_error.width > 0 ? py::object(ToArray(standard_error)) : py::none());
+}
+
+// An H x W x C float32 array (C >= 1) with optional H x W alpha as an Image.
+Image FromArray(const FloatArray& array, const std::optional<FloatArray>& alpha) {
+  if (array.ndim() != 3 && array.ndim() != 2) throw Error("an image must be an H x W x C (or H x W) array");
+  Image image;
+  image.height = static_cast<int>(array.shape(0));
+  image.width = static_cast<int>(array.shape(1));
+  image.channels = array.ndim() == 3 ? static_cast<int>(array.shape(2)) : 1;
+  if (image.width < 1 || image.height < 1 || image.channels < 1) throw Error("an image needs at least one pixel and one channel");
+  image.pixels.assign(array.data(), array.data() + array.size());
+  if (alpha) {
+    if (alpha->ndim() != 2 || alpha->shape(0) != image.height || alpha->shape(1) != image.width) {
+      throw Error("alpha must be an H x W array of the image's size");
+    }
+    image.alpha.assign(alpha->data(), alpha->data() + alpha->size());
+  }
+  return image;
+}
+
+void WriteExrArray(const std::string& path, const FloatArray& array, const std::optional<FloatArray>& alpha,
+                   const std::vector<std::string>& channel_names, const std::string& colour_space,
+                   const std::string& envmap, const ImageMetadata& metadata) {
+  Image image = FromArray(array, alpha);
+  image.channel_names = channel_names;
+  image.colour_space = ParseColourSpace(colour_space);
+  if (envmap == "latlong") {
+    image.envmap = EnvMap::kLatLong;
+  } else if (envmap == "cube") {
+    image.envmap = EnvMap::kCube;
+  } else if (!envmap.empty()) {
+    throw Error("unknown envmap '" + envmap + "' (use latlong, cube or none)");
+  }
+  py::gil_scoped_release release;
+  WriteExr(path, image, metadata);
+}
+
+py::tuple ReadExrArray(const std::string& path) {
+  ImageMetadata metadata;
+  Image image;
+  {
+    py::gil_scoped_release release;
+    image = ReadExr(path, &metadata);
+  }
+  py::dict attributes;
+  for (const auto& [key, value] : metadata) attributes[py::str(key)] = value;
+  return py::make_tuple(ToArray(image), AlphaOf(image), image.channel_names, attributes);
+}
+
+void WritePngArray(const std::string& path, const FloatArray& array, const std::optional<FloatArray>& alpha,
+                   std::optional<double> exposure, std::optional<double> ev100, const std::string& tonemap,
+                   std::optional<double> gamma, bool per_channel, bool dither, int bits) {
+  Image image = FromArray(array, alpha);
+  if (image.channels != 3) throw Error("write_png needs an image of 3 channels (linear sRGB), got " + std::to_string(image.channels));
+  if (exposure && ev100) throw Error("give exposure or ev100, not both");
+  if (bits != 8 && bits != 16) throw Error("bits must be 8 or 16 (got " + std::to_string(bits) + ")");
+  ToneMapping mapping;
+  mapping.op = ParseToneMapper(tonemap);
+  if (gamma) {
+    if (!(*gamma > 0.0) || !std::isfinite(*gamma)) throw Error("gamma must be a positive number");
+    mapping.transfer = DisplayTransfer::kGamma;
+    mapping.gamma = *gamma;
+  }
+  mapping.per_channel = per_channel;
+  mapping.dither = dither;
+  mapping.bit_depth = bits;
+  py::gil_scoped_release release;
+  if (exposure) {
+    if (!std::isfinite(*exposure) || *exposure < 0.0) throw Error("exposure must be a finite number >= 0");
+    mapping.exposure = *exposure;
+  } else {
+    // The `atmo render` default for colour images: auto-exposure (docs/display.md).
+    mapping.exposure = ExposureFromEv100(ev100 ? *ev100 : AutoExposureEv100(image));
+  }
+  WritePng(path, image, mapping);
+}
+
+// `atmo --threads N`: at most N worker threads for everything that follows; 0 lifts the limit.
+void SetThreads(int threads) {
+  static std::unique_ptr<oneapi::tbb::global_control> limit;
+  if (threads < 0 || threads > 1024) throw Error("threads must be in 0..1024 (got " + std::to_string(threads) + ")");
+  limit.reset();
+  if (threads > 0) {
+    limit = std::make_unique<oneapi::tbb::global_control>(oneapi::tbb::global_control::max_allowed_parallelism,
+                                                          static_cast<std::size_t>(threads));
+  }
+}
+
+}  // namespace
+}  // namespace atmo::python
+
+PYBIND11_MODULE(_atmo, m) {
+  using namespace atmo;
+  using namespace atmo::python;
+  m.doc() = "atmo's compiled bindings; use the package `atmo` (docs/python.md)";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const atmo::Error& error) {
+      PyErr_SetString(PyExc_ValueError, error.what());
+    }
+  });
+
+  py::class_<PyModel>(m, "Model")
+      .def(py::init<const std::string&, const std::optional<std::string>&, const std::optional<std::string>&,
+                    const std::optional<std::string>&, int, const ModelOptions&>(),
+           py::arg("name"), py::arg("preset"), py::arg("config_path"), py::arg("config_json"), py::arg("spectral"),
+           py::arg("options"))
+      .def_property_readonly("name", [](const PyModel& s) { return std::string(s.model().name()); })
+      .def_property_readonly("preset", [](const PyModel& s) { return s.parameters().name; })
+      .def_property_readonly("channel_count", [](const PyModel& s) { return s.parameters().channel_count(); })
+      .def_property_readonly("wavelengths_nm", [](const PyModel& s) { return s.parameters().wavelengths_nm; })
+      .def_property_readonly("solar_irradiance", [](const PyModel& s) { return s.parameters().solar_irradiance; })
+      .def_property_readonly("solar_spectral_irradiance",
+                             [](const PyModel& s) { return SpectralConversion(s.parameters().wavelengths_nm).solar_irradiance(); })
+      .def_property_readonly("exposure", [](const PyModel& s) { return s.parameters().exposure; })
+      .def_property_readonly("observer_altitude_m", [](const PyModel& s) { return s.parameters().observer_altitude_m; })
+      .def_property_readonly("top_altitude_m",
+                             [](const PyModel& s) { return s.parameters().top_radius_m - s.parameters().ground_radius_m; })
+      .def_property_readonly("monte_carlo", [](const PyModel& s) { return IsMonteCarlo(s.model()); })
+      .def_property_readonly("parameter_hash", [](const PyModel& s) { return ParameterHashHex(s.parameters()); })
+      .def("parameters_json", [](const PyModel& s) { return ToJson(s.parameters()); })
+      .def("sample", &Sample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
+           py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
+      .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
+           py::arg("sun_disc"), py::arg("ground"))
+      .def("time_sample", &TimeSample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
+           py::arg("azimuth_deg"), py::arg("repeats"))
+      .def("time_radiance_batch", &TimeRadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"),
+           py::arg("directions"), py::arg("repeats"), py::arg("parallel"))
+      .def(
+          "render",
+          [](const PyModel& self, const std::string& camera, int width, int height, double fov_deg, double yaw_deg,
+             double pitch_deg, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg, bool sun_disc,
+             bool ground, const std::string& unit, bool xyz, std::uint64_t spp) {
+            RenderRequest request{camera,   width,    height, fov_deg, yaw_deg, pitch_deg, altitude_m, sun_elevation_deg,
+                                  sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp};
+            return RenderFrame(self, request);
+          },
+          py::arg("camera"), py::arg("width"), py::arg("height"), py::arg("fov_deg"), py::arg("yaw_deg"),
+          py::arg("pitch_deg"), py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("sun_azimuth_deg"),
+          py::arg("sun_disc"), py::arg("ground"), py::arg("unit"), py::arg("xyz"), py::arg("spp"));
+
+  m.def("camera_directions", &CameraDirections, py::arg("camera"), py::arg("width"), py::arg("height"),
+        py::arg("fov_deg"), py::arg("yaw_deg"), py::arg("pitch_deg"));
+  m.def("sun_direction", [](double elevation_deg, double azimuth_deg) {
+    const glm::dvec3 d = SunDirection(elevation_deg, azimuth_deg);
+    return std::vector<double>{d.x, d.y, d.z};
+  });
+  m.def("write_exr", &WriteExrArray, py::arg("path"), py::arg("image"), py::arg("alpha"), py::arg("channel_names"),
+        py::arg("colour_space"), py::arg("envmap"), py::arg("metadata"));
+  m.def("read_exr", &ReadExrArray, py::arg("path"));
+  m.def("write_png", &WritePngArray, py::arg("path"), py::arg("image"), py::arg("alpha"), py::arg("exposure"),
+        py::arg("ev100"), py::arg("tonemap"), py::arg("gamma"), py::arg("per_channel"), py::arg("dither"),
+        py::arg("bits"));
+  m.def("auto_exposure_ev100", [](const FloatArray& image, const std::optional<FloatArray>& alpha) {
+    return AutoExposureEv100(FromArray(image, alpha));
+  }, py::arg("image"), py::arg("alpha") = py::none());
+  m.def("exposure_from_ev100", &ExposureFromEv100);
+  m.def("set_threads", &SetThreads, py::arg("threads"));
+  m.def("model_names", &ModelNames);
+  m.def("preset_names", &PresetNames);
+  m.def("preset_json", [](const std::string& name) { return ToJson(Preset(name)); });
+  m.attr("version") = ATMO_VERSION;
+}

@@ -1,0 +1,145 @@
+"""Model.render: shapes per camera, agreement with RadianceBatch and with sample, `atmo render`."""
+
+import numpy as np
+import pytest
+
+import atmo
+
+
+@pytest.mark.parametrize("camera,size,shape", [
+    ("perspective", (64, 36), (36, 64, 3)),
+    ("fisheye", (48, 48), (48, 48, 3)),
+    ("equirect", (64, 32), (32, 64, 3)),
+    ("cubemap", (16, None), (96, 16, 3)),
+])
+def test_every_camera_gives_a_float32_image(earth, camera, size, shape):
+    image = earth.render(*size, camera=camera, sun_elevation_deg=20.0)
+    assert image.dtype == np.float32 and image.shape == shape
+    assert np.all(np.isfinite(image)) and np.all(image >= 0.0)
+    assert image.max() > 0.0
+
+
+def test_relative_frame_equals_radiance_batch_of_its_pixel_directions(earth):
+    # The frame pass is RadianceBatch on the camera's pixel directions times the preset's solar
+    # irradiance (the sun disc has its own pixel-integrated pass: left out here). The sun lies at
+    # compass azimuth 0, the convention of radiance_batch and sample.
+    for camera, (w, h), kwargs in [("perspective", (40, 24), dict(fov_deg=70.0, yaw_deg=30.0, pitch_deg=5.0)),
+                                   ("fisheye", (32, 32), dict(yaw_deg=0.0)),
+                                   ("equirect", (48, 24), dict(yaw_deg=0.0))]:
+        image = earth.render(w, h, camera, unit="relative", sun_disc=False, sun_elevation_deg=25.0,
+                             sun_azimuth_deg=0.0, **kwargs)
+        directions = atmo.camera_directions(w, h, camera, **kwargs)
+        batch = earth.radiance_batch(0.0, 65.0, directions, ground=True)
+        expected = batch * earth.solar_irradiance.astype(np.float32)
+        np.testing.assert_array_equal(image, expected)
+
+
+def test_luminance_frame_agrees_with_sampled_luminance(earth):
+    # The frame folds the channels into linear sRGB in float (RenderViewFolded); its luminance
+    # (Rec.709 Y) at each pixel is the sampled luminance of that direction in double, to the float
+    # kernel's rounding and the fold's 3-channel colour weights: well within 1e-4 relative.
+    w, h = 48, 24
+    image = earth.render(w, h, "equirect", unit="luminance", sun_disc=False, ground=False, yaw_deg=0.0,
+                         sun_elevation_deg=30.0, sun_azimuth_deg=0.0)
+    d = atmo.camera_directions(w, h, "equirect", yaw_deg=0.0)
+    view_zenith = np.degrees(np.arccos(np.clip(d[..., 2], -1.0, 1.0)))
+    azimuth = np.degrees(np.arctan2(d[..., 0], d[..., 1]))  # compass: x east, y north
+    sampled = earth.sample(0.0, 60.0, view_zenith, azimuth, unit="luminance").radiance[..., 0]
+    y = 0.2126 * image[..., 0] + 0.7152 * image[..., 1] + 0.0722 * image[..., 2]
+    sky = view_zenith < 89.0
+    np.testing.assert_allclose(y[sky], sampled[sky], rtol=1e-4)
+
+
+def test_sun_disc_adds_the_transmitted_solar_irradiance(earth):
+    # The pixel-integrated disc: sum over pixels of (with - without disc) x pixel solid angle is
+    # the sun's irradiance through the atmosphere, T(sun) x solar_irradiance (relative units).
+    w, h = 1024, 512
+    kwargs = dict(unit="relative", sun_elevation_deg=40.0, sun_azimuth_deg=0.0, yaw_deg=0.0, ground=False)
+    with_disc = earth.render(w, h, "equirect", sun_disc=True, **kwargs).astype(np.float64)
+    without = earth.render(w, h, "equirect", sun_disc=False, **kwargs).astype(np.float64)
+    latitude = np.pi / 2 - (np.arange(h) + 0.5) * np.pi / h
+    solid_angle = (2 * np.pi / w) * (np.pi / h) * np.cos(latitude)
+    irradiance = ((with_disc - without) * solid_angle[:, None, None]).sum(axis=(0, 1))
+    t_sun = earth.sample(0.0, 50.0, 50.0, 0.0).transmittance
+    np.testing.assert_allclose(irradiance, t_sun * earth.solar_irradiance, rtol=0.02)
+
+
+def test_fisheye_has_alpha_and_black_corners(earth):
+    frame = earth.render(32, 32, "fisheye", full=True)
+    assert frame.alpha is not None and frame.alpha.shape == (32, 32)
+    corner = frame.alpha == 0.0
+    assert corner[0, 0] and not corner[16, 16]
+    np.testing.assert_array_equal(frame.image[corner], 0.0)
+
+
+def test_spectral_frames(cli):
+    model = atmo.Model("hillaire", preset="earth", spectral=12)
+    radiance = model.render(32, 16, "equirect", unit="radiance")
+    assert radiance.shape == (16, 32, 12)
+    colour = model.render(32, 16, "equirect", unit="luminance")
+    assert colour.shape == (16, 32, 3)
+    xyz = model.render(32, 16, "equirect", unit="luminance", xyz=True, full=True)
+    assert xyz.channel_names == ("X", "Y", "Z") and xyz.colour_space == "xyz"
+    # Y of the XYZ frame is the luminance of the sRGB frame.
+    y = 0.2126 * colour[..., 0] + 0.7152 * colour[..., 1] + 0.0722 * colour[..., 2]
+    np.testing.assert_allclose(xyz.image[..., 1], y, rtol=1e-4, atol=1e-3)
+
+
+@pytest.mark.parametrize("cli_args,model_kwargs,render_kwargs", [
+    (["--camera", "equirect", "--width", "64", "--height", "32", "--sun-elevation", "15", "--sun-azimuth", "200"],
+     {}, dict(width=64, height=32, camera="equirect", sun_elevation_deg=15.0, sun_azimuth_deg=200.0)),
+    (["--camera", "fisheye", "--width", "40", "--height", "40", "--sun-elevation", "5", "--xyz"],
+     {}, dict(width=40, height=40, camera="fisheye", sun_elevation_deg=5.0, xyz=True)),
+    (["--camera", "cubemap", "--face-size", "12", "--no-ground"],
+     {}, dict(width=12, camera="cubemap", ground=False)),
+    (["--spectral", "8", "--unit", "radiance", "--width", "48", "--height", "27", "--pitch", "-5", "--fov", "60",
+      "--altitude", "3000"],
+     dict(spectral=8), dict(width=48, height=27, unit="radiance", pitch_deg=-5.0, fov_deg=60.0, altitude_m=3000.0)),
+    (["--unit", "relative", "--width", "32", "--height", "18", "--yaw", "90", "--no-sun-disc"],
+     {}, dict(width=32, height=18, unit="relative", yaw_deg=90.0, sun_disc=False)),
+])
+def test_render_matches_atmo_render_exr(tmp_path, cli, cli_args, model_kwargs, render_kwargs):
+    # The frame `atmo render` writes into its EXR, bit for bit: the same library calls.
+    exr = tmp_path / "cli.exr"
+    cli("render", *cli_args, "--exr", str(exr), "--no-png")
+    printed, printed_alpha, names, metadata = atmo.read_exr(exr)
+    frame = atmo.Model("hillaire", preset="earth", **model_kwargs).render(full=True, **render_kwargs)
+    assert names == frame.channel_names
+    assert metadata["atmo:unit"] == render_kwargs.get("unit", "luminance")
+    np.testing.assert_array_equal(frame.image, printed)
+    if frame.alpha is not None:
+        np.testing.assert_array_equal(frame.alpha, printed_alpha)
+
+
+def test_monte_carlo_frame_has_standard_errors_that_fall_as_one_over_root_n():
+    # Model reference renders progressively; its standard errors come with the frame, and four
+    # times the paths halve them (on average over the sky pixels, to Monte Carlo noise).
+    model = atmo.Model("reference", seed=2)
+    few = model.render(8, 4, "equirect", unit="relative", sun_elevation_deg=30.0, spp=64, full=True)
+    many = model.render(8, 4, "equirect", unit="relative", sun_elevation_deg=30.0, spp=256, full=True)
+    assert few.image.shape == (4, 8, 3) and few.standard_error.shape == (4, 8, 3)
+    sky = slice(0, 2)  # the upper half: sky, lit by the sun
+    assert np.all(many.image[sky] > 0.0)
+    ratio = many.standard_error[sky].mean() / few.standard_error[sky].mean()
+    assert 0.4 < ratio < 0.6
+    # The estimates agree within their errors: |difference| < 5 sigma nearly everywhere.
+    sigma = np.sqrt(few.standard_error[sky] ** 2 + many.standard_error[sky] ** 2)
+    assert np.mean(np.abs(few.image[sky] - many.image[sky]) < 5 * sigma + 1e-12) > 0.95
+
+
+def test_monte_carlo_frame_matches_atmo_render_with_its_seed(tmp_path, cli):
+    # The reference frame depends only on the seed, the pixel's direction and the path count: the
+    # module's frame (luminance, from the model of unit solar irradiance) is the CLI's, and so
+    # are the standard-error channels of the EXR.
+    exr = tmp_path / "mc.exr"
+    cli("render", "--model", "reference", "--seed", "5", "--spp", "8", "--camera", "equirect", "--width", "8",
+        "--height", "4", "--exr", str(exr), "--no-png")
+    printed, _, names, _ = atmo.read_exr(exr)
+    frame = atmo.Model("reference", seed=5).render(8, 4, "equirect", spp=8, full=True)
+    assert names == ("R", "G", "B", "R.stderr", "G.stderr", "B.stderr")
+    np.testing.assert_array_equal(frame.image, printed[..., :3])
+    np.testing.assert_array_equal(frame.standard_error, printed[..., 3:])
+    frame.write_exr(tmp_path / "module.exr")
+    again, _, again_names, _ = atmo.read_exr(tmp_path / "module.exr")
+    assert again_names == names
+    np.testing.assert_array_equal(again, printed)
