@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@ namespace {
 
 using Json = nlohmann::json;
 using ::atmo::testing::ReadFile;
+using ::atmo::gl::testing::SamplerSlack;
 
 // The one file an engine includes.
 std::string TablesGlsl() {
@@ -192,8 +194,9 @@ void main() {
   // Same table, same shared lookup functions, both in float: what is left is the float rounding
   // of the camera ray (atmo's GetCameraRayDirection vs the engine's copy) and of the horizon's
   // angle (the host's double vs float here), through the sky view's steep rows at the horizon.
+  // Measured on llvmpipe: p99 3.0e-5, max 5.4e-5.
   EXPECT_LT(d.p99, 1e-4 * SamplerSlack(context));
-  EXPECT_LT(d.max, 2e-3 * SamplerSlack(context));
+  EXPECT_LT(d.max, 5e-4 * SamplerSlack(context));
 }
 
 // The other lookups of atmo_tables.glsl in a fresh program against the same functions compiled
@@ -278,7 +281,11 @@ void main() {
   uv = (floor(screen * vec2(sv)) + 0.5) / vec2(sv);
   float azimuth;
   atmo_GetViewAnglesFromSkyViewTextureUv(atmosphere, sv, view_r, uv, mu, azimuth);
-  float e_sv = length(atmo_GetSkyViewTextureUvFromViewAngles(atmosphere, sv, view_r, mu, azimuth) - uv);
+  // The last sky row and the first ground row both map to the horizon (each half puts its ends on
+  // texel centres); in float its zenith angle comes back on either side, so they are left out.
+  int row = int(floor(uv.y * float(sv.y)));
+  float e_sv = row == sv.y / 2 || row == sv.y / 2 - 1 ? 0.0 :
+      length(atmo_GetSkyViewTextureUvFromViewAngles(atmosphere, sv, view_r, mu, azimuth) - uv);
   ivec3 ap = textureSize(aerial_radiance, 0);
   vec3 uvw = (floor(vec3(screen, q.w / 35.0) * vec3(ap)) + 0.5) / vec3(ap);
   vec2 s;
@@ -332,7 +339,11 @@ void main() {
   const shared::Texture2D ms_cpu = texture2d(multiple_scattering, false);
   const shared::Texture3D l_cpu = texture3d(aerial_l);
   const shared::Texture3D tr_cpu = texture3d(aerial_t);
-  double t_abs = 0.0, ms_rel = 0.0, ap_rel = 0.0, ap_t_abs = 0.0, round_trip = 0.0;
+  // Relative differences of Psi_ms over values above 1e-3 of its largest (deep night, where it
+  // falls by orders of magnitude, is compared at that floor).
+  const double ms_peak = *std::max_element(multiple_scattering.rgb.begin(), multiple_scattering.rgb.end());
+  double t_abs = 0.0, ms_rel = 0.0, ap_rel = 0.0, ap_t_abs = 0.0;
+  double round_trip[4] = {0.0, 0.0, 0.0, 0.0};
   for (int i = 0; i < kQueries; ++i) {
     const float* q = &queries[8 * i];
     const float* g = &results[20 * i];
@@ -343,24 +354,25 @@ void main() {
                                   l, tr);
     for (int c = 0; c < 3; ++c) {
       t_abs = std::max(t_abs, std::abs(g[c] - t[c]));
-      ms_rel = std::max(ms_rel, std::abs(g[4 + c] - m[c]) / std::max(m[c], 1e-12));
+      ms_rel = std::max(ms_rel, std::abs(g[4 + c] - m[c]) / std::max(m[c], 1e-3 * ms_peak));
       ap_rel = std::max(ap_rel, std::abs(g[8 + c] - l[c]) / std::max(l[c], 1e-6));
       ap_t_abs = std::max(ap_t_abs, std::abs(g[12 + c] - tr[c]));
     }
-    for (int k = 0; k < 4; ++k) round_trip = std::max(round_trip, static_cast<double>(g[16 + k]));
+    for (int k = 0; k < 4; ++k) round_trip[k] = std::max(round_trip[k], static_cast<double>(g[16 + k]));
   }
   std::printf("engine lookups vs C++: transmittance max abs %.2e, multiple scattering max rel %.2e, aerial "
-              "radiance max rel %.2e, aerial transmittance max abs %.2e; float round trips max %.2e\n",
-              t_abs, ms_rel, ap_rel, ap_t_abs, round_trip);
-  // Float mappings of double ones: the transmittance's (r, mu) mapping loses ~1e-4 of a texel
-  // near the horizon at the ground (float's r^2 - R^2), the others are linear; the sampler's
-  // float weights add ~1e-6.
+              "radiance max rel %.2e, aerial transmittance max abs %.2e; float round trips max %.2e %.2e %.2e %.2e\n",
+              t_abs, ms_rel, ap_rel, ap_t_abs, round_trip[0], round_trip[1], round_trip[2], round_trip[3]);
+  // The same functions and floats, the GPU in float: measured on llvmpipe 5.9e-7, 5.9e-6, 1.3e-6,
+  // 1.1e-7 (the float mappings' rounding, ~1e-7 of a texel, times the tables' gradients); the
+  // round trips 1.1e-5 (transmittance: float's r^2 - R^2 near the ground), 6e-8, 5.7e-5 (sky view:
+  // acos of a float cosine near the zenith), 0.
   const double slack = SamplerSlack(context);
-  EXPECT_LT(t_abs, 2e-4 * slack);
-  EXPECT_LT(ms_rel, 1e-4 * slack);
-  EXPECT_LT(ap_rel, 1e-4 * slack);
-  EXPECT_LT(ap_t_abs, 1e-5 * slack);
-  EXPECT_LT(round_trip, 1e-4);
+  EXPECT_LT(t_abs, 1e-5 * slack);
+  EXPECT_LT(ms_rel, 5e-5 * slack);
+  EXPECT_LT(ap_rel, 2e-5 * slack);
+  EXPECT_LT(ap_t_abs, 1e-6 * slack);
+  for (double e : round_trip) EXPECT_LT(e, 1e-4);
 }
 
 }  // namespace

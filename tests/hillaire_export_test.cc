@@ -184,7 +184,10 @@ TEST_F(HillaireExport, MappingsAndTheirInversesAgree) {
       double r_ms, mu_s;
       shared::GetRMuSFromMultiScatteringTextureUv(km, size, uv, r_ms, mu_s);
       worst = std::max(worst, glm::length(shared::GetMultiScatteringTextureUvFromRMuS(km, size, r_ms, mu_s) - uv));
+      // The first ground row and the last sky row both map to the horizon (each half puts its
+      // ends on texel centres); there the forward mapping takes the sky, so that row is skipped.
       for (double altitude_km : {0.0, 0.3, 8.0, 60.0}) {
+        if (y == size.y / 2) continue;
         const double r_view = km.bottom_radius + altitude_km;
         double mu_view, azimuth;
         shared::GetViewAnglesFromSkyViewTextureUv(km, size, r_view, uv, mu_view, azimuth);
