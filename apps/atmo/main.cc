@@ -481,6 +481,9 @@ int main(int argc, char** argv) {
                 "hillaire: distance of the last aerial-perspective slice in metres")
           ->check(kPositive),
       AddSunOptions(precompute_app, precompute.sun)};
+  hillaire_flags.back()
+      ->excludes(precompute_app->get_option("--sun-elevation"))
+      ->excludes(precompute_app->get_option("--sun-azimuth"));
 
   atmo::cli::IlluminanceCommand illuminance;
   CLI::App* illuminance_app = app.add_subcommand(
