@@ -75,7 +75,7 @@ set(content "// atmo_tables.glsl: samples the tables exported by `atmo precomput
 // (NAME.json) and in docs/tables.md.
 //
 // To use it: paste (or #include through GL_ARB_shading_language_include) this file after the
-// `#version` line (GLSL 3.30 or later; 4.30 tested) of any shader, upload the raw tables into
+// `#version` line of any shader (tested with `#version 430 core`), upload the raw tables into
 // GL_RGB32F textures with GL_LINEAR filtering and clamp to edge (the sky view: GL_REPEAT in s),
 // then, lengths in km as in the manifest:
 //   AtmoGeometry atmosphere = AtmoGeometry(bottom_radius_km, top_radius_km);
