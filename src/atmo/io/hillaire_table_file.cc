@@ -3,6 +3,7 @@
 #include "io/hillaire_table_file.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 
 #include "atmo/error.h"
@@ -216,8 +217,9 @@ std::vector<std::pair<std::string, std::string>> HillaireTableOptions(const Hill
 void ValidateHillaireExportView(const AtmosphereParameters& p, const HillaireExportView& view) {
   const double top_m = p.top_radius_m - p.ground_radius_m;
   if (!std::isfinite(view.altitude_m) || view.altitude_m < 0.0 || view.altitude_m > top_m) {
-    throw Error("the exported sky view needs an observer inside the atmosphere: --altitude in [0, " +
-                std::to_string(top_m) + "] m (got " + std::to_string(view.altitude_m) + ")");
+    char text[160];
+    std::snprintf(text, sizeof(text), "--altitude in [0, %.10g] m (got %.10g)", top_m, view.altitude_m);
+    throw Error("the exported sky view needs an observer inside the atmosphere: " + std::string(text));
   }
   if (!std::isfinite(view.sun_elevation_deg) || !std::isfinite(view.sun_azimuth_deg)) {
     throw Error("the sun's elevation and azimuth must be finite");
