@@ -610,7 +610,39 @@ TEST_F(CliTest, PrecomputeDefaultsToTheModelItExports) {
   const RunResult r = Run("precompute --preset atmosphere-plus --option size=8x16x8 --option orders=1 --out t");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "t.raw"));
-  EXPECT_EQ(r.out.rfind("wrote t.exr, t.raw, t.json (elek, ", 0), 0u) << r.out;
+  EXPECT_EQ(r.out.rfind("wrote t.exr, t.raw, t_transmittance.exr, t_transmittance.raw, t.json (elek, ", 0), 0u)
+      << r.out;
+}
+
+// --model hillaire exports its six tables and the manifest; the view flags reach the manifest, an
+// observer above the atmosphere is refused in one line before anything is written, and the
+// hillaire-only flags are named in a warning for elek.
+TEST_F(CliTest, PrecomputeHillaireWritesTheTablesOfTheView) {
+  const std::string small = "--option transmittance_lut=32x16 --option multiple_scattering_lut=8x8 "
+                            "--option sky_view_lut=32x16 --aerial-size 4x4x4 --width 64 --height 32 ";
+  const RunResult r =
+      Run("precompute --model hillaire " + small + "--altitude 250 --sun-elevation 33 --sun-azimuth 90 --out h");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("wrote h.json and 6 tables as h_<table>.exr, .raw (hillaire, earth, cpu, altitude 250 m, sun "
+                        "elevation 33 deg)", 0), 0u) << r.out;
+  for (const char* table : {"transmittance", "multiple_scattering", "sky_view", "sky_view_ground", "aerial_radiance",
+                            "aerial_transmittance"}) {
+    EXPECT_TRUE(fs::exists(dir_ / ("h_" + std::string(table) + ".exr"))) << table;
+    EXPECT_TRUE(fs::exists(dir_ / ("h_" + std::string(table) + ".raw"))) << table;
+  }
+  const std::string manifest = ReadFile(dir_ / "h.json");
+  EXPECT_NE(manifest.find("\"altitude_m\": 250.0"), std::string::npos);
+  EXPECT_NE(manifest.find("\"sun_elevation_deg\": 33.0"), std::string::npos);
+  EXPECT_NE(manifest.find("\"sky_view_lut\": \"32x16\""), std::string::npos);
+  ExpectFailureKeepingOutputs("precompute --model hillaire " + small + "--altitude 200000 --out x",
+                              "inside the atmosphere", {"x.json", "x_sky_view.raw"});
+  ExpectFailureKeepingOutputs("precompute --model hillaire --aerial-size 4x4 --out x", "--aerial-size 4x4",
+                              {"x.json"});
+  const RunResult elek = Run("precompute --preset atmosphere-plus --option size=8x16x8 --option orders=1 "
+                             "--altitude 5 --out e");
+  ASSERT_EQ(elek.exit_code, 0) << elek.err;
+  EXPECT_EQ(elek.err, "atmo: warning: --altitude applies to --model hillaire only\n");
+  EXPECT_EQ(Run("precompute --model simple --out s").exit_code, 1);
 }
 
 }  // namespace

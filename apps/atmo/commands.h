@@ -189,10 +189,24 @@ struct BenchCommand {
 };
 int RunBench(const CommonOptions& common, const BenchCommand& command);
 
-// `atmo precompute`: computes the model's table and exports it (model elek: NAME.exr, NAME.raw,
-// NAME.json; include/atmo/elek.h).
+// `atmo precompute`: computes the model's tables and exports them (model elek: NAME.exr, NAME.raw,
+// NAME_transmittance.exr/.raw, NAME.json, include/atmo/elek.h; model hillaire: NAME_<table>.exr/.raw
+// for six tables and NAME.json, include/atmo/hillaire_tables.h and docs/tables.md).
 struct PrecomputeCommand {
   std::string out;  // NAME, without extension
+  // Model hillaire: the observer and sun of the sky-view and aerial-perspective tables, and the
+  // camera and size of the aerial-perspective volume (render's flags and defaults).
+  std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
+  double sun_elevation_deg = 10.0;
+  double sun_azimuth_deg = 180.0;
+  SunOptions sun;  // --date: the sun from a date and place
+  int width = 1280;
+  int height = 720;
+  double fov_deg = 90.0;
+  std::optional<double> yaw_deg;  // default: the sun azimuth
+  double pitch_deg = 10.0;
+  std::string aerial_size = "32x32x32";
+  double aerial_distance_m = 32000.0;
 };
 int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command);
 

@@ -7,7 +7,8 @@
 //                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
 //   atmo presets [--dump NAME]
 //   atmo bench   [--repeat N | --quick] [--width W --height H]
-//   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json)
+//   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json, ...)
+//   atmo precompute --model hillaire --out NAME      (writes NAME.json, NAME_<table>.exr, .raw)
 //   atmo illuminance [--sun-elevation E ...] [--altitude A]   (lux on a horizontal plane, CSV)
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
@@ -444,13 +445,48 @@ int main(int argc, char** argv) {
   AddSunOptions(bench_app, bench.sun);  // the frame's sun from a date (sun_options.h)
 
   atmo::cli::PrecomputeCommand precompute;
-  CLI::App* precompute_app =
-      app.add_subcommand("precompute", "export the model's table (elek: NAME.exr, NAME.raw, NAME.json)");
+  CLI::App* precompute_app = app.add_subcommand(
+      "precompute", "export the model's tables for engines (NAME.json + EXR and raw float; docs/tables.md)");
   AddCommonOptions(precompute_app, common);
   precompute_app->add_option("--out", precompute.out, "output NAME (without extension)")->required();
-  // Only elek has an exportable table: the default model here.
-  precompute_app->get_option("--model")->default_str("elek")->description("sky model whose table is exported: elek "
-                                                                         "(the only one with a table)");
+  // elek was the first model with an exportable table: still the default model here.
+  precompute_app->get_option("--model")->default_str("elek")->description(
+      "sky model whose tables are exported: elek (its scattering and transmittance tables) or hillaire "
+      "(transmittance, multiple scattering, sky view, aerial perspective)");
+  // Model hillaire's view-dependent tables: render's observer, sun and camera flags.
+  const std::vector<CLI::Option*> hillaire_flags = {
+      AddOptionalNumber(precompute_app, "--altitude", precompute.altitude_m,
+                        "hillaire: observer altitude in metres of the sky-view and aerial tables [default: the "
+                        "preset's]")
+          ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m)),
+      AddNumber(precompute_app, "--sun-elevation", precompute.sun_elevation_deg, "hillaire: sun elevation in degrees")
+          ->check(RangeOf(-90.0, 90.0)),
+      AddNumber(precompute_app, "--sun-azimuth", precompute.sun_azimuth_deg, "hillaire: sun compass azimuth in degrees"),
+      precompute_app->add_option("--width", precompute.width, "hillaire: aerial-perspective camera width in pixels")
+          ->check(kInteger)
+          ->check(CLI::Range(1, atmo::kMaxImageSide))
+          ->capture_default_str(),
+      precompute_app->add_option("--height", precompute.height, "hillaire: aerial-perspective camera height in pixels")
+          ->check(kInteger)
+          ->check(CLI::Range(1, atmo::kMaxImageSide))
+          ->capture_default_str(),
+      AddNumber(precompute_app, "--fov", precompute.fov_deg,
+                "hillaire: aerial-perspective camera horizontal field of view in degrees")
+          ->check(OpenRangeOf(0.0, 180.0)),
+      AddOptionalNumber(precompute_app, "--yaw", precompute.yaw_deg,
+                        "hillaire: aerial-perspective camera compass azimuth in degrees [default: the sun's]"),
+      AddNumber(precompute_app, "--pitch", precompute.pitch_deg, "hillaire: aerial-perspective camera elevation in degrees")
+          ->check(RangeOf(-90.0, 90.0)),
+      precompute_app->add_option("--aerial-size", precompute.aerial_size,
+                                 "hillaire: aerial-perspective froxels WxHxD, each in [1, 512]")
+          ->capture_default_str(),
+      AddNumber(precompute_app, "--aerial-distance", precompute.aerial_distance_m,
+                "hillaire: distance of the last aerial-perspective slice in metres")
+          ->check(kPositive),
+      AddSunOptions(precompute_app, precompute.sun)};
+  hillaire_flags.back()
+      ->excludes(precompute_app->get_option("--sun-elevation"))
+      ->excludes(precompute_app->get_option("--sun-azimuth"));
 
   atmo::cli::IlluminanceCommand illuminance;
   CLI::App* illuminance_app = app.add_subcommand(
@@ -485,8 +521,10 @@ int main(int argc, char** argv) {
                     "hillaire" + lists},
       {presets_app, "Examples:\n  atmo presets\n  atmo presets --dump earth > hazy.json" + lists},
       {bench_app, "Example:\n  atmo bench --quick --width 320 --height 180" + lists},
-      {precompute_app, "Example:\n  atmo precompute --preset atmosphere-plus --out ap_table   (writes ap_table.exr, "
-                       ".raw, .json)" + lists},
+      {precompute_app, "Examples:\n  atmo precompute --preset atmosphere-plus --out ap_table   (elek: ap_table.exr, "
+                       ".raw, .json, ap_table_transmittance.exr, .raw)\n"
+                       "  atmo precompute --model hillaire --altitude 100 --sun-elevation 20 --out sky   (sky.json, "
+                       "sky_<table>.exr, .raw)" + lists},
       {illuminance_app, "Example:\n  atmo illuminance --preset earth-spectral --sun-elevation 10 30 60" + lists},
   };
   for (const auto& [sub, footer] : footers) {
@@ -522,6 +560,11 @@ int main(int argc, char** argv) {
   if (!table.empty()) common.options.push_back("table=" + table);
   if (sample_app->parsed() && sample_sun_elevation) sample.sun_zenith_deg = 90.0 - *sample_sun_elevation;
   if (precompute_app->parsed() && precompute_app->get_option("--model")->count() == 0) common.model = "elek";
+  if (precompute_app->parsed() && common.model != "hillaire") {
+    for (CLI::Option* option : hillaire_flags) {
+      if (option->count() > 0) PrintWarning(option->get_name() + " applies to --model hillaire only");
+    }
+  }
   if (compare_app->parsed() && compare.image_path.empty()) {
     for (const char* flag : {"--altitude", "--sun-zenith", "--image-range", "--image-size"}) {
       if (compare_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the --image only");

@@ -11,6 +11,8 @@
 #include "cpu/camera.h"
 #include "cpu/sun_disc.h"
 #include "gl/program.h"
+#include "io/hillaire_table_file.h"
+#include "io/table_files.h"
 #include "physics/shared_parameters.h"
 
 namespace atmo::gl {
@@ -638,6 +640,38 @@ Image RenderHillaireGl(const Context& context, const AtmosphereParameters& param
     AddSunDiscOnHost(parameters, transmittance, render, image);
   }
   return image;
+}
+
+HillaireTables ComputeHillaireTablesGl(const Context& context, const AtmosphereParameters& parameters,
+                                       const HillaireSettings& settings, const HillaireExportView& view,
+                                       PassTimings* timings) {
+  Validate(parameters);
+  ValidateHillaireExportView(parameters, view);
+  HillaireSettings with_sky_view = settings;
+  with_sky_view.use_sky_view_lut = true;
+  HillaireGl sky(context, parameters, with_sky_view);
+  sky.Precompute(timings);
+  sky.SetView(view.altitude_m, SunDirection(view.sun_elevation_deg, view.sun_azimuth_deg), /*ground=*/true, timings);
+  HillaireTables tables;
+  tables.parameters = parameters;
+  tables.options = HillaireTableOptions(settings);
+  tables.view = view;
+  tables.backend = "gl";
+  const auto read = [&](const char* name, shared::Texture2D (HillaireGl::*download)(std::size_t) const) {
+    std::vector<shared::Texture2D> textures;
+    for (std::size_t b = 0; b < sky.batch_count(); ++b) textures.push_back((sky.*download)(b));
+    std::vector<const shared::Texture2D*> pointers;
+    for (const auto& t : textures) pointers.push_back(&t);
+    tables.tables.push_back(io::TableFromTextures(name, pointers));
+  };
+  read("transmittance", &HillaireGl::ReadTransmittance);
+  read("multiple_scattering", &HillaireGl::ReadMultipleScattering);
+  read("sky_view", &HillaireGl::ReadSkyView);
+  read("sky_view_ground", &HillaireGl::ReadSkyAndGroundView);
+  const AerialPerspectiveVolume volume = sky.ComputeAerialPerspective(view.camera, view.aerial, timings);
+  tables.tables.push_back(AerialPerspectiveTable(volume, /*radiance=*/true));
+  tables.tables.push_back(AerialPerspectiveTable(volume, /*radiance=*/false));
+  return tables;
 }
 
 }  // namespace atmo::gl

@@ -40,6 +40,7 @@
 
 #include "atmo/aerial_perspective.h"
 #include "atmo/gl/hillaire_gl.h"  // the public entry points (options by name)
+#include "atmo/hillaire_tables.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -186,5 +187,13 @@ void AddSunDiscOnHost(const AtmosphereParameters& parameters, std::span<const sh
 Image RenderHillaireGl(const Context& context, const AtmosphereParameters& parameters,
                        const HillaireSettings& settings, const RenderSettings& render,
                        PassTimings* timings = nullptr);
+
+// The exported tables of include/atmo/hillaire_tables.h computed on the GL backend (backend
+// "gl"): Precompute, SetView with the ground (the sky-view table is computed whatever the sky_view
+// option says) and ComputeAerialPerspective, each table read back. Throws atmo::Error as
+// ComputeHillaireTables does.
+HillaireTables ComputeHillaireTablesGl(const Context& context, const AtmosphereParameters& parameters,
+                                       const HillaireSettings& settings, const HillaireExportView& view,
+                                       PassTimings* timings = nullptr);
 
 }  // namespace atmo::gl

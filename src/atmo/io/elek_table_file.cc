@@ -1,11 +1,5 @@
 #include "io/elek_table_file.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -16,18 +10,15 @@
 #include "atmo/elek.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "io/table_files.h"
 #include "models/elek_model.h"
 
 namespace atmo {
 namespace {
 
-using Json = nlohmann::ordered_json;
-
-std::string Hex64(std::uint64_t value) {
-  char text[17];
-  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(value));
-  return text;
-}
+using io::Hex64;
+using io::Json;
+using io::ManifestInteger;
 
 // Little-endian float32 bytes of the RGBA tables of every batch, one after another.
 std::vector<unsigned char> RawBytes(const ElekModel& model) {
@@ -93,63 +84,13 @@ std::string ReadFile(const std::filesystem::path& path, const char* what,
   return ReadFileBounded(path, "elek table " + std::string(what) + " ", max_bytes);
 }
 
-// An integer of the manifest in [lo, hi]. JSON numbers with a fraction or exponent are refused
-// rather than converted: get<int>() loaded format_version 1.5 as 1, and converting 1e30 to an
-// integer is undefined behaviour (it printed -2147483648, and raw_bytes 1e30 read as 32768).
-std::uint64_t ManifestInteger(const Json& j, const char* key, std::uint64_t lo, std::uint64_t hi,
-                              const std::string& where) {
-  const Json& value = j.at(key);
-  const std::string range = " in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-  if (!value.is_number_integer()) throw Error(where + key + " must be an integer" + range + " (got " + value.dump() + ")");
-  if (value.is_number_unsigned()) {
-    const std::uint64_t u = value.get<std::uint64_t>();
-    if (u >= lo && u <= hi) return u;
-  }
-  throw Error(where + key + " must be an integer" + range + " (got " + value.dump() + ")");
-}
-
 }  // namespace
 
-std::uint64_t Fnv1a64(std::span<const unsigned char> bytes) {
-  std::uint64_t hash = 14695981039346656037ull;
-  for (unsigned char b : bytes) {
-    hash ^= b;
-    hash *= 1099511628211ull;
-  }
-  return hash;
-}
-
-// An advisory lock (flock) on the folder of a table's files, for as long as it lives: exclusive
-// while an export publishes its set, shared while a load reads it, so that a reader never sees
-// the files of two exports mixed and two exports publish one after the other. A folder that
-// cannot be opened is not locked (the operation then fails on its own files).
-namespace {
-
-class FolderLock {
- public:
-  FolderLock(const std::filesystem::path& file, bool exclusive) {
-    const std::filesystem::path dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-    fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd_ >= 0) {
-      while (::flock(fd_, exclusive ? LOCK_EX : LOCK_SH) != 0 && errno == EINTR) {
-      }
-    }
-  }
-  ~FolderLock() {
-    if (fd_ >= 0) ::close(fd_);  // closing releases the lock
-  }
-  FolderLock(const FolderLock&) = delete;
-  FolderLock& operator=(const FolderLock&) = delete;
-
- private:
-  int fd_ = -1;
-};
-
-}  // namespace
+using io::FolderLock;
 
 ElekTableFiles ElekTableFilesFor(const std::filesystem::path& name) {
   const std::string base = name.string();
-  return {base + ".exr", base + ".raw", base + ".json"};
+  return {base + ".exr", base + ".raw", base + ".json", base + "_transmittance.exr", base + "_transmittance.raw"};
 }
 
 ElekTableFiles ExportElekTable(const Model& model, const std::filesystem::path& name) {
@@ -193,7 +134,23 @@ ElekTableFiles ExportElekTable(const Model& model, const std::filesystem::path& 
             {"atmo:elekLayout", "slice z of batch b = rows [H (z + D b), H (z + D b + 1)); A = Mie of channel 3b"}},
            &set);
 
-  const std::string manifest = Manifest(*elek, raw).dump(2) + "\n";
+  // The sun-transmittance table (the 2D table of hillaire's export), one band per batch.
+  std::vector<const shared::Texture2D*> transmittance;
+  for (const auto& batch : elek->batches()) transmittance.push_back(&batch.transmittance);
+  Json transmittance_entry =
+      io::StageTable(set, io::TableFromTextures("transmittance", transmittance), files.transmittance_exr,
+                     files.transmittance_raw,
+                     {{"atmo:version", ATMO_VERSION},
+                      {"atmo:model", "elek"},
+                      {"atmo:table", "transmittance"},
+                      {"atmo:parameterHash", ParameterHashHex(elek->parameters())}});
+  transmittance_entry.update(io::TransmittanceTableDescription());
+  transmittance_entry["geometry_km"] = {{"bottom_radius", elek->parameters().ground_radius_m / 1000.0},
+                                        {"top_radius", elek->parameters().top_radius_m / 1000.0}};
+
+  Json manifest_json = Manifest(*elek, raw);
+  manifest_json["transmittance"] = transmittance_entry;
+  const std::string manifest = manifest_json.dump(2) + "\n";
   set.Stage(files.json, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     out << manifest;
@@ -216,15 +173,7 @@ void LoadElekTable(const std::string& name, ElekModel& model) {
   }
   try {
     if (j.value("format", std::string()) != "atmo-elek-table") throw Error(where + "not an elek table manifest");
-    const std::uint64_t version = ManifestInteger(j, "format_version", 0, 1u << 30, where);
-    if (version != static_cast<std::uint64_t>(kElekTableFormatVersion)) {
-      throw Error(where + "format version " + std::to_string(version) + " does not match this program's " +
-                  std::to_string(kElekTableFormatVersion));
-    }
-    const std::string atmo_version = j.at("atmo_version").get<std::string>();
-    if (atmo_version != ATMO_VERSION) {
-      throw Error(where + "written by atmo " + atmo_version + ", this is atmo " + ATMO_VERSION + "; precompute it again");
-    }
+    io::CheckTableVersions(j, kElekTableFormatVersion, where);
     const std::string hash = j.at("parameter_hash").get<std::string>();
     if (hash != ParameterHashHex(model.parameters())) {
       throw Error(where + "parameter hash " + hash + " does not match the parameters' " +

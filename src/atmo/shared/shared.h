@@ -22,6 +22,7 @@ namespace {
 #include "sun.glsl"
 #include "sky.glsl"
 #include "camera.glsl"
+#include "tables.glsl"
 #include "elek.glsl"
 #include "simple.glsl"
 }  // namespace
