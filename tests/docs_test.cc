@@ -49,6 +49,10 @@ constexpr Skipped kSkipped[] = {
     {"atmo render --model reference", "44 million paths: about a minute on two cores"},
     {"atmo render --option sky_view=off", "a per-pixel ray march of a 1280x720 frame: about 20 s on two cores"},
     {"atmo render --date 2026-06-21T04:00+02:00 --until", "a 109-frame time-lapse: about a minute"},
+    {"atmo-viewer", "opens a window until it is closed (tests/viewer/viewer_test.cc runs the viewer under Xvfb)"},
+    {"xvfb-run -a atmo-viewer --hidden --frames 31", "31 frames at 1280x720 under llvmpipe, about 10 s "
+                                                      "(tests/viewer/viewer_test.cc runs scripts on small frames)"},
+    {"xvfb-run -a atmo-viewer --hidden --frames 40", "the viewer's benchmark, 40 frames with every table: about 10 s"},
     {"atmo render --backend gl --model elek", "the elek table on the GL backend: 10 s under Mesa llvmpipe "
                                               "(gl_elek_test.cc runs it on a small table)"},
 };

@@ -80,6 +80,7 @@ void SetViewValue(ViewState& state, std::string_view key, std::string_view value
   double number = 0.0;
   if (!ParseNumber(value, number)) throw Error(std::string(key) + " takes a finite number, got '" + std::string(value) + "'");
   state.*(k->field) = number;
+  if (key == "ev") state.auto_exposure = false;  // a fixed EV100, as --ev
 }
 
 int ViewerScript::LastFrame() const {
@@ -134,6 +135,10 @@ ViewerScript ParseViewerScript(std::string_view text, const std::string& name) {
       command.kind = ScriptCommand::Kind::kScreenshot;
       if (!ParseFrame(w[1], command.first_frame)) throw Error(where + "frame '" + w[1] + "' is not an integer >= 0");
       command.path = w[2];
+      const std::string extension = command.path.size() >= 4 ? command.path.substr(command.path.size() - 4) : "";
+      if (extension != ".exr" && extension != ".png") {
+        throw Error(where + "screenshot '" + command.path + "' must end in .exr or .png");
+      }
     } else {
       throw Error(where + "unknown command '" + w[0] + "' (known: at, ramp, screenshot)");
     }
@@ -153,6 +158,7 @@ std::vector<std::string> ApplyScript(const ViewerScript& script, int frame, View
         if (frame >= c.first_frame && frame <= c.last_frame) {
           const double t = static_cast<double>(frame - c.first_frame) / (c.last_frame - c.first_frame);
           state.*(FindNumberKey(c.key)->field) = c.from + t * (c.to - c.from);
+          if (c.key == "ev") state.auto_exposure = false;
         }
         break;
       case ScriptCommand::Kind::kScreenshot:
