@@ -1,12 +1,15 @@
 // The viewer's script (script.h).
 #include "script.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 
 #include "atmo/error.h"
+#include "cpu/camera.h"
+#include "shared/shared.h"
 
 namespace atmo::viewer {
 
@@ -63,6 +66,29 @@ std::string KeyList() {
 }
 
 }  // namespace
+
+Camera ViewCamera(const ViewState& state, int width, int height) {
+  Camera camera;
+  camera.kind = state.camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fov_deg = state.fov_deg;
+  camera.yaw_deg = state.yaw_deg;
+  camera.pitch_deg = state.pitch_deg;
+  return camera;
+}
+
+bool PutSunAtPixel(ViewState& state, int width, int height, double x, double y) {
+  const shared::CameraParameters camera = ToSharedCamera(ViewCamera(state, width, height));
+  shared::vec3 direction;
+  if (!shared::GetCameraRayDirection(camera, shared::vec2(x, y), direction)) return false;
+  constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+  state.sun_elevation_deg = std::asin(std::clamp(static_cast<double>(direction.z), -1.0, 1.0)) * kDegrees;
+  double azimuth = std::atan2(static_cast<double>(direction.x), static_cast<double>(direction.y)) * kDegrees;
+  if (azimuth < 0.0) azimuth += 360.0;
+  state.sun_azimuth_deg = azimuth;
+  return true;
+}
 
 std::vector<std::string> ViewKeyNames() {
   std::vector<std::string> names = {"camera"};

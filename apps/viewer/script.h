@@ -48,6 +48,14 @@ struct ViewState {
   double ground_radius_m = 6360e3;
 };
 
+// The camera of the view at a frame size.
+Camera ViewCamera(const ViewState& state, int width, int height);
+// Puts the sun where pixel position (x, y) of a width x height frame looks (pixel units, (0, 0)
+// the top-left corner, as the mouse reports it): the view direction of the frame pass's own
+// shared::GetCameraRayDirection, as a compass azimuth in [0, 360) and an elevation. Returns false
+// and leaves the sun where the camera sees nothing there (outside the fisheye's circle).
+bool PutSunAtPixel(ViewState& state, int width, int height, double x, double y);
+
 std::vector<std::string> ViewKeyNames();
 // Sets the key to `value` (a number, or a camera name for `camera`); throws atmo::Error for an
 // unknown key or a value that is not one.

@@ -35,7 +35,6 @@ namespace atmo::viewer {
 
 namespace {
 
-constexpr double kDegrees = 180.0 / std::numbers::pi;
 // The most batches of three channels the display pass reads (12 channels): earth-spectral and
 // --spectral up to 12 show; more are refused with a message.
 constexpr int kMaxDisplayBatches = 4;
@@ -239,31 +238,6 @@ AtmosphereParameters ApplyAtmosphereKnobs(const AtmosphereParameters& base, cons
   if (!(p == base)) p.name = "custom";
   Validate(p);
   return p;
-}
-
-// The camera of the view at the frame's size.
-Camera ViewCamera(const ViewState& state, int width, int height) {
-  Camera camera;
-  camera.kind = state.camera;
-  camera.width = width;
-  camera.height = height;
-  camera.fov_deg = state.fov_deg;
-  camera.yaw_deg = state.yaw_deg;
-  camera.pitch_deg = state.pitch_deg;
-  return camera;
-}
-
-// The compass azimuth and elevation (degrees) of the pixel under the mouse, or nothing where the
-// camera sees nothing (outside the fisheye's circle): shared::GetCameraRayDirection, the frame
-// pass's own unprojection.
-std::optional<std::pair<double, double>> DirectionUnderMouse(const Camera& camera, double x, double y) {
-  const shared::CameraParameters shared_camera = ToSharedCamera(camera);
-  shared::vec3 direction;
-  if (!shared::GetCameraRayDirection(shared_camera, shared::vec2(x, y), direction)) return std::nullopt;
-  const double elevation = std::asin(std::clamp(static_cast<double>(direction.z), -1.0, 1.0)) * kDegrees;
-  double azimuth = std::atan2(static_cast<double>(direction.x), static_cast<double>(direction.y)) * kDegrees;
-  if (azimuth < 0.0) azimuth += 360.0;
-  return std::make_pair(azimuth, elevation);
 }
 
 // Moves an altitude smoothly on a log scale through 0: (h + 10 m) grows by e^step.
@@ -521,11 +495,7 @@ void Viewer::HandleInput(double dt_s) {
     int width = 0;
     int height = 0;
     glfwGetFramebufferSize(window, &width, &height);
-    const auto direction = DirectionUnderMouse(ViewCamera(state_, width, height), x, y);
-    if (direction) {
-      state_.sun_azimuth_deg = direction->first;
-      state_.sun_elevation_deg = direction->second;
-    }
+    PutSunAtPixel(state_, width, height, x, y);
   } else {
     dragging_sun_ = false;
   }

@@ -16,8 +16,11 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/parameters.h"
+#include "atmo/render.h"
 #include "cli_fixture.h"
+#include "cpu/camera.h"
 #include "script.h"
+#include "shared/shared.h"
 
 namespace atmo::testing {
 namespace {
@@ -79,6 +82,37 @@ TEST(ViewerScript, BadLinesNameTheirLine) {
       EXPECT_NE(std::string(error.what()).find(c.message), std::string::npos) << error.what();
     }
   }
+}
+
+// Dragging the sun: the pixel where a camera sees a direction (the frame pass's inverse mapping,
+// GetCameraFragCoordFromDirection) puts the sun back on that direction, for every camera kind.
+TEST(ViewerScript, SunGoesWhereTheMousePoints) {
+  for (const CameraKind kind : {CameraKind::kPerspective, CameraKind::kFisheye, CameraKind::kEquirect}) {
+    ViewState state;
+    state.camera = kind;
+    state.yaw_deg = 200.0;
+    state.pitch_deg = 15.0;
+    state.fov_deg = 80.0;
+    const int width = 640;
+    const int height = kind == CameraKind::kFisheye ? 640 : 360;
+    for (const auto& [azimuth, elevation] : {std::pair{210.0, 5.0}, {185.0, 30.0}, {230.0, -3.0}}) {
+      if (kind == CameraKind::kFisheye && elevation < 0.0) continue;  // the all-sky fisheye sees no ground
+      const glm::dvec3 sun = SunDirection(elevation, azimuth);
+      shared::vec2 pixel;
+      ASSERT_TRUE(shared::GetCameraFragCoordFromDirection(ToSharedCamera(viewer::ViewCamera(state, width, height)),
+                                                         shared::vec3(sun.x, sun.y, sun.z), pixel));
+      ASSERT_TRUE(viewer::PutSunAtPixel(state, width, height, pixel.x, pixel.y));
+      // Both mappings in double: the round trip is exact to rounding.
+      EXPECT_NEAR(state.sun_azimuth_deg, azimuth, 1e-9) << static_cast<int>(kind);
+      EXPECT_NEAR(state.sun_elevation_deg, elevation, 1e-9) << static_cast<int>(kind);
+    }
+  }
+  // Outside the fisheye's circle the camera sees nothing: the sun stays.
+  ViewState fisheye;
+  fisheye.camera = CameraKind::kFisheye;
+  fisheye.sun_elevation_deg = 12.0;
+  EXPECT_FALSE(viewer::PutSunAtPixel(fisheye, 640, 640, 2.0, 2.0));
+  EXPECT_EQ(fisheye.sun_elevation_deg, 12.0);
 }
 
 // --- The program, under a display. -----------------------------------------------------------
