@@ -29,6 +29,7 @@ constexpr NumberKey kNumberKeys[] = {
     {"sun-elevation", &ViewState::sun_elevation_deg},
     {"sun-azimuth", &ViewState::sun_azimuth_deg},
     {"ev", &ViewState::ev100},
+    {"date-hours", &ViewState::date_hours},
     {"rayleigh-density", &ViewState::rayleigh_density},
     {"mie-density", &ViewState::mie_density},
     {"ozone-density", &ViewState::ozone_density},

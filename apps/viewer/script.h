@@ -34,6 +34,8 @@ struct ViewState {
   double sun_azimuth_deg = 180.0;
   bool sun_disc = true;
   bool ground = true;
+  // With --date: hours after it (the sun follows the date; moving the sun by hand leaves it).
+  double date_hours = 0.0;
   // Display: EV100 of the exposure, or metered from the frame (auto_exposure).
   double ev100 = 0.0;
   bool auto_exposure = true;

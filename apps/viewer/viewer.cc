@@ -291,6 +291,7 @@ class Viewer {
   void HandleInput(double dt_s);
   void DrawPanels();
   void Screenshot(const std::string& exr_path, const std::string& png_path);
+  void FollowDate();  // the sun of --date + date_hours
   cli::RenderPlan CurrentPlan() const;
 
   ViewerOptions options_;
@@ -319,6 +320,12 @@ class Viewer {
   double frame_ms_ = 0.0;
   double metered_ev100_ = 0.0;
   int frame_ = 0;
+  // --date: the sun follows the date plus state_.date_hours, played at play_speed_ hours per
+  // second, until the sun is moved by hand (date_follows_ false).
+  bool date_follows_ = false;
+  bool playing_ = false;
+  double play_speed_ = 0.5;
+  std::optional<cli::SunAtInstant> dated_sun_;  // the instant the sun shows, when it follows the date
   bool dragging_view_ = false;
   bool dragging_sun_ = false;
   double last_x_ = 0.0;
@@ -367,6 +374,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   } else {
     state_.auto_exposure = true;
   }
+  date_follows_ = plan_.dated_sun.has_value();
+  dated_sun_ = plan_.dated_sun;
   ResetAtmosphereKnobs(base_, state_);
   loaded_ = state_;
   current_ = base_;
@@ -436,11 +445,8 @@ cli::RenderPlan Viewer::CurrentPlan() const {
   plan.settings.sun_azimuth_deg = state_.sun_azimuth_deg;
   plan.settings.terms.sun_disc = state_.sun_disc;
   plan.settings.terms.ground = state_.ground;
-  // A moved sun is no longer the --date's.
-  if (state_.sun_elevation_deg != plan_.settings.sun_elevation_deg ||
-      state_.sun_azimuth_deg != plan_.settings.sun_azimuth_deg) {
-    plan.dated_sun.reset();
-  }
+  // The instant the sun shows; none once the sun was moved by hand.
+  plan.dated_sun = date_follows_ ? dated_sun_ : std::nullopt;
   return plan;
 }
 
@@ -477,6 +483,15 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
               std::string(ToString(plan.settings.camera.kind)).c_str());
 }
 
+void Viewer::FollowDate() {
+  if (!date_follows_) return;
+  const double julian_day = plan_.dated_sun->julian_day_utc + state_.date_hours / 24.0;
+  if (dated_sun_ && dated_sun_->julian_day_utc == julian_day) return;
+  dated_sun_ = cli::SunAt(options_.render.sun, julian_day);
+  state_.sun_elevation_deg = dated_sun_->position.elevation_deg;
+  state_.sun_azimuth_deg = dated_sun_->position.azimuth_deg;
+}
+
 void Viewer::HandleInput(double dt_s) {
   GLFWwindow* window = static_cast<GLFWwindow*>(context_->window());
   const ImGuiIO& io = ImGui::GetIO();
@@ -495,7 +510,7 @@ void Viewer::HandleInput(double dt_s) {
     int width = 0;
     int height = 0;
     glfwGetFramebufferSize(window, &width, &height);
-    PutSunAtPixel(state_, width, height, x, y);
+    if (PutSunAtPixel(state_, width, height, x, y)) date_follows_ = false;
   } else {
     dragging_sun_ = false;
   }
@@ -555,9 +570,32 @@ void Viewer::DrawPanels() {
     v = static_cast<float>(state_.fov_deg);
     if (ImGui::SliderFloat("fov", &v, 5.0f, 170.0f, "%.1f")) state_.fov_deg = v;
     v = static_cast<float>(state_.sun_elevation_deg);
-    if (ImGui::SliderFloat("sun elevation", &v, -90.0f, 90.0f, "%.2f")) state_.sun_elevation_deg = v;
+    if (ImGui::SliderFloat("sun elevation", &v, -90.0f, 90.0f, "%.2f")) {
+      state_.sun_elevation_deg = v;
+      date_follows_ = false;
+    }
     v = static_cast<float>(state_.sun_azimuth_deg);
-    if (ImGui::SliderFloat("sun azimuth", &v, 0.0f, 360.0f, "%.1f")) state_.sun_azimuth_deg = v;
+    if (ImGui::SliderFloat("sun azimuth", &v, 0.0f, 360.0f, "%.1f")) {
+      state_.sun_azimuth_deg = v;
+      date_follows_ = false;
+    }
+    if (plan_.dated_sun) {
+      // --date, --latitude, --longitude: the sun of that place at the date plus an offset.
+      ImGui::Checkbox("sun follows the date", &date_follows_);
+      v = static_cast<float>(state_.date_hours);
+      if (ImGui::SliderFloat("hours after --date", &v, -24.0f, 24.0f, "%.2f")) {
+        state_.date_hours = v;
+        date_follows_ = true;
+      }
+      if (ImGui::Button(playing_ ? "pause" : "play")) {
+        playing_ = !playing_;
+        if (playing_) date_follows_ = true;
+      }
+      ImGui::SameLine();
+      float speed = static_cast<float>(play_speed_);
+      if (ImGui::SliderFloat("hours/s", &speed, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic)) play_speed_ = speed;
+      if (date_follows_ && dated_sun_) ImGui::Text("%s", dated_sun_->date_utc.c_str());
+    }
     ImGui::Checkbox("sun disc", &state_.sun_disc);
     ImGui::SameLine();
     ImGui::Checkbox("lit ground", &state_.ground);
@@ -688,6 +726,8 @@ int Viewer::Run() {
     HandleInput(dt_s);
     if (!options_.no_panels) DrawPanels();
     ImGui::Render();
+    if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
+    FollowDate();
 
     // The atmosphere: a knob that moved rebuilds every table (a new HillaireGl: its channels may
     // have changed); --recompute-every-frame recomputes them anyway.

@@ -342,6 +342,33 @@ TEST_F(Viewer, FlyingThroughTheTopOfTheAtmosphereDoesNotPop) {
   EXPECT_LT(Luminance(o.x, o.y, o.z), Luminance(a.x, a.y, a.z));
 }
 
+// With --date, the sun follows the date: three hours later (a script's date-hours) the viewer
+// shows what `atmo render --date` shows for that instant, and records it.
+TEST_F(Viewer, SunFollowsTheDate) {
+  WriteFile(dir_ / "morning.txt",
+            "screenshot 0 six.exr\n"
+            "at 1 date-hours 3\n"
+            "screenshot 1 nine.exr\n");
+  const std::string place = "--latitude 46.5 --longitude 7.9 --width 160 --height 90 --yaw 100 --pitch 10";
+  const RunResult v = RunViewer("--date 2026-06-21T06:00+02:00 " + place + " --frames 2 --script morning.txt");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const RunResult r = Run("render --backend gl --date 2026-06-21T09:00+02:00 " + place + " --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata six_m;
+  ImageMetadata nine_m;
+  ImageMetadata render_m;
+  ReadExr(dir_ / "six.exr", &six_m);
+  const Image nine = ReadExr(dir_ / "nine.exr", &nine_m);
+  const Image render = ReadExr(dir_ / "render.exr", &render_m);
+  EXPECT_EQ(Metadata(six_m, "atmo:date"), "2026-06-21T04:00:00Z");
+  EXPECT_EQ(Metadata(nine_m, "atmo:date"), Metadata(render_m, "atmo:date"));
+  EXPECT_EQ(Metadata(nine_m, "atmo:sunElevationDeg"), Metadata(render_m, "atmo:sunElevationDeg"));
+  EXPECT_EQ(Metadata(nine_m, "atmo:latitudeDeg"), "46.5");
+  // The morning sun climbs: 2.7 degrees at 06:00 CEST, 32.0 at 09:00 (Interlaken, measured).
+  EXPECT_GT(std::stod(Metadata(nine_m, "atmo:sunElevationDeg")), std::stod(Metadata(six_m, "atmo:sunElevationDeg")) + 20.0);
+  EXPECT_LT(MaxRelativeDifference(nine, render, 1.0), 1e-5);
+}
+
 TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   WriteFile(dir_ / "bad.txt", "at 0 yaw 10\nat 1 sun-height 3\n");
   RunResult r = RunViewer("--frames 2 --script bad.txt");
