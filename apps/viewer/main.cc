@@ -9,11 +9,10 @@
 // This file only parses the command line (the flags of `atmo render` through apps/atmo/cli_flags.h)
 // and calls RunViewer. Errors: one line `atmo-viewer: error: ...` on stderr; exit 2 for a command
 // line that does not parse, 1 for anything else.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 #include <string>
-
-#include <CLI/CLI.hpp>
 
 #include "atmo/error.h"
 #include "atmo/interrupt.h"

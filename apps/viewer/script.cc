@@ -105,14 +105,16 @@ void SetViewValue(ViewState& state, std::string_view key, std::string_view value
   const NumberKey* k = FindNumberKey(key);
   if (k == nullptr) throw Error("unknown key '" + std::string(key) + "' (known: " + KeyList() + ")");
   double number = 0.0;
-  if (!ParseNumber(value, number)) throw Error(std::string(key) + " takes a finite number, got '" + std::string(value) + "'");
+  if (!ParseNumber(value, number))
+    throw Error(std::string(key) + " takes a finite number, got '" + std::string(value) + "'");
   state.*(k->field) = number;
   if (key == "ev") state.auto_exposure = false;  // a fixed EV100, as --ev
 }
 
 int ViewerScript::LastFrame() const {
   int last = 0;
-  for (const ScriptCommand& c : commands) last = std::max(last, c.kind == ScriptCommand::Kind::kRamp ? c.last_frame : c.first_frame);
+  for (const ScriptCommand& c : commands)
+    last = std::max(last, c.kind == ScriptCommand::Kind::kRamp ? c.last_frame : c.first_frame);
   return last;
 }
 

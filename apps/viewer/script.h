@@ -67,13 +67,13 @@ struct ScriptCommand {
   enum class Kind { kAt, kRamp, kScreenshot };
   Kind kind = Kind::kAt;
   int first_frame = 0;
-  int last_frame = 0;       // kRamp
-  std::string key;          // kAt, kRamp
-  std::string value;        // kAt: the value as written
-  double from = 0.0;        // kRamp
-  double to = 0.0;          // kRamp
-  std::string path;         // kScreenshot
-  int line = 0;             // in the file, for messages
+  int last_frame = 0;  // kRamp
+  std::string key;     // kAt, kRamp
+  std::string value;   // kAt: the value as written
+  double from = 0.0;   // kRamp
+  double to = 0.0;     // kRamp
+  std::string path;    // kScreenshot
+  int line = 0;        // in the file, for messages
 };
 
 struct ViewerScript {

@@ -1,6 +1,8 @@
 // atmo-viewer's window, frame loop and panels (viewer.h).
 #include "viewer.h"
 
+#include <epoxy/gl.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,8 +14,6 @@
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <epoxy/gl.h>
 // epoxy's gl.h first: GLFW must not include the system GL header.
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -142,8 +142,8 @@ class DisplayPass {
   DisplayPass(const DisplayPass&) = delete;
   DisplayPass& operator=(const DisplayPass&) = delete;
 
-  void Draw(const gl::HillaireGl& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping,
-            int width, int height) const {
+  void Draw(const gl::HillaireGl& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
+            int height) const {
     glViewport(0, 0, width, height);
     const int batches = static_cast<int>(sky.batch_count());
     const GLuint program = Program(batches, static_cast<int>(mapping.op), mapping.per_channel);
@@ -286,7 +286,7 @@ class Viewer {
   int Run();
 
  private:
-  void Rebuild();                       // a new HillaireGl for the current atmosphere and settings
+  void Rebuild();  // a new HillaireGl for the current atmosphere and settings
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
   void DrawPanels();
@@ -295,14 +295,14 @@ class Viewer {
   cli::RenderPlan CurrentPlan() const;
 
   ViewerOptions options_;
-  cli::RenderPlan plan_;          // from the flags, as `atmo render` plans them
-  AtmosphereParameters base_;     // the loaded atmosphere (preset or config), before the knobs
-  AtmosphereParameters current_;  // with the knobs
+  cli::RenderPlan plan_;               // from the flags, as `atmo render` plans them
+  AtmosphereParameters base_;          // the loaded atmosphere (preset or config), before the knobs
+  AtmosphereParameters current_;       // with the knobs
   AtmosphereParameters current_base_;  // the base_ that current_ was made from
   HillaireSettings settings_;
   ViewState state_;
-  ViewState loaded_;              // the knobs of base_
-  ViewState built_;               // what the GPU tables and sky view were last made for
+  ViewState loaded_;  // the knobs of base_
+  ViewState built_;   // what the GPU tables and sky view were last made for
   std::unique_ptr<gl::Context> context_;
   std::unique_ptr<gl::HillaireGl> sky_;
   std::unique_ptr<DisplayPass> display_;
@@ -311,7 +311,7 @@ class Viewer {
   ToneMapping mapping_;
   bool tables_dirty_ = true;
   bool view_dirty_ = true;
-  std::string status_;            // the last error or file written, shown in the panel
+  std::string status_;  // the last error or file written, shown in the panel
   std::string config_path_ = "viewer_config.json";
   std::string screenshot_name_ = "viewer";
   int preset_index_ = -1;
@@ -438,7 +438,8 @@ cli::RenderPlan Viewer::CurrentPlan() const {
   cli::RenderPlan plan = plan_;
   plan.parameters = current_;
   plan.model_parameters = current_;
-  if (plan.unit != RadianceUnit::kRelative) plan.model_parameters.solar_irradiance.assign(current_.channel_count(), 1.0);
+  if (plan.unit != RadianceUnit::kRelative)
+    plan.model_parameters.solar_irradiance.assign(current_.channel_count(), 1.0);
   plan.settings.camera = ViewCamera(state_, options_.render.width, options_.render.height);
   plan.settings.altitude_m = state_.altitude_m;
   plan.settings.sun_elevation_deg = state_.sun_elevation_deg;
@@ -471,7 +472,25 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   command.ev100.reset();
   command.auto_exposure = state_.auto_exposure;
   if (!state_.auto_exposure) command.ev100 = state_.ev100;
+  // The --option flags, with the panel's hillaire options where they differ from them: what
+  // `atmo render --option ...` needs to render this frame.
   cli::CommonOptions common = options_.common;
+  const HillaireSettings flags = cli::GlHillaireSettings(options_.common);
+  const auto set_option = [&](const std::string& key, const std::string& value) {
+    std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+    common.options.push_back(key + "=" + value);
+  };
+  if (settings_.sky_view_samples != flags.sky_view_samples) {
+    set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+  }
+  if (settings_.ray_march_samples != flags.ray_march_samples) {
+    set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
+  }
+  if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
+    set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
+  }
+  if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
+    set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
   cli::RenderOutputs outputs(common, command, plan, "hillaire");
   outputs.SetMetadata("atmo:writer", "atmo-viewer");
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
@@ -501,8 +520,8 @@ void Viewer::HandleInput(double dt_s) {
   const bool free_mouse = !io.WantCaptureMouse;
   const bool left = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
   const bool right = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
-  const bool shift = glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
-                     glfwGetKey(window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  const bool shift =
+      glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
   // Right button (or shift + left): the sun goes where the mouse points on the sky.
   const bool sun_button = right || (left && shift);
   if (sun_button && (dragging_sun_ || free_mouse)) {
@@ -593,7 +612,8 @@ void Viewer::DrawPanels() {
       }
       ImGui::SameLine();
       float speed = static_cast<float>(play_speed_);
-      if (ImGui::SliderFloat("hours/s", &speed, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic)) play_speed_ = speed;
+      if (ImGui::SliderFloat("hours/s", &speed, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+        play_speed_ = speed;
       if (date_follows_ && dated_sun_) ImGui::Text("%s", dated_sun_->date_utc.c_str());
     }
     ImGui::Checkbox("sun disc", &state_.sun_disc);
@@ -731,11 +751,11 @@ int Viewer::Run() {
 
     // The atmosphere: a knob that moved rebuilds every table (a new HillaireGl: its channels may
     // have changed); --recompute-every-frame recomputes them anyway.
-    const bool atmosphere_changed =
-        state_.rayleigh_density != built_.rayleigh_density || state_.mie_density != built_.mie_density ||
-        state_.ozone_density != built_.ozone_density || state_.mie_g != built_.mie_g ||
-        state_.ground_albedo != built_.ground_albedo || state_.ground_radius_m != built_.ground_radius_m ||
-        !(base_ == current_base_);
+    const bool atmosphere_changed = state_.rayleigh_density != built_.rayleigh_density ||
+                                    state_.mie_density != built_.mie_density ||
+                                    state_.ozone_density != built_.ozone_density || state_.mie_g != built_.mie_g ||
+                                    state_.ground_albedo != built_.ground_albedo ||
+                                    state_.ground_radius_m != built_.ground_radius_m || !(base_ == current_base_);
     timings_.Clear();
     try {
       if (sky_ == nullptr || atmosphere_changed) {
@@ -758,9 +778,8 @@ int Viewer::Run() {
       state_.ground_radius_m = built_.ground_radius_m;
       if (sky_ == nullptr) throw;
     }
-    if (view_dirty_ || state_.altitude_m != built_.altitude_m ||
-        state_.sun_elevation_deg != built_.sun_elevation_deg || state_.sun_azimuth_deg != built_.sun_azimuth_deg ||
-        state_.ground != built_.ground) {
+    if (view_dirty_ || state_.altitude_m != built_.altitude_m || state_.sun_elevation_deg != built_.sun_elevation_deg ||
+        state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground) {
       sky_->SetView(state_.altitude_m, SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg), state_.ground,
                     &timings_);
       view_dirty_ = false;
@@ -771,9 +790,12 @@ int Viewer::Run() {
     glfwGetFramebufferSize(window, &width, &height);
     for (const std::string& path : shots) {
       const std::string lower = path.size() >= 4 ? path.substr(path.size() - 4) : path;
-      if (lower == ".exr") Screenshot(path, "");
-      else if (lower == ".png") Screenshot("", path);
-      else throw Error("script screenshot '" + path + "' must end in .exr or .png");
+      if (lower == ".exr")
+        Screenshot(path, "");
+      else if (lower == ".png")
+        Screenshot("", path);
+      else
+        throw Error("script screenshot '" + path + "' must end in .exr or .png");
     }
     if (frames > 0 && frame_ == frames - 1 && (!final_exr.empty() || !final_png.empty())) {
       Screenshot(final_exr, final_png);
@@ -787,10 +809,10 @@ int Viewer::Run() {
       // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
       if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2)) {
         const Image frame = sky_->ReadFrame();
-        const Image srgb = plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
-                               ? frame
-                               : ConvertImage(frame, SpectralConversion(current_.wavelengths_nm),
-                                              ImageColour::kLinearSrgb);
+        const Image srgb =
+            plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
+                ? frame
+                : ConvertImage(frame, SpectralConversion(current_.wavelengths_nm), ImageColour::kLinearSrgb);
         metered_ev100_ = AutoExposureEv100(srgb);
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
@@ -827,8 +849,7 @@ int Viewer::Run() {
   if (frames > 0) {
     const double mean_ms = timed_frames > 0 ? frame_ms_sum / timed_frames : 0.0;
     std::printf("atmo-viewer: %d frames at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames 1..%d, on %s\n",
-                frame_, options_.render.width, options_.render.height,
-                std::string(ToString(state_.camera)).c_str(),
+                frame_, options_.render.width, options_.render.height, std::string(ToString(state_.camera)).c_str(),
                 options_.recompute_every_frame ? ", every table every frame" : "", mean_ms,
                 mean_ms > 0.0 ? 1000.0 / mean_ms : 0.0, frame_ - 1, context_->renderer().c_str());
     std::string passes;

@@ -18,15 +18,15 @@
 namespace atmo::viewer {
 
 struct ViewerOptions {
-  cli::CommonOptions common;   // --model, --preset, --config, --option, --spectral (as `atmo render`)
-  cli::RenderCommand render;   // camera, observer, sun, display flags (as `atmo render`); the EXR
-                               // and PNG paths are the screenshot of the last frame (empty: none)
-  int frames = 0;              // stop after this many frames (0: when the window is closed)
-  std::string script_path;     // timed moves (script.h); empty: none
-  std::string save_config;     // write the atmosphere as JSON (`atmo render --config`) at the end
+  cli::CommonOptions common;           // --model, --preset, --config, --option, --spectral (as `atmo render`)
+  cli::RenderCommand render;           // camera, observer, sun, display flags (as `atmo render`); the EXR
+                                       // and PNG paths are the screenshot of the last frame (empty: none)
+  int frames = 0;                      // stop after this many frames (0: when the window is closed)
+  std::string script_path;             // timed moves (script.h); empty: none
+  std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
   bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)
-  bool hidden = false;         // an invisible window (headless runs; Xvfb still needed)
-  bool no_panels = false;      // the sky alone, no ImGui panels
+  bool hidden = false;                 // an invisible window (headless runs; Xvfb still needed)
+  bool no_panels = false;              // the sky alone, no ImGui panels
   // The last --frames frame as the window shows it (8-bit sRGB PNG read from the back buffer:
   // the display shader's tone mapping, and the panels unless no_panels); empty: none.
   std::string window_screenshot;

@@ -2,16 +2,15 @@
 // display (Viewer.*; ctest runs them through xvfb-run): a screenshot equals `atmo render --backend
 // gl` with the same flags, the window shows what the PNG shows, a scripted sun move reddens and
 // darkens the horizon towards the sun, and a saved config is accepted back by `atmo render`.
+#include <gtest/gtest.h>
 #include <png.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
-#include <gtest/gtest.h>
 
 #include "atmo/error.h"
 #include "atmo/image.h"
@@ -100,7 +99,7 @@ TEST(ViewerScript, SunGoesWhereTheMousePoints) {
       const glm::dvec3 sun = SunDirection(elevation, azimuth);
       shared::vec2 pixel;
       ASSERT_TRUE(shared::GetCameraFragCoordFromDirection(ToSharedCamera(viewer::ViewCamera(state, width, height)),
-                                                         shared::vec3(sun.x, sun.y, sun.z), pixel));
+                                                          shared::vec3(sun.x, sun.y, sun.z), pixel));
       ASSERT_TRUE(viewer::PutSunAtPixel(state, width, height, pixel.x, pixel.y));
       // Both mappings in double: the round trip is exact to rounding.
       EXPECT_NEAR(state.sun_azimuth_deg, azimuth, 1e-9) << static_cast<int>(kind);
@@ -146,7 +145,8 @@ class Viewer : public CliFixture {
 double MaxRelativeDifference(const Image& a, const Image& b, double floor) {
   double worst = 0.0;
   for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-    const double d = std::abs(static_cast<double>(a.pixels[i]) - b.pixels[i]) / std::max(std::abs(double(b.pixels[i])), floor);
+    const double d =
+        std::abs(static_cast<double>(a.pixels[i]) - b.pixels[i]) / std::max(std::abs(double(b.pixels[i])), floor);
     worst = std::max(worst, d);
   }
   return worst;
@@ -195,7 +195,8 @@ std::vector<unsigned char> ReadPngRgb(const fs::path& path, int& width, int& hei
   if (png_image_begin_read_from_file(&image, path.c_str()) == 0) throw Error("cannot read " + path.string());
   image.format = PNG_FORMAT_RGB;
   std::vector<unsigned char> samples(PNG_IMAGE_SIZE(image));
-  if (png_image_finish_read(&image, nullptr, samples.data(), 0, nullptr) == 0) throw Error("cannot decode " + path.string());
+  if (png_image_finish_read(&image, nullptr, samples.data(), 0, nullptr) == 0)
+    throw Error("cannot decode " + path.string());
   width = static_cast<int>(image.width);
   height = static_cast<int>(image.height);
   return samples;
@@ -232,7 +233,8 @@ TEST_F(Viewer, WindowShowsWhatThePngShows) {
     EXPECT_LE(worst, 2) << display;
     // And the exposure is the one asked for: 4 EV less exposure darkens the window.
     if (display == "--ev 9") {
-      const RunResult darker = RunViewer(std::string(kSameFlags) + " --ev 13 --no-sun-disc --frames 3 --no-panels "
+      const RunResult darker = RunViewer(std::string(kSameFlags) +
+                                         " --ev 13 --no-sun-disc --frames 3 --no-panels "
                                          "--window-screenshot darker.png");
       ASSERT_EQ(darker.exit_code, 0) << darker.err;
       const std::vector<unsigned char> dark = ReadPngRgb(dir_ / "darker.png", vw, vh);
@@ -282,7 +284,8 @@ TEST_F(Viewer, ScriptedSunMoveReddensAndDarkensTheHorizon) {
   EXPECT_LT(Luminance(l.x, l.y, l.z), Luminance(h.x, h.y, h.z));
   const glm::dvec3 zenith_high = PatchMean(high, 70, 90, 0, 4);
   const glm::dvec3 zenith_low = PatchMean(low, 70, 90, 0, 4);
-  EXPECT_LT(Luminance(zenith_low.x, zenith_low.y, zenith_low.z), 0.5 * Luminance(zenith_high.x, zenith_high.y, zenith_high.z));
+  EXPECT_LT(Luminance(zenith_low.x, zenith_low.y, zenith_low.z),
+            0.5 * Luminance(zenith_high.x, zenith_high.y, zenith_high.z));
 }
 
 // The atmosphere changed in the viewer (a script's knobs) and saved: `atmo render --config` reads
@@ -293,10 +296,12 @@ TEST_F(Viewer, SavedConfigRendersTheSameSkyInAtmoRender) {
             "at 0 rayleigh-density 0.7\n"
             "at 0 mie-g 0.7\n"
             "at 0 ground-albedo 0.1\n");
-  const RunResult v = RunViewer(std::string(kSameFlags) + " --frames 2 --script haze.txt --save-config haze.json "
+  const RunResult v = RunViewer(std::string(kSameFlags) +
+                                " --frames 2 --script haze.txt --save-config haze.json "
                                 "--screenshot viewer.exr");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  const RunResult r = Run("render --backend gl --config haze.json " + std::string(kSameFlags) + " --exr render.exr --no-png");
+  const RunResult r =
+      Run("render --backend gl --config haze.json " + std::string(kSameFlags) + " --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   ImageMetadata rm;
@@ -323,8 +328,9 @@ TEST_F(Viewer, FlyingThroughTheTopOfTheAtmosphereDoesNotPop) {
             "screenshot 1 above.exr\n"
             "at 2 altitude 1000000\n"
             "screenshot 2 orbit.exr\n");
-  const RunResult v = RunViewer("--width 160 --height 90 --pitch -30 --sun-elevation 20 --no-sun-disc --frames 3 "
-                                "--script climb.txt");
+  const RunResult v = RunViewer(
+      "--width 160 --height 90 --pitch -30 --sun-elevation 20 --no-sun-disc --frames 3 "
+      "--script climb.txt");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   const Image below = ReadExr(dir_ / "below.exr");
   const Image above = ReadExr(dir_ / "above.exr");
@@ -365,7 +371,8 @@ TEST_F(Viewer, SunFollowsTheDate) {
   EXPECT_EQ(Metadata(nine_m, "atmo:sunElevationDeg"), Metadata(render_m, "atmo:sunElevationDeg"));
   EXPECT_EQ(Metadata(nine_m, "atmo:latitudeDeg"), "46.5");
   // The morning sun climbs: 2.7 degrees at 06:00 CEST, 32.0 at 09:00 (Interlaken, measured).
-  EXPECT_GT(std::stod(Metadata(nine_m, "atmo:sunElevationDeg")), std::stod(Metadata(six_m, "atmo:sunElevationDeg")) + 20.0);
+  EXPECT_GT(std::stod(Metadata(nine_m, "atmo:sunElevationDeg")),
+            std::stod(Metadata(six_m, "atmo:sunElevationDeg")) + 20.0);
   EXPECT_LT(MaxRelativeDifference(nine, render, 1.0), 1e-5);
 }
 
