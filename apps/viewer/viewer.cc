@@ -35,9 +35,9 @@ namespace atmo::viewer {
 
 namespace {
 
-// The most batches of three channels the display pass reads (12 channels): earth-spectral and
-// --spectral up to 12 show; more are refused with a message.
-constexpr int kMaxDisplayBatches = 4;
+// The most batches of three channels the display pass reads (24 channels): earth-spectral's 15
+// and --spectral up to 24 show; more are refused with a message.
+constexpr int kMaxDisplayBatches = 8;
 // The altitude slider's range, metres: the ground to 1000 km (issue's "orbit"); the command line
 // and scripts may go higher.
 constexpr float kMaxSliderAltitude_m = 1e6f;
@@ -65,10 +65,14 @@ layout(binding = 0) uniform sampler2D frame0;
 layout(binding = 1) uniform sampler2D frame1;
 layout(binding = 2) uniform sampler2D frame2;
 layout(binding = 3) uniform sampler2D frame3;
+layout(binding = 4) uniform sampler2D frame4;
+layout(binding = 5) uniform sampler2D frame5;
+layout(binding = 6) uniform sampler2D frame6;
+layout(binding = 7) uniform sampler2D frame7;
 // EncodeDisplay(u^2) at u = (i + 0.5) / size: the display transfer as a table, read at sqrt(v),
 // where the sRGB curve is nearly linear.
-layout(binding = 4) uniform sampler1D encode_table;
-uniform mat3 weights[4];
+layout(binding = 8) uniform sampler1D encode_table;
+uniform mat3 weights[8];
 uniform float exposure;
 uniform int frame_height;
 out vec4 colour;
@@ -95,6 +99,18 @@ void main() {
 #endif
 #if BATCH_COUNT > 3
   rgb += weights[3] * texelFetch(frame3, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 4
+  rgb += weights[4] * texelFetch(frame4, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 5
+  rgb += weights[5] * texelFetch(frame5, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 6
+  rgb += weights[6] * texelFetch(frame6, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 7
+  rgb += weights[7] * texelFetch(frame7, texel, 0).rgb;
 #endif
   vec3 v = max(rgb, vec3(0.0)) * exposure;
 #if PER_CHANNEL
@@ -152,7 +168,7 @@ class DisplayPass {
     glUniformMatrix3fv(glGetUniformLocation(program, "weights"), batches, GL_FALSE, &weights[0][0][0]);
     glUniform1f(glGetUniformLocation(program, "exposure"), static_cast<float>(mapping.exposure));
     if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
-    glBindTextureUnit(4, encode_table_);
+    glBindTextureUnit(8, encode_table_);
     glUniform1i(glGetUniformLocation(program, "frame_height"), height);
     glBindVertexArray(vao_);
     glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -286,7 +302,8 @@ class Viewer {
   int Run();
 
  private:
-  void Rebuild();  // a new HillaireGl for the current atmosphere and settings
+  // A new HillaireGl for `parameters` and settings_ (tables not computed yet); throws atmo::Error.
+  std::unique_ptr<gl::HillaireGl> MakeSky(const AtmosphereParameters& parameters) const;
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
   void DrawPanels();
@@ -298,7 +315,12 @@ class Viewer {
   cli::RenderPlan plan_;               // from the flags, as `atmo render` plans them
   AtmosphereParameters base_;          // the loaded atmosphere (preset or config), before the knobs
   AtmosphereParameters current_;       // with the knobs
-  AtmosphereParameters current_base_;  // the base_ that current_ was made from
+  // What the shown tables were made from, to go back to when a change fails.
+  AtmosphereParameters current_base_;
+  ViewState current_loaded_;
+  int current_preset_index_ = -1;
+  HillaireSettings shown_settings_;
+  bool settings_changed_ = false;  // the panel's hillaire options moved
   HillaireSettings settings_;
   ViewState state_;
   ViewState loaded_;  // the knobs of base_
@@ -427,11 +449,14 @@ void Viewer::UpdateDisplayWeights() {
   for (std::size_t c = 0; c < nc; ++c) weights_[c / 3][c % 3] = per_channel[c];
 }
 
-void Viewer::Rebuild() {
-  AtmosphereParameters model_parameters = current_;
-  if (plan_.unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(current_.channel_count(), 1.0);
-  sky_ = std::make_unique<gl::HillaireGl>(*context_, model_parameters, settings_);
-  UpdateDisplayWeights();
+std::unique_ptr<gl::HillaireGl> Viewer::MakeSky(const AtmosphereParameters& parameters) const {
+  if (static_cast<int>(ChannelBatchCount(parameters.channel_count())) > kMaxDisplayBatches) {
+    throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
+                std::to_string(parameters.channel_count()) + ")");
+  }
+  AtmosphereParameters model_parameters = parameters;
+  if (plan_.unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
+  return std::make_unique<gl::HillaireGl>(*context_, model_parameters, settings_);
 }
 
 cli::RenderPlan Viewer::CurrentPlan() const {
@@ -626,15 +651,11 @@ void Viewer::DrawPanels() {
     if (ImGui::BeginCombo("preset", shown)) {
       for (std::size_t i = 0; i < presets.size(); ++i) {
         if (ImGui::Selectable(presets[i].c_str(), static_cast<int>(i) == preset_index_)) {
-          AtmosphereParameters preset = Preset(presets[i]);
-          if (static_cast<int>(ChannelBatchCount(preset.channel_count())) > kMaxDisplayBatches) {
-            status_ = "preset " + presets[i] + " has too many channels for the viewer";
-          } else {
-            preset_index_ = static_cast<int>(i);
-            base_ = preset;
-            ResetAtmosphereKnobs(base_, state_);
-            loaded_ = state_;
-          }
+          // Made in the next frame; a preset hillaire refuses (simple's half-space) is reported there.
+          preset_index_ = static_cast<int>(i);
+          base_ = Preset(presets[i]);
+          ResetAtmosphereKnobs(base_, state_);
+          loaded_ = state_;
         }
       }
       ImGui::EndCombo();
@@ -666,7 +687,7 @@ void Viewer::DrawPanels() {
         s.multiple_scattering_directions != settings_.multiple_scattering_directions ||
         s.use_sky_view_lut != settings_.use_sky_view_lut) {
       settings_ = s;
-      sky_.reset();  // rebuilt with the new settings
+      settings_changed_ = true;  // every table again, with the new settings
     }
   }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -698,11 +719,7 @@ void Viewer::DrawPanels() {
     ImGui::SameLine();
     if (ImGui::Button("load config")) {
       try {
-        AtmosphereParameters loaded = LoadParametersFile(config);
-        if (static_cast<int>(ChannelBatchCount(loaded.channel_count())) > kMaxDisplayBatches) {
-          throw Error(std::string(config) + " has too many channels for the viewer");
-        }
-        base_ = loaded;
+        base_ = LoadParametersFile(config);
         preset_index_ = -1;
         ResetAtmosphereKnobs(base_, state_);
         loaded_ = state_;
@@ -758,25 +775,39 @@ int Viewer::Run() {
                                     state_.ground_radius_m != built_.ground_radius_m || !(base_ == current_base_);
     timings_.Clear();
     try {
-      if (sky_ == nullptr || atmosphere_changed) {
-        current_ = ApplyAtmosphereKnobs(base_, loaded_, state_);
+      if (sky_ == nullptr || atmosphere_changed || settings_changed_) {
+        // All or nothing: the new atmosphere and its tables replace the shown ones only once built.
+        AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
+        std::unique_ptr<gl::HillaireGl> sky = MakeSky(next);
+        sky->Precompute(&timings_);
+        sky_ = std::move(sky);
+        current_ = std::move(next);
         current_base_ = base_;
-        Rebuild();
-        sky_->Precompute(&timings_);
+        current_loaded_ = loaded_;
+        current_preset_index_ = preset_index_;
+        shown_settings_ = settings_;
+        settings_changed_ = false;
+        UpdateDisplayWeights();
         view_dirty_ = true;
       } else if (options_.recompute_every_frame) {
         sky_->Precompute(&timings_);
         view_dirty_ = true;
       }
     } catch (const Error& error) {
-      status_ = error.what();  // a knob out of bounds: keep the last atmosphere
+      if (sky_ == nullptr) throw;  // the first atmosphere: nothing to go back to
+      // A knob out of bounds, or a preset or config hillaire refuses: back to what is shown.
+      status_ = error.what();
+      base_ = current_base_;
+      loaded_ = current_loaded_;
+      preset_index_ = current_preset_index_;
+      settings_ = shown_settings_;
+      settings_changed_ = false;
       state_.rayleigh_density = built_.rayleigh_density;
       state_.mie_density = built_.mie_density;
       state_.ozone_density = built_.ozone_density;
       state_.mie_g = built_.mie_g;
       state_.ground_albedo = built_.ground_albedo;
       state_.ground_radius_m = built_.ground_radius_m;
-      if (sky_ == nullptr) throw;
     }
     if (view_dirty_ || state_.altitude_m != built_.altitude_m || state_.sun_elevation_deg != built_.sun_elevation_deg ||
         state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground) {

@@ -156,7 +156,9 @@ double MaxRelativeDifference(const Image& a, const Image& b, double floor) {
 constexpr const char* kSameFlags = "--width 160 --height 90 --sun-elevation 6 --sun-azimuth 200 --yaw 185 --pitch 4";
 
 TEST_F(Viewer, ScreenshotEqualsAtmoRenderGl) {
-  for (const std::string camera : {"perspective", "fisheye"}) {
+  // The RGB preset through two cameras, and the 15-channel spectral preset (five batches of three
+  // channels, each its own frame texture in the display pass).
+  for (const std::string camera : {"perspective", "fisheye", "perspective --preset earth-spectral"}) {
     const std::string flags = std::string(kSameFlags) + " --camera " + camera;
     const RunResult v = RunViewer(flags + " --frames 3 --screenshot viewer.exr");
     ASSERT_EQ(v.exit_code, 0) << v.err;
