@@ -334,8 +334,9 @@ class Viewer {
   bool tables_dirty_ = true;
   bool view_dirty_ = true;
   std::string status_;  // the last error or file written, shown in the panel
-  std::string config_path_ = "viewer_config.json";
-  std::string screenshot_name_ = "viewer";
+  // The Files panel's text fields (ImGui edits them in place).
+  char config_path_[512] = "viewer_config.json";
+  char screenshot_name_[512] = "viewer";
   int preset_index_ = -1;
   PassTimings timings_;      // this frame's passes (GPU time; display and swap on the host)
   PassTimings run_timings_;  // every frame's but the first, for the summary of a --frames run
@@ -703,15 +704,11 @@ void Viewer::DrawPanels() {
     ImGui::Checkbox("per channel", &mapping_.per_channel);
   }
   if (ImGui::CollapsingHeader("Files", ImGuiTreeNodeFlags_DefaultOpen)) {
-    static char config[512];
-    static char shot[512];
-    if (config[0] == '\0') std::snprintf(config, sizeof config, "%s", config_path_.c_str());
-    if (shot[0] == '\0') std::snprintf(shot, sizeof shot, "%s", screenshot_name_.c_str());
-    ImGui::InputText("config", config, sizeof config);
+    ImGui::InputText("config", config_path_, sizeof config_path_);
     if (ImGui::Button("save config")) {
       try {
-        WriteConfig(config, current_);
-        status_ = std::string("wrote ") + config;
+        WriteConfig(config_path_, current_);
+        status_ = std::string("wrote ") + config_path_;
       } catch (const Error& error) {
         status_ = error.what();
       }
@@ -719,19 +716,19 @@ void Viewer::DrawPanels() {
     ImGui::SameLine();
     if (ImGui::Button("load config")) {
       try {
-        base_ = LoadParametersFile(config);
+        base_ = LoadParametersFile(config_path_);
         preset_index_ = -1;
         ResetAtmosphereKnobs(base_, state_);
         loaded_ = state_;
-        status_ = std::string("loaded ") + config;
+        status_ = std::string("loaded ") + config_path_;
       } catch (const Error& error) {
         status_ = error.what();
       }
     }
-    ImGui::InputText("screenshot", shot, sizeof shot);
+    ImGui::InputText("screenshot", screenshot_name_, sizeof screenshot_name_);
     if (ImGui::Button("screenshot EXR + PNG")) {
       try {
-        Screenshot(std::string(shot) + ".exr", std::string(shot) + ".png");
+        Screenshot(std::string(screenshot_name_) + ".exr", std::string(screenshot_name_) + ".png");
       } catch (const Error& error) {
         status_ = error.what();
       }
