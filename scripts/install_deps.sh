@@ -20,6 +20,7 @@ PACKAGES=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
   libglfw3-dev xvfb xauth
   pybind11-dev python3-dev python3-numpy python3-pytest
+  libimgui-dev libstb-dev
 )
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   PACKAGES+=(nodejs npm)

@@ -53,6 +53,10 @@ constexpr Skipped kSkipped[] = {
                               "installs into build/package_test/prefix)"},
     {"cmake -S myproject", "a project of the reader's (package_cmake_consumer_build builds tests/consumer)"},
     {"c++ -std=c++20 main.cc", "the reader's program (package_pkg_config builds tests/consumer/main.cc so)"},
+    {"atmo-viewer", "opens a window until it is closed (tests/viewer/viewer_test.cc runs the viewer under Xvfb)"},
+    {"xvfb-run -a atmo-viewer --hidden --frames 31", "31 frames at 1280x720 under llvmpipe, about 10 s "
+                                                      "(tests/viewer/viewer_test.cc runs scripts on small frames)"},
+    {"xvfb-run -a atmo-viewer --hidden --frames 40", "the viewer's benchmark, 40 frames with every table: about 10 s"},
     {"atmo render --backend gl --model elek", "the elek table on the GL backend: 10 s under Mesa llvmpipe "
                                               "(gl_elek_test.cc runs it on a small table)"},
 };

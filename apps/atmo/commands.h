@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
@@ -136,6 +137,46 @@ struct RenderCommand {
   int specular_samples = 32;
 };
 int RunRender(const CommonOptions& common, const RenderCommand& command);
+
+// What `atmo render` makes of its flags before it renders: the atmosphere, the unit, the frame's
+// settings (camera, observer, sun, terms) and the PNG's tone mapping. atmo-viewer (apps/viewer)
+// plans its frames and screenshots with the same function, so that the same flags mean the same.
+struct RenderPlan {
+  AtmosphereParameters parameters;        // --preset / --config, --spectral, --sun-size
+  AtmosphereParameters model_parameters;  // parameters, with solar_irradiance 1 in physical units
+  RadianceUnit unit = RadianceUnit::kLuminance;
+  RenderSettings settings;
+  std::optional<SunAtInstant> dated_sun;  // --date
+  bool cubemap = false;                   // --camera cubemap (settings.camera then perspective)
+  ToneMapping mapping;                    // the PNG's, before its exposure
+};
+// Throws atmo::Error for what RunRender rejects in these flags.
+RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command);
+
+// The EXR and PNG outputs of `atmo render`: the image converted to the EXR's unit, the metadata
+// table of docs/cli.md#atmo-render, the PNG's exposure (--exposure, --ev, auto or the preset's).
+// `plan` and `command` must outlive it. Write takes the model's image per channel (relative
+// radiance x model_parameters.solar_irradiance) or already linear sRGB (colour_space kLinearSrgb),
+// and a Monte Carlo model's standard errors (or null); empty paths are skipped; it returns the
+// paths written. Throws atmo::Error.
+class RenderOutputs {
+ public:
+  RenderOutputs(const CommonOptions& common, const RenderCommand& command, const RenderPlan& plan,
+                const std::string& model_name);
+  void SetMetadata(const std::string& key, const std::string& value);  // adds or replaces
+  std::vector<std::string> Write(const std::string& exr_path, const std::string& png_path, const Image& image,
+                                 const Image* standard_error, double render_ms);
+  double write_s() const { return write_s_; }  // seconds spent in Write so far
+
+ private:
+  const RenderCommand& command_;
+  const RenderPlan& plan_;
+  SpectralConversion convert_;
+  ImageColour exr_colour_ = ImageColour::kLinearSrgb;
+  bool legacy_png_ = false;
+  ImageMetadata metadata_;
+  double write_s_ = 0.0;
+};
 // cubemap_command.cc: whether --ktx2, --sh, --irradiance or --specular asks for output, and
 // writing them from the cube (3 channels; linear sRGB when `luminance`), appending the paths.
 bool WantsEnvironmentOutputs(const RenderCommand& command);

@@ -15,7 +15,7 @@
 // of that instant and place; render also --until ISO --step DURATION [--mp4 F]: a time-lapse.
 // Shared by all but presets: --model, --preset, --config, --backend cpu|gl, --threads N, --seed N, --option K=V.
 //
-// This file only parses the command line (CLI11 lives here and nowhere else) and hands plain
+// This file only parses the command line (CLI11 lives here and in cli_flags.cc) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
 // for a command line that does not parse, 1 for anything else.
 #include <cctype>
@@ -33,11 +33,22 @@
 #include "atmo/error.h"
 #include "atmo/interrupt.h"
 #include "atmo/render.h"
+#include "cli_flags.h"
 #include "commands.h"
 
 namespace {
 
+using atmo::cli::AddCommonOptions;
+using atmo::cli::AddNumber;
+using atmo::cli::AddOptionalNumber;
+using atmo::cli::AddSunOptions;
 using atmo::cli::CommonOptions;
+using atmo::cli::JoinNames;
+using atmo::cli::kFinite;
+using atmo::cli::kInteger;
+using atmo::cli::kPositive;
+using atmo::cli::OpenRangeOf;
+using atmo::cli::RangeOf;
 
 // Prints `atmo: error: <message>` as one line on stderr.
 void PrintError(const std::string& message) {
@@ -49,141 +60,6 @@ void PrintError(const std::string& message) {
   std::fprintf(stderr, "atmo: error: %s\n", line.c_str());
 }
 
-// Rejects "nan", "inf" and anything that is not a number (CLI11 would accept nan and inf).
-const CLI::Validator kFinite(
-    [](std::string& text) -> std::string {
-      char* end = nullptr;
-      const double value = std::strtod(text.c_str(), &end);
-      if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
-      if (!std::isfinite(value)) return "must be a finite number, got '" + text + "'";
-      return {};
-    },
-    "FINITE", "FINITE");
-
-// An integer, checked before a range so that `--width abc` says so (CLI11's Range said "not in range").
-const CLI::Validator kInteger(
-    [](std::string& text) -> std::string {
-      char* end = nullptr;
-      (void)std::strtoll(text.c_str(), &end, 10);
-      if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not an integer";
-      return {};
-    },
-    "", "INTEGER");
-
-// "a, b, c": the names a --help lists.
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string text;
-  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
-  return text;
-}
-
-const CLI::Validator kPositive(
-    [](std::string& text) -> std::string {
-      char* end = nullptr;
-      const double value = std::strtod(text.c_str(), &end);
-      if (!(value > 0.0)) return "must be positive, got '" + text + "'";
-      return {};
-    },
-    "POSITIVE", "POSITIVE");
-
-// [min, max] for a floating-point value, printed with %g (CLI::Range prints "0.000000").
-CLI::Validator RangeOf(double min, double max) {
-  return CLI::Validator(
-      [min, max](std::string& text) -> std::string {
-        const double value = std::strtod(text.c_str(), nullptr);
-        if (value >= min && value <= max) return {};
-        return atmo::cli::Format("%s is outside [%g, %g]", text.c_str(), min, max);
-      },
-      atmo::cli::Format("[%g, %g]", min, max));
-}
-
-// (min, max), open: for the perspective field of view.
-CLI::Validator OpenRangeOf(double min, double max) {
-  return CLI::Validator(
-      [min, max](std::string& text) -> std::string {
-        const double value = std::strtod(text.c_str(), nullptr);
-        if (value > min && value < max) return {};
-        return atmo::cli::Format("%s is outside (%g, %g)", text.c_str(), min, max);
-      },
-      atmo::cli::Format("(%g, %g)", min, max));
-}
-
-// Adds a floating-point option that must be finite.
-CLI::Option* AddNumber(CLI::App* app, const std::string& name, double& value, const std::string& help) {
-  return app->add_option(name, value, help)->check(kFinite)->capture_default_str();
-}
-
-// An option whose default depends on other values: set only when given.
-CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::optional<double>& value,
-                               const std::string& help) {
-  return app
-      ->add_option_function<double>(
-          name, [&value](const double& v) { value = v; }, help)
-      ->check(kFinite);
-}
-
-void AddCommonOptions(CLI::App* app, CommonOptions& common) {
-  app->add_option("--model", common.model, "sky model: " + JoinNames(atmo::ModelNames()))->capture_default_str();
-  CLI::Option* preset =
-      app->add_option("--preset", common.preset, "parameter preset: " + JoinNames(atmo::PresetNames()) +
-                                                     " (`atmo presets` describes them)")
-          ->capture_default_str();
-  CLI::Option* config =
-      app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
-  preset->excludes(config);
-  app->add_option("--backend", common.backend, "cpu, or gl (OpenGL compute: render, sample, precompute, bench of hillaire and elek)")
-      ->check(CLI::IsMember({"cpu", "gl"}))
-      ->capture_default_str();
-  app->add_option("--threads", common.threads, "worker threads (default: all cores)")
-      ->check(kInteger)
-      ->check(CLI::Range(1, 1024));
-  // Read as text: CLI11's unsigned conversion wrapped -1 to 2^64 - 1 and refused 20-digit seeds.
-  app->add_option_function<std::string>(
-         "--seed",
-         [&common](const std::string& text) {
-           common.seed = *atmo::cli::ParseSeed(text);
-           common.seed_given = true;
-         },
-         "random seed for Monte Carlo models, an integer in [0, 18446744073709551615] (deterministic models "
-         "ignore it)")
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            if (atmo::cli::ParseSeed(text)) return {};
-            return "'" + text + "' is not an integer in [0, 18446744073709551615]";
-          },
-          "SEED", "SEED"));
-  app->add_option("--option", common.options,
-                  "model setting KEY=VALUE (repeatable); the keys are in docs/models/MODEL.md#options, and an "
-                  "unknown key's error lists the model's keys")
-      ->expected(1)
-      ->take_all();
-  app->add_option("--spectral", common.spectral,
-                  "resample the atmosphere to N wavelengths over 360-830 nm, each medium by its physics "
-                  "(docs/spectral.md)")
-      ->check(kInteger)
-      ->check(CLI::Range(3, 256));
-}
-
-// --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.
-// A date needs a place and a place a date. Returns the --date option, for the caller's excludes.
-CLI::Option* AddSunOptions(CLI::App* app, atmo::cli::SunOptions& sun) {
-  CLI::Option* date = app->add_option(
-      "--date", sun.date,
-      "ISO 8601 date-time with a zone (2026-06-21T12:00+02:00, 2026-06-21T10:00Z): the sun of that instant "
-      "at --latitude, --longitude");
-  CLI::Option* latitude = AddOptionalNumber(app, "--latitude", sun.latitude_deg,
-                                            "observer latitude in degrees, north positive (with --date)")
-                              ->check(RangeOf(-90.0, 90.0));
-  CLI::Option* longitude = AddOptionalNumber(app, "--longitude", sun.longitude_deg,
-                                             "observer longitude in degrees, east positive (with --date)")
-                               ->check(RangeOf(-180.0, 360.0));
-  CLI::Option* refraction = app->add_flag(
-      "--refraction", sun.refraction,
-      "the apparent (refracted, 1010 mbar, 10 C) sun elevation instead of the geometric one (with --date)");
-  for (CLI::Option* option : {latitude, longitude, refraction}) option->needs(date);
-  date->needs(latitude)->needs(longitude);
-  return date;
-}
 
 // Puts each flag of `app` into its help group (CLI11's default lumps them all under "Options").
 void GroupFlags(CLI::App* app) {
@@ -229,122 +105,9 @@ int main(int argc, char** argv) {
   atmo::cli::RenderCommand render;
   CLI::App* render_app = app.add_subcommand("render", "render a sky image (EXR + tone-mapped PNG)");
   AddCommonOptions(render_app, common);
-  render_app->add_option("--camera", render.camera, "perspective, fisheye, equirect or cubemap")
-      ->check(CLI::IsMember({"perspective", "fisheye", "equirect", "cubemap"}))
-      ->capture_default_str();
+  atmo::cli::RenderFlags render_flags;
+  atmo::cli::AddRenderFlags(render_app, render, render_flags);
   const std::string side_help = " in pixels";
-  render_app->add_option("--width", render.width, "image width" + side_help)
-      ->check(kInteger)
-      ->check(CLI::Range(1, atmo::kMaxImageSide))
-      ->capture_default_str();
-  render_app->add_option("--height", render.height, "image height" + side_help)
-      ->check(kInteger)
-      ->check(CLI::Range(1, atmo::kMaxImageSide))
-      ->capture_default_str();
-  AddNumber(render_app, "--fov", render.fov_deg, "horizontal field of view in degrees (perspective)")
-      ->check(OpenRangeOf(0.0, 180.0));
-  AddOptionalNumber(render_app, "--yaw", render.yaw_deg,
-                    "compass azimuth of the view centre (fisheye: of the image's top) in degrees "
-                    "[default: the sun's; fisheye: 0, north up]");
-  AddNumber(render_app, "--pitch", render.pitch_deg, "elevation of the view in degrees")
-      ->check(RangeOf(-90.0, 90.0));
-  AddNumber(render_app, "--sun-elevation", render.sun_elevation_deg, "sun elevation in degrees")
-      ->check(RangeOf(-90.0, 90.0));
-  AddNumber(render_app, "--sun-azimuth", render.sun_azimuth_deg, "sun compass azimuth in degrees");
-  AddOptionalNumber(render_app, "--altitude", render.altitude_m,
-                    "observer altitude in metres [default: the preset's]")
-      ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
-  CLI::Option* exposure = AddOptionalNumber(render_app, "--exposure", render.exposure,
-                                            "linear exposure multiplier of the PNG (docs/display.md) [default: "
-                                            "auto-exposure; a relative 3-channel render: the preset's]")
-                              ->check(kPositive);
-  CLI::Option* ev = AddOptionalNumber(render_app, "--ev", render.ev100,
-                                      "exposure as EV100 (photographic; 1/(1.2 2^EV) on cd/m^2), e.g. 15 for "
-                                      "sunny noon, 9 for sunset, 4 for civil twilight")
-                        ->excludes(exposure);
-  render_app->add_flag("--auto-exposure", render.auto_exposure,
-                       "EV100 from the image's log-average luminance (the default for physical units)")
-      ->excludes(exposure)
-      ->excludes(ev);
-  render_app->add_option("--tonemap", render.tonemap, "exp, aces or none (applied to luminance, hue kept)")
-      ->check(CLI::IsMember({"exp", "aces", "none"}))
-      ->capture_default_str();
-  render_app->add_option_function<double>(
-                "--gamma", [&render](const double& g) { render.gamma = g; },
-                "a bare display gamma instead of the sRGB transfer function (the seed's curve: 2.2)")
-      ->check(kFinite)
-      ->check(RangeOf(0.1, 10.0));
-  render_app->add_flag("--per-channel", render.per_channel,
-                       "tone-map each channel apart (the seed's look) instead of the luminance");
-  render_app->add_flag("--no-dither", render.no_dither, "8-bit PNG without dithering (shows contour bands)");
-  render_app->add_option("--png-bits", render.png_bits, "PNG bits per sample: 8 or 16")
-      ->check(CLI::IsMember({8, 16}))
-      ->capture_default_str();
-  render_app->add_flag("--no-sun-disc", render.no_sun_disc, "leave the sun disc out");
-  AddOptionalNumber(render_app, "--sun-size", render.sun_size_deg,
-                    "angular diameter of the sun disc in degrees, in (0, 20] [default: the preset's]");
-  render_app->add_flag("--no-ground", render.no_ground,
-                       "leave the light reflected by the ground out (rays that meet it show only the air in front)");
-  CLI::Option* exr_flag =
-      render_app->add_option("--exr", render.exr_path, "linear EXR output, F.exr (empty: none)")->capture_default_str();
-  CLI::Option* png_flag = render_app->add_option("--png", render.png_path, "tone-mapped PNG output, F.png (empty: none)")
-                              ->capture_default_str();
-  std::string render_output;
-  bool no_exr = false;
-  bool no_png = false;
-  render_app
-      ->add_option("-o,--output", render_output,
-                   "NAME: write NAME.exr and NAME.png; NAME.exr or NAME.png: only that file (instead of --exr, --png)")
-      ->excludes(exr_flag)
-      ->excludes(png_flag);
-  render_app->add_flag("--no-exr", no_exr, "write no EXR (the same as --exr \"\")")->excludes(exr_flag);
-  render_app->add_flag("--no-png", no_png, "write no PNG (the same as --png \"\")")->excludes(png_flag);
-  render_app->add_option("--unit", render.unit,
-                         "what the EXR holds: luminance (linear sRGB, cd/m^2), radiance (W m^-2 sr^-1 nm^-1 per "
-                         "wavelength) or relative (per unit solar irradiance x solar_irradiance)")
-      ->check(CLI::IsMember({"luminance", "radiance", "relative"}))
-      ->capture_default_str();
-  render_app->add_flag("--xyz", render.xyz, "with --unit luminance: CIE 1931 XYZ channels instead of linear sRGB");
-  render_app
-      ->add_option_function<std::uint64_t>(
-          "--spp,--samples", [&render](const std::uint64_t& n) { render.spp = n; },
-          "Monte Carlo paths per pixel, rendered progressively in passes of 4, 8, 16, ... "
-          "(model reference only; --samples is the same flag, as in `atmo sample`) [default: its samples option]")
-      ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
-
-  // The sun from a date (sun_options.h) instead of --sun-elevation and --sun-azimuth, and the time-lapse.
-  // --camera cubemap and its environment outputs (docs/environment.md).
-  render_app->add_option("--face-size", render.face_size, "cubemap face size in texels")
-      ->check(CLI::Range(1, atmo::kMaxImageSide))
-      ->capture_default_str();
-  render_app->add_option("--ktx2", render.ktx2_path, "cubemap: KTX 2.0 cubemap output (RGBA16F)");
-  render_app->add_flag("--ktx2-float", render.ktx2_float32, "cubemap: KTX2 outputs in RGBA32F instead of RGBA16F");
-  render_app->add_flag("--mips", render.mips, "cubemap: the --ktx2 file with its box-filtered mip chain");
-  render_app->add_option("--sh", render.sh_path, "cubemap: L2 spherical harmonics of the radiance, JSON");
-  render_app->add_option("--irradiance", render.irradiance_path,
-                         "cubemap: diffuse irradiance cube map (OpenEXR cube for *.exr, else KTX2)");
-  render_app->add_option("--irradiance-size", render.irradiance_size, "cubemap: irradiance face size")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
-  render_app->add_option("--specular", render.specular_path, "cubemap: GGX-prefiltered specular mip chain, KTX2");
-  render_app->add_option("--specular-levels", render.specular_levels,
-                         "cubemap: specular levels (roughness = level / (levels - 1))")
-      ->check(CLI::Range(1, 15))
-      ->capture_default_str();
-  render_app->add_option("--specular-samples", render.specular_samples, "cubemap: GGX samples per specular texel")
-      ->check(CLI::Range(1, 4096))
-      ->capture_default_str();
-  CLI::Option* render_date = AddSunOptions(render_app, render.sun);
-  render_date->excludes(render_app->get_option("--sun-elevation"))->excludes(render_app->get_option("--sun-azimuth"));
-  CLI::Option* until = render_app->add_option(
-      "--until", render.sun.until, "time-lapse: frames from --date every --step up to this ISO 8601 date-time");
-  CLI::Option* step = render_app->add_option("--step", render.sun.step, "time-lapse step: 10min, 30s, 1h30min, 2d");
-  CLI::Option* mp4 = render_app->add_option(
-      "--mp4", render.sun.mp4_path, "time-lapse: also assemble the PNG frames into this H.264 MP4 (needs ffmpeg on PATH)");
-  AddNumber(render_app, "--fps", render.sun.fps, "frames per second of the --mp4")->check(RangeOf(0.1, 1000.0))->needs(mp4);
-  until->needs(render_date)->needs(step);
-  step->needs(until);
-  mp4->needs(until);
 
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
@@ -570,30 +333,7 @@ int main(int argc, char** argv) {
       if (compare_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the --image only");
     }
   }
-  if (render_app->parsed()) {
-    if (!render_output.empty()) {
-      std::string extension = std::filesystem::path(render_output).extension().string();
-      for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      render.exr_path = extension == ".png" ? std::string() : extension == ".exr" ? render_output : render_output + ".exr";
-      render.png_path = extension == ".exr" ? std::string() : extension == ".png" ? render_output : render_output + ".png";
-    }
-    if (no_exr) render.exr_path.clear();
-    if (no_png) render.png_path.clear();
-    // Flags that the chosen camera or outputs do not use: said, not silently ignored.
-    if (render.camera != "perspective") {
-      for (const char* flag : {"--fov", "--pitch"}) {
-        if (render_app->get_option(flag)->count() > 0) {
-          PrintWarning(std::string(flag) + " applies to the perspective camera only");
-        }
-      }
-    }
-    if (render.png_path.empty()) {
-      for (const char* flag : {"--exposure", "--ev", "--auto-exposure", "--tonemap", "--gamma", "--per-channel",
-                               "--no-dither", "--png-bits"}) {
-        if (render_app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the PNG only");
-      }
-    }
-  }
+  if (render_app->parsed()) atmo::cli::FinishRenderFlags(render_app, render, render_flags);
 
   try {
     std::optional<oneapi::tbb::global_control> thread_limit;

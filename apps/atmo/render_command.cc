@@ -65,21 +65,10 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
 
 }  // namespace
 
-int RunRender(const CommonOptions& common, const RenderCommand& command) {
-  // The success line reports the whole time and its parts (precompute, view, frame, write).
-  const auto command_start = std::chrono::steady_clock::now();
-  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  };
-  double precompute_s = 0.0;
-  double view_s = 0.0;
-  double frame_s = 0.0;
-  double write_s = 0.0;
-  CheckBackend(common, /*command_has_gl=*/true);
-  CheckOutputsApart(common, {},
-                    {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
-  const bool on_gl = common.backend == "gl";
-  AtmosphereParameters parameters = LoadParameters(common);
+RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command) {
+  RenderPlan plan;
+  plan.parameters = LoadParameters(common);
+  AtmosphereParameters& parameters = plan.parameters;
   if (command.sun_size_deg) {
     const double d = *command.sun_size_deg;
     // The lower bound is sun_angular_radius_rad's 1e-6 rad (docs/parameters.md) as a diameter.
@@ -88,35 +77,19 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     }
     parameters.sun_angular_radius_rad = 0.5 * d * std::numbers::pi / 180.0;
   }
-  const RadianceUnit unit = ParseRadianceUnit(command.unit);
-  if (command.xyz && unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
+  plan.unit = ParseRadianceUnit(command.unit);
+  if (command.xyz && plan.unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
   // The models answer per unit solar irradiance; in physical units the colour conversion brings
   // in the solar spectrum, so the model's images are rendered with solar_irradiance 1.
-  AtmosphereParameters model_parameters = parameters;
-  if (unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
-  const SpectralConversion convert(parameters.wavelengths_nm);
-  const ImageColour exr_colour = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
-                                 : command.xyz                   ? ImageColour::kXyz
-                                                                 : ImageColour::kLinearSrgb;
-  // The PNG shows colour: the legacy channels as they are for a relative 3-channel render (the
-  // seed's look), else the converted linear sRGB.
-  const bool legacy_png = unit == RadianceUnit::kRelative && parameters.channel_count() == 3;
-
-  RenderSettings settings;
-  // --camera cubemap: six 90-degree perspective faces (atmo/cubemap.h), rendered below.
-  const bool cubemap = command.camera == "cubemap";
-  if (cubemap) {
-    if (on_gl) throw Error("--camera cubemap renders on the cpu backend only");
-    if (IsTimeLapse(command.sun)) throw Error("--camera cubemap does not take --until (a time-lapse)");
-    if (common.model == "reference") throw Error("--camera cubemap needs a deterministic model, not reference");
-    if (command.face_size < 1 || command.face_size > kMaxImageSide) {
-      throw Error("--face-size must be in 1.." + std::to_string(kMaxImageSide) + " (got " +
-                  std::to_string(command.face_size) + ")");
-    }
-  } else if (WantsEnvironmentOutputs(command)) {
-    throw Error("--ktx2, --sh, --irradiance and --specular need --camera cubemap");
+  plan.model_parameters = parameters;
+  if (plan.unit != RadianceUnit::kRelative) {
+    plan.model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
   }
-  settings.camera.kind = cubemap ? CameraKind::kPerspective : ParseCameraKind(command.camera);
+
+  RenderSettings& settings = plan.settings;
+  // --camera cubemap: six 90-degree perspective faces (atmo/cubemap.h), rendered by RunRender.
+  plan.cubemap = command.camera == "cubemap";
+  settings.camera.kind = plan.cubemap ? CameraKind::kPerspective : ParseCameraKind(command.camera);
   settings.camera.width = command.width;
   settings.camera.height = command.height;
   settings.camera.fov_deg = command.fov_deg;
@@ -128,18 +101,17 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   settings.sun_elevation_deg = command.sun_elevation_deg;
   settings.sun_azimuth_deg = command.sun_azimuth_deg;
   // --date: the sun of that instant and place instead (sun_options.h); a time-lapse starts there.
-  std::optional<SunAtInstant> dated_sun;
   if (HasDate(command.sun)) {
-    dated_sun = SunAtDate(command.sun);
-    settings.sun_elevation_deg = dated_sun->position.elevation_deg;
-    settings.sun_azimuth_deg = dated_sun->position.azimuth_deg;
+    plan.dated_sun = SunAtDate(command.sun);
+    settings.sun_elevation_deg = plan.dated_sun->position.elevation_deg;
+    settings.sun_azimuth_deg = plan.dated_sun->position.azimuth_deg;
     if (!command.yaw_deg && settings.camera.kind != CameraKind::kFisheye) settings.camera.yaw_deg = settings.sun_azimuth_deg;
   }
   settings.terms.sun_disc = !command.no_sun_disc;
   settings.terms.ground = !command.no_ground;
   if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
 
-  ToneMapping mapping;
+  ToneMapping& mapping = plan.mapping;
   mapping.op = ParseToneMapper(command.tonemap);
   if (command.gamma) {
     mapping.transfer = DisplayTransfer::kGamma;
@@ -148,6 +120,140 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   mapping.per_channel = command.per_channel;
   mapping.dither = !command.no_dither;
   mapping.bit_depth = command.png_bits;
+  return plan;
+}
+
+RenderOutputs::RenderOutputs(const CommonOptions& common, const RenderCommand& command, const RenderPlan& plan,
+                             const std::string& model_name)
+    : command_(command), plan_(plan), convert_(plan.parameters.wavelengths_nm) {
+  const AtmosphereParameters& parameters = plan.parameters;
+  const RenderSettings& settings = plan.settings;
+  const RadianceUnit unit = plan.unit;
+  exr_colour_ = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
+                : command.xyz                   ? ImageColour::kXyz
+                                                : ImageColour::kLinearSrgb;
+  // The PNG shows colour: the legacy channels as they are for a relative 3-channel render (the
+  // seed's look), else the converted linear sRGB.
+  legacy_png_ = unit == RadianceUnit::kRelative && parameters.channel_count() == 3;
+  metadata_ = {
+      {"atmo:version", ATMO_VERSION},
+      {"atmo:model", model_name},
+      {"atmo:backend", common.backend},
+      {"atmo:preset", parameters.name},
+      {"atmo:parameterHash", ParameterHashHex(parameters)},
+      {"atmo:unit", std::string(ToString(unit))},
+      {"atmo:radianceUnit", UnitDescription(unit, command.xyz, parameters.solar_irradiance)},
+      {"atmo:renderTimeMs", ""},
+      {"atmo:camera", plan.cubemap ? std::string("cubemap") : std::string(ToString(settings.camera.kind))},
+      {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
+      {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
+      {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
+      {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
+      {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
+      {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
+      {"atmo:sunAngularDiameterDeg", Format("%.10g", 2.0 * parameters.sun_angular_radius_rad * 180.0 / std::numbers::pi)},
+      {"atmo:modelOptions", JoinOptions(common.options)},
+  };
+  // Only what the camera uses: the field of view and pitch are the perspective camera's.
+  if (settings.camera.kind == CameraKind::kPerspective) {
+    SetMetadata("atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg));
+    SetMetadata("atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg));
+  }
+  if (plan.dated_sun) {
+    for (const auto& [key, value] : SunMetadata(command.sun, *plan.dated_sun)) SetMetadata(key, value);
+  }
+}
+
+void RenderOutputs::SetMetadata(const std::string& key, const std::string& value) {
+  for (auto& entry : metadata_) {
+    if (entry.first == key) {
+      entry.second = value;
+      return;
+    }
+  }
+  metadata_.emplace_back(key, value);
+}
+
+std::vector<std::string> RenderOutputs::Write(const std::string& exr_path, const std::string& png_path,
+                                              const Image& image, const Image* standard_error, double render_ms) {
+  const auto write_start = std::chrono::steady_clock::now();
+  const RenderCommand& command = command_;
+  const RadianceUnit unit = plan_.unit;
+  const bool is_colour = image.colour_space == ColourSpace::kLinearSrgb;
+  std::vector<std::string> written;
+  // The PNG's display image and exposure first, so that the EXR records the exposure too.
+  Image display;
+  ToneMapping png_mapping = plan_.mapping;
+  if (!png_path.empty()) {
+    display = legacy_png_ || is_colour ? image : ConvertImage(image, convert_, ImageColour::kLinearSrgb);
+    if (command.exposure) {
+      png_mapping.exposure = *command.exposure;
+    } else if (command.ev100) {
+      png_mapping.exposure = ExposureFromEv100(*command.ev100);
+    } else if (command.auto_exposure || !legacy_png_) {
+      png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
+    } else {
+      png_mapping.exposure = plan_.parameters.exposure;
+    }
+    SetMetadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
+  }
+  if (!exr_path.empty()) {
+    SetMetadata("atmo:renderTimeMs", Format("%.3f", render_ms));
+    Image exr_image = is_colour ? (command.xyz ? LinearSrgbImageToXyz(image) : image)
+                      : unit == RadianceUnit::kRelative ? image
+                                                        : ConvertImage(image, convert_, exr_colour_);
+    // Equirects and cube maps carry OpenEXR's envmap attribute (docs/environment.md).
+    exr_image.envmap = plan_.settings.camera.kind == CameraKind::kEquirect ? EnvMap::kLatLong : image.envmap;
+    if (standard_error != nullptr) {
+      ProgressiveImage with_error;
+      with_error.radiance = exr_image;
+      with_error.standard_error =
+          unit == RadianceUnit::kRelative ? *standard_error : ConvertStandardError(*standard_error, convert_, exr_colour_);
+      exr_image = WithStandardErrorChannels(with_error);
+      exr_image.colour_space = with_error.radiance.colour_space;
+    }
+    WriteExr(exr_path, exr_image, metadata_);
+    written.push_back(exr_path);
+  }
+  if (!png_path.empty()) {
+    WritePng(png_path, display, png_mapping);
+    written.push_back(png_path);
+  }
+  write_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
+  return written;
+}
+
+int RunRender(const CommonOptions& common, const RenderCommand& command) {
+  // The success line reports the whole time and its parts (precompute, view, frame, write).
+  const auto command_start = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  double precompute_s = 0.0;
+  double view_s = 0.0;
+  double frame_s = 0.0;
+  CheckBackend(common, /*command_has_gl=*/true);
+  CheckOutputsApart(common, {},
+                    {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
+  const bool on_gl = common.backend == "gl";
+  RenderPlan plan = PlanRender(common, command);
+  const AtmosphereParameters& parameters = plan.parameters;
+  const AtmosphereParameters& model_parameters = plan.model_parameters;
+  const RadianceUnit unit = plan.unit;
+  const RenderSettings& settings = plan.settings;
+  const bool cubemap = plan.cubemap;
+  const SpectralConversion convert(parameters.wavelengths_nm);
+  if (cubemap) {
+    if (on_gl) throw Error("--camera cubemap renders on the cpu backend only");
+    if (IsTimeLapse(command.sun)) throw Error("--camera cubemap does not take --until (a time-lapse)");
+    if (common.model == "reference") throw Error("--camera cubemap needs a deterministic model, not reference");
+    if (command.face_size < 1 || command.face_size > kMaxImageSide) {
+      throw Error("--face-size must be in 1.." + std::to_string(kMaxImageSide) + " (got " +
+                  std::to_string(command.face_size) + ")");
+    }
+  } else if (WantsEnvironmentOutputs(command)) {
+    throw Error("--ktx2, --sh, --irradiance and --specular need --camera cubemap");
+  }
 
   // Fail fast, before precomputing anything, when an output cannot be written.
   if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
@@ -171,91 +277,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   const auto elapsed_ms = [&] {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   };
-  ImageMetadata metadata = {
-      {"atmo:version", ATMO_VERSION},
-      {"atmo:model", model_name},
-      {"atmo:backend", common.backend},
-      {"atmo:preset", parameters.name},
-      {"atmo:parameterHash", ParameterHashHex(parameters)},
-      {"atmo:unit", std::string(ToString(unit))},
-      {"atmo:radianceUnit", UnitDescription(unit, command.xyz, parameters.solar_irradiance)},
-      {"atmo:renderTimeMs", ""},
-      {"atmo:camera", cubemap ? std::string("cubemap") : std::string(ToString(settings.camera.kind))},
-      {"atmo:sunElevationDeg", Format("%.10g", settings.sun_elevation_deg)},
-      {"atmo:sunAzimuthDeg", Format("%.10g", settings.sun_azimuth_deg)},
-      {"atmo:altitudeM", Format("%.10g", settings.altitude_m)},
-      {"atmo:wavelengthsNm", JoinValues(parameters.wavelengths_nm)},
-      {"atmo:cameraYawDeg", Format("%.10g", settings.camera.yaw_deg)},
-      {"atmo:terms", std::string(settings.terms.sun_disc ? "sun_disc " : "") + (settings.terms.ground ? "ground" : "")},
-      {"atmo:sunAngularDiameterDeg", Format("%.10g", 2.0 * parameters.sun_angular_radius_rad * 180.0 / std::numbers::pi)},
-      {"atmo:modelOptions", JoinOptions(common.options)},
-  };
-  const auto set_metadata = [&](const std::string& key, const std::string& value) {
-    for (auto& entry : metadata) {
-      if (entry.first == key) {
-        entry.second = value;
-        return;
-      }
-    }
-    metadata.emplace_back(key, value);
-  };
-  // Only what the camera uses: the field of view and pitch are the perspective camera's.
-  if (settings.camera.kind == CameraKind::kPerspective) {
-    set_metadata("atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg));
-    set_metadata("atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg));
-  }
-  if (dated_sun) {
-    for (const auto& [key, value] : SunMetadata(command.sun, *dated_sun)) set_metadata(key, value);
-  }
-  // Writes the outputs asked for from the model's image (per channel) and, for a Monte Carlo
-  // model, its standard errors (same unit).
-  // `image` is either per channel (relative radiance x solar_irradiance) or already linear sRGB in
-  // cd/m^2 (colour_space kLinearSrgb: a folded CPU frame).
+  RenderOutputs outputs(common, command, plan, model_name);
+  const auto set_metadata = [&](const std::string& key, const std::string& value) { outputs.SetMetadata(key, value); };
   const auto write_to = [&](const std::string& exr_path, const std::string& png_path, const Image& image,
                             const Image* standard_error, double render_ms) {
-    const auto write_start = std::chrono::steady_clock::now();
-    const bool is_colour = image.colour_space == ColourSpace::kLinearSrgb;
-    std::vector<std::string> written;
-    // The PNG's display image and exposure first, so that the EXR records the exposure too.
-    Image display;
-    ToneMapping png_mapping = mapping;
-    if (!png_path.empty()) {
-      display = legacy_png || is_colour ? image : ConvertImage(image, convert, ImageColour::kLinearSrgb);
-      if (command.exposure) {
-        png_mapping.exposure = *command.exposure;
-      } else if (command.ev100) {
-        png_mapping.exposure = ExposureFromEv100(*command.ev100);
-      } else if (command.auto_exposure || !legacy_png) {
-        png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
-      } else {
-        png_mapping.exposure = parameters.exposure;
-      }
-      set_metadata("atmo:pngExposure", Format("%.6g", png_mapping.exposure));
-    }
-    if (!exr_path.empty()) {
-      set_metadata("atmo:renderTimeMs", Format("%.3f", render_ms));
-      Image exr_image = is_colour ? (command.xyz ? LinearSrgbImageToXyz(image) : image)
-                        : unit == RadianceUnit::kRelative ? image
-                                                          : ConvertImage(image, convert, exr_colour);
-      // Equirects and cube maps carry OpenEXR's envmap attribute (docs/environment.md).
-      exr_image.envmap = settings.camera.kind == CameraKind::kEquirect ? EnvMap::kLatLong : image.envmap;
-      if (standard_error != nullptr) {
-        ProgressiveImage with_error;
-        with_error.radiance = exr_image;
-        with_error.standard_error =
-            unit == RadianceUnit::kRelative ? *standard_error : ConvertStandardError(*standard_error, convert, exr_colour);
-        exr_image = WithStandardErrorChannels(with_error);
-        exr_image.colour_space = with_error.radiance.colour_space;
-      }
-      WriteExr(exr_path, exr_image, metadata);
-      written.push_back(exr_path);
-    }
-    if (!png_path.empty()) {
-      WritePng(png_path, display, png_mapping);
-      written.push_back(png_path);
-    }
-    write_s += seconds_since(write_start);
-    return written;
+    return outputs.Write(exr_path, png_path, image, standard_error, render_ms);
   };
   const auto write = [&](const Image& image, const Image* standard_error, double render_ms) {
     return write_to(command.exr_path, command.png_path, image, standard_error, render_ms);
@@ -371,7 +397,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     };
     const auto passes_start = std::chrono::steady_clock::now();
     image = RenderProgressive(*model, settings, progressive).radiance;
-    frame_s = seconds_since(passes_start) - write_s;
+    frame_s = seconds_since(passes_start) - outputs.write_s();
     progress.Finish();
   } else {
     // A long CPU frame (a per-pixel ray march, a large image) draws a bar over its rows.
@@ -398,8 +424,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
   // The whole time and its parts; on the gl backend the tables are GPU passes of the frame's run.
   const std::string parts =
-      on_gl ? Format("gl passes and read-back %.2f s, write %.2f s", frame_s, write_s)
-            : Format("precompute %.2f s, view %.2f s, frame %.2f s, write %.2f s", precompute_s, view_s, frame_s, write_s);
+      on_gl ? Format("gl passes and read-back %.2f s, write %.2f s", frame_s, outputs.write_s())
+            : Format("precompute %.2f s, view %.2f s, frame %.2f s, write %.2f s", precompute_s, view_s, frame_s, outputs.write_s());
   std::printf("%s %s (%dx%d %s, %s, %s) in %.2f s: %s\n", written.empty() ? "rendered" : "wrote",
               written.empty() ? "without writing a file" : files.c_str(), image.width, image.height,
               std::string(ToString(settings.camera.kind)).c_str(), model_name.c_str(), parameters.name.c_str(),

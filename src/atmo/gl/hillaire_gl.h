@@ -105,6 +105,11 @@ class HillaireGl {
   // The last frame, one channel per wavelength (the batches' frames read back and interleaved),
   // with alpha (0 outside the circle) for a fisheye camera.
   Image ReadFrame() const;
+  // The last frame of batch `batch` where it lies on the GPU (rgba32f, the camera's size, row 0 at
+  // the top; rgb channels 3 batch .. 3 batch + 2, alpha 0 outside a fisheye's circle): what a
+  // viewer draws without a read-back. Empty before RenderFrame; throws std::out_of_range for a
+  // batch >= batch_count().
+  const GpuTexture& frame_texture(std::size_t batch = 0) const { return batches_.at(batch).frame; }
 
   // Per unit direction (local frame): the scattered radiance per unit solar irradiance (no sun
   // disc, no ground light) and the transmittance to the top of the atmosphere (0 towards the

@@ -1,0 +1,73 @@
+// atmo-viewer: the sky of model hillaire live in a window, on the GL backend (docs/viewer.md).
+//
+//   atmo-viewer [--preset P | --config F.json] [--option K=V] [render flags of `atmo render`:
+//               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
+//               --sun-azimuth --date ... --ev --exposure --tonemap ...]
+//               [--frames N [--screenshot F.png|F.exr|NAME]] [--script F] [--save-config F.json]
+//               [--recompute-every-frame] [--hidden]
+//
+// This file only parses the command line (the flags of `atmo render` through apps/atmo/cli_flags.h)
+// and calls RunViewer. Errors: one line `atmo-viewer: error: ...` on stderr; exit 2 for a command
+// line that does not parse, 1 for anything else.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "atmo/error.h"
+#include "atmo/interrupt.h"
+#include "cli_flags.h"
+#include "viewer.h"
+
+int main(int argc, char** argv) {
+  atmo::InstallInterruptHandlers("atmo-viewer");
+  CLI::App app{"atmo-viewer: the sky of model hillaire live in a window (docs/viewer.md)", "atmo-viewer"};
+  app.set_version_flag("--version", std::string("atmo-viewer ") + ATMO_VERSION);
+  atmo::viewer::ViewerOptions options;
+  // The screenshot of the last --frames frame goes where `atmo render` writes (--exr, --png, -o);
+  // by default nowhere.
+  options.render.exr_path.clear();
+  options.render.png_path.clear();
+  atmo::cli::AddCommonOptions(&app, options.common);
+  atmo::cli::RenderFlags flags;
+  atmo::cli::AddRenderFlags(&app, options.render, flags);
+  app.add_option("--frames", options.frames, "stop after N frames (default: when the window is closed)")
+      ->check(atmo::cli::kInteger)
+      ->check(CLI::Range(1, 100000000));
+  std::string screenshot;
+  app.add_option("--screenshot", screenshot,
+                 "write the last frame: F.png or F.exr, or NAME for NAME.exr and NAME.png, with the metadata of "
+                 "`atmo render` (needs --frames)")
+      ->excludes("--exr")
+      ->excludes("--png")
+      ->excludes("--output");
+  app.add_option("--script", options.script_path, "timed camera, sun and atmosphere moves (docs/viewer.md#scripts)");
+  app.add_option("--save-config", options.save_config,
+                 "write the atmosphere as JSON at the end (`atmo render --config` reads it back)");
+  app.add_flag("--recompute-every-frame", options.recompute_every_frame,
+               "recompute every table every frame (the benchmark of docs/performance.md)");
+  app.add_flag("--no-panels", options.no_panels, "the sky alone, without the panels");
+  app.add_option("--window-screenshot", options.window_screenshot,
+                 "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
+  app.add_flag("--hidden", options.hidden, "an invisible window (scripted runs; a display is still needed)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    if (error.get_exit_code() == 0) return app.exit(error);
+    std::fprintf(stderr, "atmo-viewer: error: %s\n", error.what());
+    return 2;
+  }
+  if (!screenshot.empty()) flags.output = screenshot;
+  // The display flags set the window's exposure and curve too: no "applies to the PNG only".
+  atmo::cli::FinishRenderFlags(&app, options.render, flags, /*png_only_warnings=*/false);
+  try {
+    return atmo::viewer::RunViewer(options);
+  } catch (const std::exception& error) {
+    std::string line = error.what();
+    for (char& c : line) {
+      if (c == '\n' || c == '\r') c = ' ';
+    }
+    std::fprintf(stderr, "atmo-viewer: error: %s\n", line.c_str());
+  }
+  return 1;
+}

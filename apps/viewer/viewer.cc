@@ -1,0 +1,912 @@
+// atmo-viewer's window, frame loop and panels (viewer.h).
+#include "viewer.h"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+// epoxy's gl.h first: GLFW must not include the system GL header.
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+
+#include "atmo/colour.h"
+#include "atmo/error.h"
+#include "atmo/image.h"
+#include "atmo/parameters.h"
+#include "cpu/camera.h"
+#include "gl/context.h"
+#include "gl/hillaire_gl.h"
+#include "physics/shared_parameters.h"
+#include "script.h"
+
+namespace atmo::viewer {
+
+namespace {
+
+// The most batches of three channels the display pass reads (24 channels): earth-spectral's 15
+// and --spectral up to 24 show; more are refused with a message.
+constexpr int kMaxDisplayBatches = 8;
+// The altitude slider's range, metres: the ground to 1000 km (issue's "orbit"); the command line
+// and scripts may go higher.
+constexpr float kMaxSliderAltitude_m = 1e6f;
+
+// Full-screen triangle; the fragment shader reads the frame texel of its pixel (row 0 at the top).
+constexpr const char* kDisplayVertexShader = R"glsl(#version 450 core
+void main() {
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+  gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)glsl";
+
+// The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
+// atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
+// luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
+// float, without the PNG's dither.
+// The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
+// atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
+// luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
+// float, without the PNG's dither. BATCH_COUNT, TONE_OP (atmo::ToneMapper's order: exp, aces,
+// none) and PER_CHANNEL are compiled in (DisplayPass keeps one program per choice): llvmpipe ran
+// the uniform branches on them at about twice the cost of the whole pass without them.
+constexpr const char* kDisplayFragmentShader = R"glsl(
+layout(binding = 0) uniform sampler2D frame0;
+layout(binding = 1) uniform sampler2D frame1;
+layout(binding = 2) uniform sampler2D frame2;
+layout(binding = 3) uniform sampler2D frame3;
+layout(binding = 4) uniform sampler2D frame4;
+layout(binding = 5) uniform sampler2D frame5;
+layout(binding = 6) uniform sampler2D frame6;
+layout(binding = 7) uniform sampler2D frame7;
+// EncodeDisplay(u^2) at u = (i + 0.5) / size: the display transfer as a table, read at sqrt(v),
+// where the sRGB curve is nearly linear.
+layout(binding = 8) uniform sampler1D encode_table;
+uniform mat3 weights[8];
+uniform float exposure;
+uniform int frame_height;
+out vec4 colour;
+
+float Curve(float v) {
+#if TONE_OP == 0
+  float t = 1.0 - exp(-v);
+#elif TONE_OP == 1
+  float t = (v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14);
+#else
+  float t = v;
+#endif
+  return clamp(t, 0.0, 1.0);
+}
+float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
+void main() {
+  ivec2 texel = ivec2(int(gl_FragCoord.x), frame_height - 1 - int(gl_FragCoord.y));
+  vec3 rgb = weights[0] * texelFetch(frame0, texel, 0).rgb;
+#if BATCH_COUNT > 1
+  rgb += weights[1] * texelFetch(frame1, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 2
+  rgb += weights[2] * texelFetch(frame2, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 3
+  rgb += weights[3] * texelFetch(frame3, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 4
+  rgb += weights[4] * texelFetch(frame4, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 5
+  rgb += weights[5] * texelFetch(frame5, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 6
+  rgb += weights[6] * texelFetch(frame6, texel, 0).rgb;
+#endif
+#if BATCH_COUNT > 7
+  rgb += weights[7] * texelFetch(frame7, texel, 0).rgb;
+#endif
+  vec3 v = max(rgb, vec3(0.0)) * exposure;
+#if PER_CHANNEL
+  v = vec3(Curve(v.r), Curve(v.g), Curve(v.b));
+#else
+  float y = dot(v, vec3(0.2126, 0.7152, 0.0722));
+  v = y > 0.0 ? v * (Curve(y) / y) : vec3(0.0);
+  float largest = max(v.r, max(v.g, v.b));
+  if (largest > 1.0) v /= largest;
+#endif
+  colour = vec4(Encode(v.r), Encode(v.g), Encode(v.b), 1.0);
+}
+)glsl";
+
+unsigned CompileShader(GLenum kind, const char* source) {
+  const GLuint shader = glCreateShader(kind);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    throw Error(std::string("display shader: ") + log);
+  }
+  return shader;
+}
+
+// The display pass: one program and an empty vertex array (core profile needs one bound).
+class DisplayPass {
+ public:
+  DisplayPass() {
+    glCreateVertexArrays(1, &vao_);
+    glCreateTextures(GL_TEXTURE_1D, 1, &encode_table_);
+    glTextureStorage1D(encode_table_, 1, GL_R32F, kEncodeTableSize);
+    glTextureParameteri(encode_table_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(encode_table_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(encode_table_, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  }
+  ~DisplayPass() {
+    glDeleteTextures(1, &encode_table_);
+    glDeleteVertexArrays(1, &vao_);
+    for (const auto& [key, program] : programs_) glDeleteProgram(program);
+  }
+  DisplayPass(const DisplayPass&) = delete;
+  DisplayPass& operator=(const DisplayPass&) = delete;
+
+  void Draw(const gl::HillaireGl& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
+            int height) const {
+    glViewport(0, 0, width, height);
+    const int batches = static_cast<int>(sky.batch_count());
+    const GLuint program = Program(batches, static_cast<int>(mapping.op), mapping.per_channel);
+    glUseProgram(program);
+    for (int b = 0; b < batches; ++b) glBindTextureUnit(b, sky.frame_texture(b).id());
+    glUniformMatrix3fv(glGetUniformLocation(program, "weights"), batches, GL_FALSE, &weights[0][0][0]);
+    glUniform1f(glGetUniformLocation(program, "exposure"), static_cast<float>(mapping.exposure));
+    if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
+    glBindTextureUnit(8, encode_table_);
+    glUniform1i(glGetUniformLocation(program, "frame_height"), height);
+    glBindVertexArray(vao_);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glUseProgram(0);
+  }
+
+ private:
+  // The program for a batch count, tone curve and mode, compiled on first use.
+  GLuint Program(int batches, int tone_op, bool per_channel) const {
+    const int key = batches * 100 + tone_op * 10 + (per_channel ? 1 : 0);
+    const auto found = programs_.find(key);
+    if (found != programs_.end()) return found->second;
+    const std::string source = "#version 450 core\n#define BATCH_COUNT " + std::to_string(batches) +
+                               "\n#define TONE_OP " + std::to_string(tone_op) + "\n#define PER_CHANNEL " +
+                               std::to_string(per_channel ? 1 : 0) + "\n" + kDisplayFragmentShader;
+    const GLuint vs = CompileShader(GL_VERTEX_SHADER, kDisplayVertexShader);
+    const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, source.c_str());
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, vs);
+    glAttachShader(program, fs);
+    glLinkProgram(program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (ok != GL_TRUE) throw Error("display shader: link failed");
+    programs_.emplace(key, program);
+    return program;
+  }
+  // 4096 entries: at the dark end u = 1/8192 is v = 1.5e-8, below an 8-bit code; the sRGB curve's
+  // largest gap between neighbours is 0.0015, a tenth of an 8-bit code.
+  static constexpr int kEncodeTableSize = 4096;
+  void FillEncodeTable(const ToneMapping& mapping) const {
+    std::vector<float> table(kEncodeTableSize);
+    for (int i = 0; i < kEncodeTableSize; ++i) {
+      const double u = (i + 0.5) / kEncodeTableSize;
+      table[i] = static_cast<float>(EncodeDisplay(u * u, mapping));
+    }
+    glTextureSubImage1D(encode_table_, 0, 0, kEncodeTableSize, GL_RED, GL_FLOAT, table.data());
+    encoded_transfer_ = mapping.transfer;
+    encoded_gamma_ = mapping.gamma;
+  }
+
+  mutable std::map<int, GLuint> programs_;
+  GLuint vao_ = 0;
+  GLuint encode_table_ = 0;
+  mutable std::optional<DisplayTransfer> encoded_transfer_;
+  mutable double encoded_gamma_ = 0.0;
+};
+
+// The ViewState knobs of an atmosphere as loaded (multipliers 1, its g, albedo and radius).
+void ResetAtmosphereKnobs(const AtmosphereParameters& p, ViewState& state) {
+  state.rayleigh_density = 1.0;
+  state.mie_density = 1.0;
+  state.ozone_density = 1.0;
+  state.mie_g = p.mie.phase_g;
+  double albedo = 0.0;
+  for (const double a : p.ground_albedo) albedo += a;
+  state.ground_albedo = p.ground_albedo.empty() ? 0.0 : albedo / static_cast<double>(p.ground_albedo.size());
+  state.ground_radius_m = p.ground_radius_m;
+}
+
+// The loaded atmosphere with the knobs applied; a knob at its loaded value leaves the parameter
+// as it is, bit for bit (so that a screenshot matches `atmo render` with the same config).
+AtmosphereParameters ApplyAtmosphereKnobs(const AtmosphereParameters& base, const ViewState& loaded,
+                                          const ViewState& state) {
+  AtmosphereParameters p = base;
+  const auto scale = [](Medium& medium, double factor) {
+    if (factor == 1.0) return;
+    for (double& s : medium.scattering_per_m) s *= factor;
+    for (double& a : medium.absorption_per_m) a *= factor;
+  };
+  scale(p.rayleigh, state.rayleigh_density);
+  scale(p.mie, state.mie_density);
+  scale(p.ozone, state.ozone_density);
+  if (state.mie_g != loaded.mie_g) p.mie.phase_g = state.mie_g;
+  if (state.ground_albedo != loaded.ground_albedo) p.ground_albedo.assign(p.channel_count(), state.ground_albedo);
+  if (state.ground_radius_m != loaded.ground_radius_m) {
+    p.top_radius_m = state.ground_radius_m + (base.top_radius_m - base.ground_radius_m);
+    p.ground_radius_m = state.ground_radius_m;
+  }
+  if (!(p == base)) p.name = "custom";
+  Validate(p);
+  return p;
+}
+
+// Moves an altitude smoothly on a log scale through 0: (h + 10 m) grows by e^step.
+double StepAltitude(double altitude_m, double step) {
+  return std::clamp((altitude_m + 10.0) * std::exp(step) - 10.0, 0.0, static_cast<double>(kMaxSliderAltitude_m));
+}
+
+// The back buffer as 8-bit display values (read bottom-up, written top row first), as a PNG of
+// those values unchanged (DisplayTransfer::kIdentity, no curve, no dither).
+void WriteWindow(const std::string& path, int width, int height) {
+  std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+  Image image(width, height, 3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        image.at(x, y, c) = rgb[(static_cast<std::size_t>(height - 1 - y) * width + x) * 3 + c] / 255.0f;
+      }
+    }
+  }
+  ToneMapping identity;
+  identity.op = ToneMapper::kNone;
+  identity.exposure = 1.0;
+  identity.per_channel = true;
+  identity.transfer = DisplayTransfer::kIdentity;
+  identity.dither = false;
+  WritePng(path, image, identity);
+  std::printf("atmo-viewer: wrote %s (the window, %dx%d)\n", path.c_str(), width, height);
+}
+
+void WriteConfig(const std::string& path, const AtmosphereParameters& parameters) {
+  const std::string json = ToJson(parameters);
+  WriteFileAtomically(path, [&](const std::filesystem::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    out << json << '\n';
+    if (!out) throw Error("write failed");
+  });
+}
+
+class Viewer {
+ public:
+  explicit Viewer(const ViewerOptions& options);
+  ~Viewer();
+  int Run();
+
+ private:
+  // A new HillaireGl for `parameters` and settings_ (tables not computed yet); throws atmo::Error.
+  std::unique_ptr<gl::HillaireGl> MakeSky(const AtmosphereParameters& parameters) const;
+  void UpdateDisplayWeights();
+  void HandleInput(double dt_s);
+  void DrawPanels();
+  void Screenshot(const std::string& exr_path, const std::string& png_path);
+  void FollowDate();  // the sun of --date + date_hours
+  cli::RenderPlan CurrentPlan() const;
+
+  ViewerOptions options_;
+  cli::RenderPlan plan_;               // from the flags, as `atmo render` plans them
+  AtmosphereParameters base_;          // the loaded atmosphere (preset or config), before the knobs
+  AtmosphereParameters current_;       // with the knobs
+  // What the shown tables were made from, to go back to when a change fails.
+  AtmosphereParameters current_base_;
+  ViewState current_loaded_;
+  int current_preset_index_ = -1;
+  HillaireSettings shown_settings_;
+  bool settings_changed_ = false;  // the panel's hillaire options moved
+  HillaireSettings settings_;
+  ViewState state_;
+  ViewState loaded_;  // the knobs of base_
+  ViewState built_;   // what the GPU tables and sky view were last made for
+  std::unique_ptr<gl::Context> context_;
+  std::unique_ptr<gl::HillaireGl> sky_;
+  std::unique_ptr<DisplayPass> display_;
+  std::vector<glm::mat3> weights_;
+  ViewerScript script_;
+  ToneMapping mapping_;
+  bool tables_dirty_ = true;
+  bool view_dirty_ = true;
+  std::string status_;  // the last error or file written, shown in the panel
+  // The Files panel's text fields (ImGui edits them in place).
+  char config_path_[512] = "viewer_config.json";
+  char screenshot_name_[512] = "viewer";
+  int preset_index_ = -1;
+  PassTimings timings_;      // this frame's passes (GPU time; display and swap on the host)
+  PassTimings run_timings_;  // every frame's but the first, for the summary of a --frames run
+  double frame_ms_ = 0.0;
+  double metered_ev100_ = 0.0;
+  int frame_ = 0;
+  // --date: the sun follows the date plus state_.date_hours, played at play_speed_ hours per
+  // second, until the sun is moved by hand (date_follows_ false).
+  bool date_follows_ = false;
+  bool playing_ = false;
+  double play_speed_ = 0.5;
+  std::optional<cli::SunAtInstant> dated_sun_;  // the instant the sun shows, when it follows the date
+  bool dragging_view_ = false;
+  bool dragging_sun_ = false;
+  double last_x_ = 0.0;
+  double last_y_ = 0.0;
+};
+
+Viewer::Viewer(const ViewerOptions& options) : options_(options) {
+  if (options_.common.model != "hillaire") {
+    throw Error("atmo-viewer shows model hillaire in this version (got --model " + options_.common.model + ")");
+  }
+  if (options_.common.backend != "cpu" && options_.common.backend != "gl") {
+    throw Error("unknown backend '" + options_.common.backend + "'");
+  }
+  options_.common.backend = "gl";  // the viewer runs on the GL backend; the metadata says so
+  if (options_.render.camera == "cubemap") throw Error("atmo-viewer has no cubemap camera (use atmo render)");
+  if (options_.render.spp) throw Error("--spp is for model reference, which atmo-viewer does not show yet");
+  plan_ = cli::PlanRender(options_.common, options_.render);
+  base_ = plan_.parameters;
+  if (static_cast<int>(ChannelBatchCount(base_.channel_count())) > kMaxDisplayBatches) {
+    throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
+                std::to_string(base_.channel_count()) + "); use fewer --spectral wavelengths");
+  }
+  settings_ = cli::GlHillaireSettings(options_.common);
+  mapping_ = plan_.mapping;
+  const RenderSettings& s = plan_.settings;
+  state_.camera = s.camera.kind;
+  state_.yaw_deg = s.camera.yaw_deg;
+  state_.pitch_deg = s.camera.pitch_deg;
+  state_.fov_deg = s.camera.fov_deg;
+  state_.altitude_m = s.altitude_m;
+  state_.sun_elevation_deg = s.sun_elevation_deg;
+  state_.sun_azimuth_deg = s.sun_azimuth_deg;
+  state_.sun_disc = s.terms.sun_disc;
+  state_.ground = s.terms.ground;
+  // The exposure as `atmo render` chooses the PNG's: --exposure, --ev, else metered (auto).
+  const bool legacy = plan_.unit == RadianceUnit::kRelative && base_.channel_count() == 3;
+  if (options_.render.exposure) {
+    state_.auto_exposure = false;
+    state_.ev100 = Ev100FromExposure(*options_.render.exposure);
+  } else if (options_.render.ev100) {
+    state_.auto_exposure = false;
+    state_.ev100 = *options_.render.ev100;
+  } else if (legacy && !options_.render.auto_exposure) {
+    state_.auto_exposure = false;
+    state_.ev100 = Ev100FromExposure(base_.exposure);
+  } else {
+    state_.auto_exposure = true;
+  }
+  date_follows_ = plan_.dated_sun.has_value();
+  dated_sun_ = plan_.dated_sun;
+  ResetAtmosphereKnobs(base_, state_);
+  loaded_ = state_;
+  current_ = base_;
+  if (!options_.script_path.empty()) {
+    script_ = ParseViewerScript(ReadFileBounded(options_.script_path, "script "), options_.script_path);
+  }
+  const std::vector<std::string> presets = PresetNames();
+  for (std::size_t i = 0; i < presets.size(); ++i) {
+    if (presets[i] == base_.name) preset_index_ = static_cast<int>(i);
+  }
+
+  gl::WindowOptions window;
+  window.width = options_.render.width;
+  window.height = options_.render.height;
+  window.title = "atmo-viewer";
+  window.visible = !options_.hidden;
+  context_ = std::make_unique<gl::Context>(window);
+  GLFWwindow* glfw_window = static_cast<GLFWwindow*>(context_->window());
+  // Scripted runs measure frames, not the display's refresh: no vsync.
+  glfwSwapInterval(options_.frames > 0 ? 0 : 1);
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini beside the user's files
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(glfw_window, true);
+  ImGui_ImplOpenGL3_Init("#version 450");
+  display_ = std::make_unique<DisplayPass>();
+}
+
+Viewer::~Viewer() {
+  sky_.reset();
+  display_.reset();
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+}
+
+void Viewer::UpdateDisplayWeights() {
+  // Per channel, its linear sRGB weights (atmo::ColourWeights; the legacy 3-channel relative
+  // render shows its channels times solar_irradiance, as `atmo render`'s PNG does).
+  const std::size_t nc = current_.channel_count();
+  std::vector<glm::vec3> per_channel(nc, glm::vec3(0.0f));
+  if (plan_.unit == RadianceUnit::kRelative && nc == 3) {
+    for (std::size_t c = 0; c < 3; ++c) per_channel[c][c] = 1.0f;  // the frame has solar_irradiance in it
+  } else {
+    per_channel = ColourWeights(SpectralConversion(current_.wavelengths_nm), ImageColour::kLinearSrgb);
+  }
+  weights_.assign(kMaxDisplayBatches, glm::mat3(0.0f));
+  for (std::size_t c = 0; c < nc; ++c) weights_[c / 3][c % 3] = per_channel[c];
+}
+
+std::unique_ptr<gl::HillaireGl> Viewer::MakeSky(const AtmosphereParameters& parameters) const {
+  if (static_cast<int>(ChannelBatchCount(parameters.channel_count())) > kMaxDisplayBatches) {
+    throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
+                std::to_string(parameters.channel_count()) + ")");
+  }
+  AtmosphereParameters model_parameters = parameters;
+  if (plan_.unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
+  return std::make_unique<gl::HillaireGl>(*context_, model_parameters, settings_);
+}
+
+cli::RenderPlan Viewer::CurrentPlan() const {
+  cli::RenderPlan plan = plan_;
+  plan.parameters = current_;
+  plan.model_parameters = current_;
+  if (plan.unit != RadianceUnit::kRelative)
+    plan.model_parameters.solar_irradiance.assign(current_.channel_count(), 1.0);
+  plan.settings.camera = ViewCamera(state_, options_.render.width, options_.render.height);
+  plan.settings.altitude_m = state_.altitude_m;
+  plan.settings.sun_elevation_deg = state_.sun_elevation_deg;
+  plan.settings.sun_azimuth_deg = state_.sun_azimuth_deg;
+  plan.settings.terms.sun_disc = state_.sun_disc;
+  plan.settings.terms.ground = state_.ground;
+  // The instant the sun shows; none once the sun was moved by hand.
+  plan.dated_sun = date_follows_ ? dated_sun_ : std::nullopt;
+  return plan;
+}
+
+// As `atmo render --backend gl` renders a frame (gl::RenderHillaireGl): the frame pass without the
+// disc, read back, the disc integrated over the pixels on the host, then the same writer.
+void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path) {
+  const auto start = std::chrono::steady_clock::now();
+  const cli::RenderPlan plan = CurrentPlan();
+  RadianceTerms terms = plan.settings.terms;
+  terms.sun_disc = false;
+  sky_->RenderFrame(ToSharedCamera(plan.settings.camera), terms);
+  Image image = sky_->ReadFrame();
+  if (plan.settings.terms.sun_disc) {
+    std::vector<shared::Texture2D> transmittance;
+    for (std::size_t b = 0; b < sky_->batch_count(); ++b) transmittance.push_back(sky_->ReadTransmittance(b));
+    gl::AddSunDiscOnHost(plan.model_parameters, transmittance, plan.settings, image);
+  }
+  const double render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  cli::RenderCommand command = options_.render;
+  // The PNG's exposure is the one on screen.
+  command.exposure.reset();
+  command.ev100.reset();
+  command.auto_exposure = state_.auto_exposure;
+  if (!state_.auto_exposure) command.ev100 = state_.ev100;
+  // The --option flags, with the panel's hillaire options where they differ from them: what
+  // `atmo render --option ...` needs to render this frame.
+  cli::CommonOptions common = options_.common;
+  const HillaireSettings flags = cli::GlHillaireSettings(options_.common);
+  const auto set_option = [&](const std::string& key, const std::string& value) {
+    std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+    common.options.push_back(key + "=" + value);
+  };
+  if (settings_.sky_view_samples != flags.sky_view_samples) {
+    set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+  }
+  if (settings_.ray_march_samples != flags.ray_march_samples) {
+    set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
+  }
+  if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
+    set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
+  }
+  if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
+    set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
+  cli::RenderOutputs outputs(common, command, plan, "hillaire");
+  outputs.SetMetadata("atmo:writer", "atmo-viewer");
+  outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
+  const std::vector<std::string> written = outputs.Write(exr_path, png_path, image, nullptr, render_ms);
+  std::string files;
+  for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
+  status_ = "wrote " + files;
+  std::printf("atmo-viewer: frame %d: wrote %s (%dx%d %s)\n", frame_, files.c_str(), image.width, image.height,
+              std::string(ToString(plan.settings.camera.kind)).c_str());
+}
+
+void Viewer::FollowDate() {
+  if (!date_follows_) return;
+  const double julian_day = plan_.dated_sun->julian_day_utc + state_.date_hours / 24.0;
+  if (dated_sun_ && dated_sun_->julian_day_utc == julian_day) return;
+  dated_sun_ = cli::SunAt(options_.render.sun, julian_day);
+  state_.sun_elevation_deg = dated_sun_->position.elevation_deg;
+  state_.sun_azimuth_deg = dated_sun_->position.azimuth_deg;
+}
+
+void Viewer::HandleInput(double dt_s) {
+  GLFWwindow* window = static_cast<GLFWwindow*>(context_->window());
+  const ImGuiIO& io = ImGui::GetIO();
+  double x = 0.0;
+  double y = 0.0;
+  glfwGetCursorPos(window, &x, &y);
+  const bool free_mouse = !io.WantCaptureMouse;
+  const bool left = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  const bool right = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+  const bool shift =
+      glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  // Right button (or shift + left): the sun goes where the mouse points on the sky.
+  const bool sun_button = right || (left && shift);
+  if (sun_button && (dragging_sun_ || free_mouse)) {
+    dragging_sun_ = true;
+    int width = 0;
+    int height = 0;
+    glfwGetFramebufferSize(window, &width, &height);
+    if (PutSunAtPixel(state_, width, height, x, y)) date_follows_ = false;
+  } else {
+    dragging_sun_ = false;
+  }
+  // Left button: look around (the sky follows the mouse).
+  if (left && !shift && (dragging_view_ || free_mouse)) {
+    if (dragging_view_) {
+      int width = 1;
+      int height = 1;
+      glfwGetWindowSize(window, &width, &height);
+      const double degrees_per_pixel =
+          state_.camera == CameraKind::kPerspective ? state_.fov_deg / std::max(width, 1) : 360.0 / std::max(width, 1);
+      state_.yaw_deg = std::fmod(state_.yaw_deg - (x - last_x_) * degrees_per_pixel + 720.0, 360.0);
+      state_.pitch_deg = std::clamp(state_.pitch_deg + (y - last_y_) * degrees_per_pixel, -90.0, 90.0);
+    }
+    dragging_view_ = true;
+  } else {
+    dragging_view_ = false;
+  }
+  last_x_ = x;
+  last_y_ = y;
+  // Altitude: the wheel, Page Up / Page Down or Q / E (held: continuous, a factor e per second).
+  if (free_mouse && io.MouseWheel != 0.0f) state_.altitude_m = StepAltitude(state_.altitude_m, 0.25 * io.MouseWheel);
+  if (!io.WantCaptureKeyboard) {
+    const auto held = [&](int key) { return glfwGetKey(window, key) == GLFW_PRESS; };
+    if (held(GLFW_KEY_PAGE_UP) || held(GLFW_KEY_E)) state_.altitude_m = StepAltitude(state_.altitude_m, 1.5 * dt_s);
+    if (held(GLFW_KEY_PAGE_DOWN) || held(GLFW_KEY_Q)) state_.altitude_m = StepAltitude(state_.altitude_m, -1.5 * dt_s);
+    const double turn = 60.0 * dt_s;  // degrees per second
+    if (held(GLFW_KEY_LEFT) || held(GLFW_KEY_A)) state_.yaw_deg = std::fmod(state_.yaw_deg - turn + 360.0, 360.0);
+    if (held(GLFW_KEY_RIGHT) || held(GLFW_KEY_D)) state_.yaw_deg = std::fmod(state_.yaw_deg + turn, 360.0);
+    if (held(GLFW_KEY_UP) || held(GLFW_KEY_W)) state_.pitch_deg = std::min(90.0, state_.pitch_deg + turn);
+    if (held(GLFW_KEY_DOWN) || held(GLFW_KEY_S)) state_.pitch_deg = std::max(-90.0, state_.pitch_deg - turn);
+    if (held(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window, GLFW_TRUE);
+  }
+}
+
+void Viewer::DrawPanels() {
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("atmo-viewer");
+  ImGui::Text("%.2f ms/frame (%.1f fps), %s", frame_ms_, frame_ms_ > 0.0 ? 1000.0 / frame_ms_ : 0.0,
+              context_->renderer().c_str());
+  if (ImGui::CollapsingHeader("GPU passes (ms)", ImGuiTreeNodeFlags_DefaultOpen)) {
+    for (const PassTiming& pass : timings_.entries()) ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
+  }
+  if (ImGui::CollapsingHeader("Camera and sun", ImGuiTreeNodeFlags_DefaultOpen)) {
+    int kind = static_cast<int>(state_.camera);
+    ImGui::Combo("camera", &kind, "perspective\0fisheye\0equirect\0");
+    state_.camera = static_cast<CameraKind>(kind);
+    float v = static_cast<float>(state_.altitude_m);
+    if (ImGui::SliderFloat("altitude m", &v, 0.0f, kMaxSliderAltitude_m, "%.0f", ImGuiSliderFlags_Logarithmic)) {
+      state_.altitude_m = v;
+    }
+    v = static_cast<float>(state_.yaw_deg);
+    if (ImGui::SliderFloat("yaw", &v, 0.0f, 360.0f, "%.1f")) state_.yaw_deg = v;
+    v = static_cast<float>(state_.pitch_deg);
+    if (ImGui::SliderFloat("pitch", &v, -90.0f, 90.0f, "%.1f")) state_.pitch_deg = v;
+    v = static_cast<float>(state_.fov_deg);
+    if (ImGui::SliderFloat("fov", &v, 5.0f, 170.0f, "%.1f")) state_.fov_deg = v;
+    v = static_cast<float>(state_.sun_elevation_deg);
+    if (ImGui::SliderFloat("sun elevation", &v, -90.0f, 90.0f, "%.2f")) {
+      state_.sun_elevation_deg = v;
+      date_follows_ = false;
+    }
+    v = static_cast<float>(state_.sun_azimuth_deg);
+    if (ImGui::SliderFloat("sun azimuth", &v, 0.0f, 360.0f, "%.1f")) {
+      state_.sun_azimuth_deg = v;
+      date_follows_ = false;
+    }
+    if (plan_.dated_sun) {
+      // --date, --latitude, --longitude: the sun of that place at the date plus an offset.
+      ImGui::Checkbox("sun follows the date", &date_follows_);
+      v = static_cast<float>(state_.date_hours);
+      if (ImGui::SliderFloat("hours after --date", &v, -24.0f, 24.0f, "%.2f")) {
+        state_.date_hours = v;
+        date_follows_ = true;
+      }
+      if (ImGui::Button(playing_ ? "pause" : "play")) {
+        playing_ = !playing_;
+        if (playing_) date_follows_ = true;
+      }
+      ImGui::SameLine();
+      float speed = static_cast<float>(play_speed_);
+      if (ImGui::SliderFloat("hours/s", &speed, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+        play_speed_ = speed;
+      if (date_follows_ && dated_sun_) ImGui::Text("%s", dated_sun_->date_utc.c_str());
+    }
+    ImGui::Checkbox("sun disc", &state_.sun_disc);
+    ImGui::SameLine();
+    ImGui::Checkbox("lit ground", &state_.ground);
+  }
+  if (ImGui::CollapsingHeader("Atmosphere", ImGuiTreeNodeFlags_DefaultOpen)) {
+    const std::vector<std::string> presets = PresetNames();
+    const char* shown = preset_index_ >= 0 ? presets[preset_index_].c_str() : "(config)";
+    if (ImGui::BeginCombo("preset", shown)) {
+      for (std::size_t i = 0; i < presets.size(); ++i) {
+        if (ImGui::Selectable(presets[i].c_str(), static_cast<int>(i) == preset_index_)) {
+          // Made in the next frame; a preset hillaire refuses (simple's half-space) is reported there.
+          preset_index_ = static_cast<int>(i);
+          base_ = Preset(presets[i]);
+          ResetAtmosphereKnobs(base_, state_);
+          loaded_ = state_;
+        }
+      }
+      ImGui::EndCombo();
+    }
+    const auto slider = [](const char* label, double& value, float min, float max, bool logarithmic) {
+      float f = static_cast<float>(value);
+      if (ImGui::SliderFloat(label, &f, min, max, "%.3f", logarithmic ? ImGuiSliderFlags_Logarithmic : 0)) value = f;
+    };
+    slider("Rayleigh density", state_.rayleigh_density, 0.0f, 10.0f, true);
+    slider("Mie density", state_.mie_density, 0.0f, 50.0f, true);
+    slider("ozone density", state_.ozone_density, 0.0f, 10.0f, true);
+    slider("Mie g", state_.mie_g, -0.99f, 0.99f, false);
+    slider("ground albedo", state_.ground_albedo, 0.0f, 1.0f, false);
+    float radius_km = static_cast<float>(state_.ground_radius_m / 1000.0);
+    if (ImGui::SliderFloat("planet radius km", &radius_km, 100.0f, 100000.0f, "%.0f", ImGuiSliderFlags_Logarithmic)) {
+      state_.ground_radius_m = 1000.0 * radius_km;
+    }
+    if (ImGui::Button("reset atmosphere")) {
+      ResetAtmosphereKnobs(base_, state_);
+    }
+  }
+  if (ImGui::CollapsingHeader("hillaire options")) {
+    HillaireSettings s = settings_;
+    ImGui::SliderInt("sky_view_samples", &s.sky_view_samples, 1, 128);
+    ImGui::SliderInt("ray_march_samples", &s.ray_march_samples, 1, 256);
+    ImGui::SliderInt("multiple_scattering_directions", &s.multiple_scattering_directions, 1, 256);
+    ImGui::Checkbox("sky_view table", &s.use_sky_view_lut);
+    if (s.sky_view_samples != settings_.sky_view_samples || s.ray_march_samples != settings_.ray_march_samples ||
+        s.multiple_scattering_directions != settings_.multiple_scattering_directions ||
+        s.use_sky_view_lut != settings_.use_sky_view_lut) {
+      settings_ = s;
+      settings_changed_ = true;  // every table again, with the new settings
+    }
+  }
+  if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Checkbox("auto-exposure", &state_.auto_exposure);
+    float ev = static_cast<float>(state_.auto_exposure ? metered_ev100_ : state_.ev100);
+    if (ImGui::SliderFloat("EV100", &ev, -10.0f, 20.0f, "%.2f")) {
+      state_.ev100 = ev;
+      state_.auto_exposure = false;
+    }
+    int op = static_cast<int>(mapping_.op);
+    ImGui::Combo("tone mapping", &op, "exp\0aces\0none\0");
+    mapping_.op = static_cast<ToneMapper>(op);
+    ImGui::Checkbox("per channel", &mapping_.per_channel);
+  }
+  if (ImGui::CollapsingHeader("Files", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::InputText("config", config_path_, sizeof config_path_);
+    if (ImGui::Button("save config")) {
+      try {
+        WriteConfig(config_path_, current_);
+        status_ = std::string("wrote ") + config_path_;
+      } catch (const Error& error) {
+        status_ = error.what();
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("load config")) {
+      try {
+        base_ = LoadParametersFile(config_path_);
+        preset_index_ = -1;
+        ResetAtmosphereKnobs(base_, state_);
+        loaded_ = state_;
+        status_ = std::string("loaded ") + config_path_;
+      } catch (const Error& error) {
+        status_ = error.what();
+      }
+    }
+    ImGui::InputText("screenshot", screenshot_name_, sizeof screenshot_name_);
+    if (ImGui::Button("screenshot EXR + PNG")) {
+      try {
+        Screenshot(std::string(screenshot_name_) + ".exr", std::string(screenshot_name_) + ".png");
+      } catch (const Error& error) {
+        status_ = error.what();
+      }
+    }
+  }
+  if (!status_.empty()) ImGui::TextWrapped("%s", status_.c_str());
+  ImGui::End();
+}
+
+int Viewer::Run() {
+  GLFWwindow* window = static_cast<GLFWwindow*>(context_->window());
+  double frame_ms_sum = 0.0;
+  int timed_frames = 0;
+  auto last = std::chrono::steady_clock::now();
+  const int frames = options_.frames;
+  const std::string final_exr = options_.render.exr_path;
+  const std::string final_png = options_.render.png_path;
+  for (frame_ = 0; frames == 0 || frame_ < frames; ++frame_) {
+    if (glfwWindowShouldClose(window)) break;
+    glfwPollEvents();
+    const auto now = std::chrono::steady_clock::now();
+    const double dt_s = std::chrono::duration<double>(now - last).count();
+    last = now;
+    const std::vector<std::string> shots = ApplyScript(script_, frame_, state_);
+
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    HandleInput(dt_s);
+    if (!options_.no_panels) DrawPanels();
+    ImGui::Render();
+    if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
+    FollowDate();
+
+    // The atmosphere: a knob that moved rebuilds every table (a new HillaireGl: its channels may
+    // have changed); --recompute-every-frame recomputes them anyway.
+    const bool atmosphere_changed = state_.rayleigh_density != built_.rayleigh_density ||
+                                    state_.mie_density != built_.mie_density ||
+                                    state_.ozone_density != built_.ozone_density || state_.mie_g != built_.mie_g ||
+                                    state_.ground_albedo != built_.ground_albedo ||
+                                    state_.ground_radius_m != built_.ground_radius_m || !(base_ == current_base_);
+    timings_.Clear();
+    try {
+      if (sky_ == nullptr || atmosphere_changed || settings_changed_) {
+        // All or nothing: the new atmosphere and its tables replace the shown ones only once built.
+        AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
+        std::unique_ptr<gl::HillaireGl> sky = MakeSky(next);
+        sky->Precompute(&timings_);
+        sky_ = std::move(sky);
+        current_ = std::move(next);
+        current_base_ = base_;
+        current_loaded_ = loaded_;
+        current_preset_index_ = preset_index_;
+        shown_settings_ = settings_;
+        settings_changed_ = false;
+        UpdateDisplayWeights();
+        view_dirty_ = true;
+      } else if (options_.recompute_every_frame) {
+        sky_->Precompute(&timings_);
+        view_dirty_ = true;
+      }
+    } catch (const Error& error) {
+      if (sky_ == nullptr) throw;  // the first atmosphere: nothing to go back to
+      // A knob out of bounds, or a preset or config hillaire refuses: back to what is shown.
+      status_ = error.what();
+      base_ = current_base_;
+      loaded_ = current_loaded_;
+      preset_index_ = current_preset_index_;
+      settings_ = shown_settings_;
+      settings_changed_ = false;
+      state_.rayleigh_density = built_.rayleigh_density;
+      state_.mie_density = built_.mie_density;
+      state_.ozone_density = built_.ozone_density;
+      state_.mie_g = built_.mie_g;
+      state_.ground_albedo = built_.ground_albedo;
+      state_.ground_radius_m = built_.ground_radius_m;
+    }
+    if (view_dirty_ || state_.altitude_m != built_.altitude_m || state_.sun_elevation_deg != built_.sun_elevation_deg ||
+        state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground) {
+      sky_->SetView(state_.altitude_m, SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg), state_.ground,
+                    &timings_);
+      view_dirty_ = false;
+    }
+    built_ = state_;
+    int width = 0;
+    int height = 0;
+    glfwGetFramebufferSize(window, &width, &height);
+    for (const std::string& path : shots) {
+      const std::string lower = path.size() >= 4 ? path.substr(path.size() - 4) : path;
+      if (lower == ".exr")
+        Screenshot(path, "");
+      else if (lower == ".png")
+        Screenshot("", path);
+      else
+        throw Error("script screenshot '" + path + "' must end in .exr or .png");
+    }
+    if (frames > 0 && frame_ == frames - 1 && (!final_exr.empty() || !final_png.empty())) {
+      Screenshot(final_exr, final_png);
+    }
+    if (width > 0 && height > 0) {
+      RadianceTerms terms;
+      terms.sun_disc = state_.sun_disc;
+      terms.ground = state_.ground;
+      sky_->RenderFrame(ToSharedCamera(ViewCamera(state_, width, height)), terms, &timings_);
+      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
+      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
+      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2)) {
+        const Image frame = sky_->ReadFrame();
+        const Image srgb =
+            plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
+                ? frame
+                : ConvertImage(frame, SpectralConversion(current_.wavelengths_nm), ImageColour::kLinearSrgb);
+        metered_ev100_ = AutoExposureEv100(srgb);
+      }
+      mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
+      {
+        ScopedPassTimer timer(timings_, "display");
+        display_->Draw(*sky_, weights_, mapping_, width, height);
+        glFinish();
+      }
+      ScopedPassTimer timer(timings_, "panels");
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+      glFinish();
+    }
+    if (frames > 0 && frame_ == frames - 1 && !options_.window_screenshot.empty()) {
+      WriteWindow(options_.window_screenshot, width, height);
+    }
+    {
+      ScopedPassTimer timer(timings_, "swap");
+      context_->SwapBuffers();
+    }
+    if (frame_ > 0) {
+      for (const PassTiming& pass : timings_.entries()) run_timings_.Add(pass.name, pass.last_ms);
+    }
+    // The frame time: from one swap to the next (the first frame compiles the shaders: left out).
+    if (frame_ > 0) {
+      frame_ms_sum += 1e3 * dt_s;
+      ++timed_frames;
+    }
+    frame_ms_ = 1e3 * dt_s;
+  }
+  if (!options_.save_config.empty()) {
+    WriteConfig(options_.save_config, current_);
+    std::printf("atmo-viewer: wrote %s\n", options_.save_config.c_str());
+  }
+  if (frames > 0) {
+    const double mean_ms = timed_frames > 0 ? frame_ms_sum / timed_frames : 0.0;
+    std::printf("atmo-viewer: %d frames at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames 1..%d, on %s\n",
+                frame_, options_.render.width, options_.render.height, std::string(ToString(state_.camera)).c_str(),
+                options_.recompute_every_frame ? ", every table every frame" : "", mean_ms,
+                mean_ms > 0.0 ? 1000.0 / mean_ms : 0.0, frame_ - 1, context_->renderer().c_str());
+    std::string passes;
+    for (const PassTiming& pass : run_timings_.entries()) {
+      passes += cli::Format("%s%s %.2f", passes.empty() ? "" : ", ", pass.name.c_str(), pass.total_ms / pass.calls);
+    }
+    std::printf("atmo-viewer: mean ms per frame that ran it: %s\n", passes.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int RunViewer(const ViewerOptions& options) {
+  if (!options.render.exr_path.empty()) cli::CheckOutputWritable(options.render.exr_path);
+  if (!options.render.png_path.empty()) cli::CheckOutputWritable(options.render.png_path);
+  if (!options.save_config.empty()) cli::CheckOutputWritable(options.save_config);
+  if (!options.window_screenshot.empty()) {
+    cli::CheckOutputWritable(options.window_screenshot);
+    cli::CheckExtension("--window-screenshot", options.window_screenshot, ".png");
+    if (options.frames == 0) throw Error("--window-screenshot needs --frames N: it writes the last frame");
+  }
+  cli::CheckExtension("--exr", options.render.exr_path, ".exr");
+  cli::CheckExtension("--png", options.render.png_path, ".png");
+  if (options.frames == 0 && (!options.render.exr_path.empty() || !options.render.png_path.empty())) {
+    throw Error("--screenshot (or --exr, --png, -o) needs --frames N: it writes the last frame");
+  }
+  Viewer viewer(options);
+  return viewer.Run();
+}
+
+}  // namespace atmo::viewer

@@ -1,0 +1,37 @@
+// atmo-viewer: model hillaire live in a window on the GL backend (docs/viewer.md).
+//
+// Every frame runs the GL passes of gl::HillaireGl into a GPU texture (the tables again when the
+// atmosphere changed, the sky-view table when the observer or the sun moved, the frame always)
+// and a small fragment shader converts it to linear sRGB, exposes and tone-maps it (the curves of
+// include/atmo/image.h) into the window; Dear ImGui draws the panels over it.
+//
+// To use it (apps/viewer/main.cc): fill ViewerOptions from the command line, then
+//   return atmo::viewer::RunViewer(options);
+// RunViewer throws atmo::Error (one line) for bad options, a script that does not parse, or no
+// window (no DISPLAY); it returns 0 when the window is closed or the --frames ran out.
+#pragma once
+
+#include <string>
+
+#include "commands.h"
+
+namespace atmo::viewer {
+
+struct ViewerOptions {
+  cli::CommonOptions common;           // --model, --preset, --config, --option, --spectral (as `atmo render`)
+  cli::RenderCommand render;           // camera, observer, sun, display flags (as `atmo render`); the EXR
+                                       // and PNG paths are the screenshot of the last frame (empty: none)
+  int frames = 0;                      // stop after this many frames (0: when the window is closed)
+  std::string script_path;             // timed moves (script.h); empty: none
+  std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
+  bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)
+  bool hidden = false;                 // an invisible window (headless runs; Xvfb still needed)
+  bool no_panels = false;              // the sky alone, no ImGui panels
+  // The last --frames frame as the window shows it (8-bit sRGB PNG read from the back buffer:
+  // the display shader's tone mapping, and the panels unless no_panels); empty: none.
+  std::string window_screenshot;
+};
+
+int RunViewer(const ViewerOptions& options);
+
+}  // namespace atmo::viewer
