@@ -42,6 +42,11 @@ MARKDOWN_TABLES = {
     "hillaire-reference-twilight": ["--model", "hillaire", "--grid", "twilight"] + REFERENCE,
     "hillaire-reference-space": ["--model", "hillaire", "--grid", "space"] + REFERENCE,
     "simple-reference": ["--model", "simple", "--preset", "simple"] + REFERENCE,
+    "elek-ground-off": ["--model", "elek", "--config", "{albedo}", "--option", "ground=off",
+                        "--grid", "docs/data/elek_ground_grid.csv"] + REFERENCE,
+    "elek-ground-on": ["--model", "elek", "--config", "{albedo}", "--option", "ground=on",
+                       "--grid", "docs/data/elek_ground_grid.csv"] + REFERENCE,
+    "elek-reference-earth": ["--model", "elek"] + REFERENCE,
 }
 
 # The elek table: one row per order count K, selected columns of each run's JSON summary.
@@ -89,6 +94,18 @@ def no_ozone_config(atmo, work):
     preset["ozone"]["absorption_per_m"] = [0.0 for _ in preset["ozone"]["absorption_per_m"]] \
         if isinstance(preset["ozone"]["absorption_per_m"], list) else 0.0
     path = os.path.join(work, "earth_no_ozone.json")
+    with open(path, "w") as f:
+        json.dump(preset, f, indent=2)
+    return path
+
+
+def albedo_config(atmo, work):
+    """The atmosphere-plus preset with a ground albedo of 0.3, as the page describes it."""
+    dump = subprocess.run([atmo, "presets", "--dump", "atmosphere-plus"], check=True, capture_output=True,
+                          text=True).stdout
+    preset = json.loads(dump)
+    preset["ground_albedo"] = [0.3 for _ in preset["ground_albedo"]]
+    path = os.path.join(work, "atmosphere_plus_albedo_0.3.json")
     with open(path, "w") as f:
         json.dump(preset, f, indent=2)
     return path
@@ -153,6 +170,10 @@ def main():
         substitutions["no_ozone"] = no_ozone_config(options.atmo, work)
     else:
         substitutions["no_ozone"] = os.path.join(work, "earth_no_ozone.json")
+    if any(i.startswith("elek-ground") for i in selected) and not options.dry_run:
+        substitutions["albedo"] = albedo_config(options.atmo, work)
+    else:
+        substitutions["albedo"] = os.path.join(work, "atmosphere_plus_albedo_0.3.json")
 
     for table_id in selected:
         if table_id == "elek-reference-orders":

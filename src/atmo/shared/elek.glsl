@@ -344,8 +344,8 @@ vec4 ComputeElekPhaseGatherWeightTexel(IN(AtmosphereParameters) atmosphere, int 
 // sun cosine there alone, E(mu_s), kept as a D x 1 table at the sun cosines of the table's slices.
 // Light of j scattering events ending in the air (order j's table, j >= 1; j = 0: the sun itself)
 // reaches the ground as E^(j), and the ground sends L_g = T(P, G) rho / pi E^(j)(mu_s_G) towards
-// every P whose ray meets it at G. The gather of order k >= 2 reads I^(k-1) + L_g[E^(k-2)]: light of
-// k - 1 events either way. mu_s_G comes from the table's canonical form (view and sun in one
+// every P whose ray meets it at G. The gather of order k >= 2 reads I^(k-1) + 4 pi L_g[E^(k-2)] (4 pi:
+// the tables' factored scale, below): light of k - 1 events either way. mu_s_G comes from the table's canonical form (view and sun in one
 // vertical plane on the same side), as every other node's sun cosine does.
 
 const int kElekGroundIntervals = 16;  // of mu_w in the sky's irradiance on the ground
@@ -380,7 +380,9 @@ vec3 ComputeElekGroundSkyIrradiance(IN(AtmosphereParameters) atmosphere, IN(Text
 
 // L_g of texel `texel`: what the ground sends back along the texel's ray, T(P, G) rho / pi E(mu_s_G)
 // with E read from `ground_irradiance` (D x 1, texel z at the sun cosine of slice z, linear in the
-// table's w); 0 for a ray that misses the ground.
+// table's w); 0 for a ray that misses the ground. Returned in the table's factored scale, 4 pi L_g:
+// the tables hold I with L = p(nu) I, and the mean of p over the sphere is 1 / (4 pi), so light
+// arriving as a radiance L enters the gather as 4 pi L (the same 4 pi as the phase gather's).
 vec3 ComputeElekGroundRadianceTexel(IN(AtmosphereParameters) atmosphere,
     IN(TransmittanceTexture) transmittance_texture, IN(Texture2D) ground_irradiance, int mapping,
     IN(ivec3) texture_size, IN(ivec3) texel) {
@@ -395,7 +397,7 @@ vec3 ComputeElekGroundRadianceTexel(IN(AtmosphereParameters) atmosphere,
   vec3 to_ground = GetTransmittance(atmosphere, transmittance_texture, r, mu, t_max, true);
   Number w = GetElekUvwFromHMuMuS(atmosphere, mapping, 0.0, 0.0, mu_s_ground).z;
   vec2 coord = vec2(GetTextureCoordFromUnitRange(w, textureSize(ground_irradiance, 0).x), 0.5);
-  return to_ground * atmosphere.ground_albedo * (1.0 / kPi) * vec3(texture(ground_irradiance, coord));
+  return to_ground * atmosphere.ground_albedo * 4.0 * vec3(texture(ground_irradiance, coord));  // 4 pi rho / pi
 }
 
 // Radiance per unit solar irradiance from the factored table (RGB = I_R, the Mie channel
