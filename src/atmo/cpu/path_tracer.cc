@@ -438,6 +438,36 @@ PathTally PathTracer::TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t s
   });
 }
 
+PathTally PathTracer::DiffuseIrradiance(const glm::dvec3& origin, const glm::dvec3& normal, const glm::dvec3& sun,
+                                        std::uint64_t seed, std::uint64_t count) const {
+  constexpr std::uint64_t kKey = 0xE1AAull;
+  return TraceBlocks(channels_.size(), 0, count, [&](std::uint64_t start, std::uint64_t n, PathTally& tally) {
+    for (std::uint64_t i = start; i < start + n; ++i) {
+      Rng geometry(StreamSeed(seed, kKey, i, channels_.size()));
+      TraceQuery query;
+      query.origin = origin;
+      query.sun = sun;
+      // pdf cos / pi: the estimate of E is pi L per path.
+      query.view = DirectionAbout(normal, std::sqrt(geometry.Uniform()), 2.0 * kPi * geometry.Uniform());
+      for (std::size_t c = 0; c < channels_.size(); ++c) {
+        Rng rng(StreamSeed(seed, kKey, i, c));
+        std::array<double, kOrderBins> orders{};
+        TracePath(query, channels_[c], rng, orders);
+        for (int k = 0; k < kOrderBins; ++k) {
+          const double v = kPi * orders[k];
+          tally.sum[c * kTallySlots + 1 + k] += v;
+          tally.sum_sq[c * kTallySlots + 1 + k] += v * v;
+        }
+        double total = 0.0;
+        for (double v : orders) total += kPi * v;
+        tally.sum[c * kTallySlots] += total;
+        tally.sum_sq[c * kTallySlots] += total * total;
+      }
+    }
+    tally.paths += n;
+  });
+}
+
 // ---------------------------------------------------------------------------------------------
 // Quadratures.
 

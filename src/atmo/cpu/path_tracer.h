@@ -130,6 +130,14 @@ class PathTracer {
   // cosine-weighted about the outward normal. Power out = 4 pi R_top^2 * pi * mean. Spherical
   // geometry only.
   PathTally TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t seed, std::uint64_t count) const;
+  // A flux estimator for the sky's irradiance: E = integral of L(w) max(n.w, 0) dOmega at `origin`
+  // (the scattered light only, as radiance queries score it: no direct sun, the view ray's own
+  // ground hit left out) by directions cosine-weighted about the unit normal `normal`, each with
+  // one path per channel; the tally's per-path values are pi L, so its mean is E per unit solar
+  // irradiance with its standard error. On the ground facing up it is the diffuse horizontal
+  // irradiance.
+  PathTally DiffuseIrradiance(const glm::dvec3& origin, const glm::dvec3& normal, const glm::dvec3& sun,
+                              std::uint64_t seed, std::uint64_t count) const;
   // The unscattered sunlight that crosses the atmosphere without meeting the ground, as a power
   // per unit irradiance (m^2): integral over impact parameters b in [R_ground, R_top] of
   // 2 pi b T(b) db, by quadrature.
