@@ -22,6 +22,7 @@ set(symbols
   transmittance.glsl:GetTransmittanceTextureUvFromRMu transmittance.glsl:GetRMuFromTransmittanceTextureUv
   transmittance.glsl:GetTransmittanceToTopAtmosphereBoundary transmittance.glsl:GetTransmittance
   transmittance.glsl:GetTransmittanceToSun
+  multiple_scattering.glsl:GetMultiScatteringUnitFromMuS multiple_scattering.glsl:GetMuSFromMultiScatteringUnit
   multiple_scattering.glsl:GetMultiScatteringTextureUvFromRMuS
   multiple_scattering.glsl:GetRMuSFromMultiScatteringTextureUv multiple_scattering.glsl:GetMultiScattering
   sky.glsl:GetHorizonNadirAngle sky.glsl:GetSkyViewTextureUvFromBeta sky.glsl:GetSkyViewTextureUvFromViewAngles

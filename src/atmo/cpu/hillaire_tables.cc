@@ -95,7 +95,7 @@ __attribute__((noinline)) void SunColumns(int n, double r_mu_s, double nu, const
     const double root = std::sqrt(std::max(c_top[i] + r2_mu2, 0.0));
     const double d = mu > 0.0 ? c_top[i] / (r_i * mu + root) : -r_i * mu + root;
     sun_column[i] = shared::ClampToRange((std::max(d, 0.0) - d_min[i]) * inverse_range[i], 0.0, 1.0) * t_columns;
-    ms_column[i] = shared::ClampToRange(0.5 * mu + 0.5, 0.0, 1.0) * m_columns;
+    ms_column[i] = shared::GetMultiScatteringUnitFromMuS(mu) * m_columns;
   }
 }
 

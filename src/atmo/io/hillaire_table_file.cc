@@ -47,9 +47,9 @@ Json Description(std::string_view name) {
     j["units"] = "sr^-1 per unit solar irradiance at the top of the atmosphere (times a scattering coefficient per "
                  "km: sr^-1 km^-1)";
     j["parameters"] = "r: distance from the planet centre (km); mu_s: cosine of the sun zenith angle at r";
-    j["mapping"] = "u = (0.5 + x (W - 1)) / W, v = (0.5 + y (H - 1)) / H, with x = clamp((mu_s + 1) / 2, 0, 1), "
-                   "y = clamp((r - R_b) / (R_t - R_b), 0, 1)";
-    j["inverse"] = "mu_s = 2 clamp((u W - 0.5) / (W - 1), 0, 1) - 1, "
+    j["mapping"] = "u = (0.5 + x (W - 1)) / W, v = (0.5 + y (H - 1)) / H, with "
+                   "x = clamp((1 + sign(mu_s) sqrt(|mu_s|)) / 2, 0, 1), y = clamp((r - R_b) / (R_t - R_b), 0, 1)";
+    j["inverse"] = "a = 2 clamp((u W - 0.5) / (W - 1), 0, 1) - 1, mu_s = sign(a) a^2, "
                    "r = R_b + clamp((v H - 0.5) / (H - 1), 0, 1) (R_t - R_b)";
     j["glsl"] = {{"lookup", "atmoMultipleScattering(atmosphere, table, r, mu_s)"},
                  {"uv", "atmo_GetMultiScatteringTextureUvFromRMuS(atmosphere, textureSize(table, 0), r, mu_s)"},

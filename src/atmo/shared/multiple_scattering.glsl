@@ -7,11 +7,26 @@
 //            phase, plus the sunlight reflected once by the Lambertian ground),
 //   f_ms   = 1/(4 pi) * integral over the sphere of integral_0^d sigma_s T dt dw
 // and 1 / (1 - f_ms) sums the geometric series of all higher orders.
-// The table is indexed linearly by x = (mu_s + 1) / 2 and y = (r - bottom) / (top - bottom).
+// The table is indexed by x = (1 + sign(mu_s) sqrt(|mu_s|)) / 2 and y = (r - bottom) / (top - bottom).
+// The square root puts the sun-angle texels where Psi_ms changes fastest, around the horizontal
+// (mu_s near 0): there Psi_ms falls by orders of magnitude over a few degrees as the sun sets for
+// the point and its surroundings, while it is smooth with the sun high. With 32 columns the
+// spacing near mu_s = 0 is 0.2 degrees instead of 3.6 (docs/models/hillaire.md measures it).
+
+Number GetMultiScatteringUnitFromMuS(Number mu_s) {
+  Number m = ClampToRange(mu_s, -1.0, 1.0);
+  Number root = sqrt(abs(m));
+  return ClampToRange(0.5 + 0.5 * (m < 0.0 ? -root : root), 0.0, 1.0);
+}
+
+Number GetMuSFromMultiScatteringUnit(Number x_mu_s) {
+  Number a = 2.0 * x_mu_s - 1.0;
+  return a < 0.0 ? -a * a : a * a;
+}
 
 vec2 GetMultiScatteringTextureUvFromRMuS(IN(AtmosphereParameters) atmosphere, IN(ivec2) texture_size,
     Number r, Number mu_s) {
-  Number x_mu_s = ClampToRange(0.5 * mu_s + 0.5, 0.0, 1.0);
+  Number x_mu_s = GetMultiScatteringUnitFromMuS(mu_s);
   Number x_r = ClampToRange((r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius), 0.0, 1.0);
   return vec2(GetTextureCoordFromUnitRange(x_mu_s, texture_size.x),
               GetTextureCoordFromUnitRange(x_r, texture_size.y));
@@ -21,7 +36,7 @@ void GetRMuSFromMultiScatteringTextureUv(IN(AtmosphereParameters) atmosphere, IN
     IN(vec2) uv, OUT(Number) r, OUT(Number) mu_s) {
   Number x_mu_s = ClampToRange(GetUnitRangeFromTextureCoord(uv.x, texture_size.x), 0.0, 1.0);
   Number x_r = ClampToRange(GetUnitRangeFromTextureCoord(uv.y, texture_size.y), 0.0, 1.0);
-  mu_s = 2.0 * x_mu_s - 1.0;
+  mu_s = GetMuSFromMultiScatteringUnit(x_mu_s);
   r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
 }
 
