@@ -24,7 +24,9 @@ set(symbols
   transmittance.glsl:GetTransmittanceToSun
   multiple_scattering.glsl:GetMultiScatteringUnitFromMuS multiple_scattering.glsl:GetMuSFromMultiScatteringUnit
   multiple_scattering.glsl:GetMultiScatteringTextureUvFromRMuS
-  multiple_scattering.glsl:GetRMuSFromMultiScatteringTextureUv multiple_scattering.glsl:GetMultiScattering
+  multiple_scattering.glsl:GetRMuSFromMultiScatteringTextureUv
+  multiple_scattering.glsl:EncodeMultiScattering multiple_scattering.glsl:DecodeMultiScattering
+  multiple_scattering.glsl:GetMultiScattering
   sky.glsl:GetHorizonNadirAngle sky.glsl:GetSkyViewTextureUvFromBeta sky.glsl:GetSkyViewTextureUvFromViewAngles
   sky.glsl:GetViewAnglesFromSkyViewTextureUv sky.glsl:GetSkyRadianceFromSkyView
   camera.glsl:GetAzimuthFromSun

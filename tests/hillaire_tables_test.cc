@@ -25,10 +25,12 @@ Texture2D TransmittanceTable(const shared::AtmosphereParameters& a) {
   return t;
 }
 
-// Float storage of the tables bounds the agreement: a few float ulps.
-void ExpectSameTexel(const glm::vec3& fast, const glm::dvec3& reference, int x, int y) {
+// Float storage of the tables bounds the agreement: a few float ulps. The sky-view rows read the
+// multiple-scattering table, which holds ln(Psi_ms): a float ulp of a logarithm near -20 is 2e-6
+// of Psi_ms, hence their looser `relative`.
+void ExpectSameTexel(const glm::vec3& fast, const glm::dvec3& reference, int x, int y, double relative = 1e-6) {
   for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(fast[c], reference[c], 1e-6 * std::abs(reference[c]) + 1e-30) << "texel " << x << "," << y;
+    EXPECT_NEAR(fast[c], reference[c], relative * std::abs(reference[c]) + 1e-30) << "texel " << x << "," << y;
   }
 }
 
@@ -85,7 +87,7 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
             ExpectSameTexel(table.at(x, y),
                             shared::ComputeSkyViewTexel(a, transmittance, multiple_scattering, ivec2(width, 10),
                                                         vec2(x + 0.5, y + 0.5), r, mu_s, 16),
-                            x, y);
+                            x, y, 1e-5);
           }
         }
       }

@@ -99,6 +99,16 @@ __attribute__((noinline)) void SunColumns(int n, double r_mu_s, double nu, const
   }
 }
 
+// shared::DecodeMultiScattering over `count` packed values (the components of an array of vec3),
+// in a loop the compiler vectorises (exp from libmvec).
+__attribute__((noinline)) void DecodeMultipleScattering(int count, double* __restrict values) {
+#pragma omp simd
+  for (int k = 0; k < count; ++k) {
+    const double psi = std::exp(values[k]);
+    values[k] = psi < 2e-30 ? 0.0 : psi;
+  }
+}
+
 // A float table padded to four components, so that a texel is one 16-byte load.
 struct PaddedTable {
   explicit PaddedTable(const shared::Texture2D& table) : width(table.width), height(table.height) {
@@ -174,6 +184,8 @@ class SunLookupsAlongRay {
         multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
       }
     }
+    static_assert(sizeof(vec3) == 3 * sizeof(double), "vec3 arrays are packed doubles");
+    if (multiple_scattering != nullptr) DecodeMultipleScattering(3 * n, &multiple_scattering[0].x);
   }
 
  private:
@@ -354,7 +366,8 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         }
         luminance_sum += luminance * ray.weight;
       }
-      table.at(x, y) = glm::vec3(shared::GetMultiScatteringFromMeans(luminance_sum / double(direction_count), f_ms));
+      table.at(x, y) = glm::vec3(
+          shared::EncodeMultiScattering(shared::GetMultiScatteringFromMeans(luminance_sum / double(direction_count), f_ms)));
     }
   });
 }

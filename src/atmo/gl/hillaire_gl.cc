@@ -149,7 +149,7 @@ void main() {
   if (lane == 0) {
     vec3 psi_ms = GetMultiScatteringFromMeans(luminance_sum / float(direction_count),
         transfer_sum / float(direction_count));
-    imageStore(output_table, texel, vec4(psi_ms, 1.0));
+    imageStore(output_table, texel, vec4(EncodeMultiScattering(psi_ms), 1.0));
   }
 }
 )glsl", "multiple-scattering table");

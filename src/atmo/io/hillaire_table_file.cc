@@ -46,6 +46,8 @@ Json Description(std::string_view name) {
                    "point is Psi_ms times the scattering coefficient there";
     j["units"] = "sr^-1 per unit solar irradiance at the top of the atmosphere (times a scattering coefficient per "
                  "km: sr^-1 km^-1)";
+    j["encoding"] = "each texel holds ln(max(Psi_ms, 1e-30)) per channel: filter bilinearly, then Psi_ms = exp(value), "
+                    "0 below 2e-30 (atmoMultipleScattering does both)";
     j["parameters"] = "r: distance from the planet centre (km); mu_s: cosine of the sun zenith angle at r";
     j["mapping"] = "u = (0.5 + x (W - 1)) / W, v = (0.5 + y (H - 1)) / H, with "
                    "x = clamp((1 + sign(mu_s) sqrt(|mu_s|)) / 2, 0, 1), y = clamp((r - R_b) / (R_t - R_b), 0, 1)";

@@ -40,10 +40,23 @@ void GetRMuSFromMultiScatteringTextureUv(IN(AtmosphereParameters) atmosphere, IN
   r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
 }
 
+// The table holds ln(Psi_ms) per channel (ln 1e-30 where Psi_ms is smaller, in the planet's
+// shadow), so that bilinear filtering interpolates Psi_ms geometrically: across the terminator it
+// falls by orders of magnitude nearly exponentially, which linear interpolation of the values
+// turns into errors of several times the value (docs/models/hillaire.md measures both).
+vec3 EncodeMultiScattering(IN(vec3) psi_ms) {
+  return log(max(psi_ms, vec3(1e-30)));
+}
+
+vec3 DecodeMultiScattering(IN(vec3) stored) {
+  vec3 psi_ms = exp(stored);
+  return vec3(psi_ms.x < 2e-30 ? 0.0 : psi_ms.x, psi_ms.y < 2e-30 ? 0.0 : psi_ms.y, psi_ms.z < 2e-30 ? 0.0 : psi_ms.z);
+}
+
 vec3 GetMultiScattering(IN(AtmosphereParameters) atmosphere, IN(MultiScatteringTexture) multiple_scattering_texture,
     Number r, Number mu_s) {
   vec2 uv = GetMultiScatteringTextureUvFromRMuS(atmosphere, textureSize(multiple_scattering_texture, 0), r, mu_s);
-  return vec3(texture(multiple_scattering_texture, uv));
+  return DecodeMultiScattering(vec3(texture(multiple_scattering_texture, uv)));
 }
 
 // Direction k of `count` (even) over the unit sphere (z up). For count == 2 the seed's variant:
@@ -175,7 +188,7 @@ void SumMultiScatteringRays(IN(AtmosphereParameters) atmosphere, IN(Transmittanc
   }
 }
 
-// The per-texel kernel of the multiple-scattering table.
+// The per-texel kernel of the multiple-scattering table: the stored texel, EncodeMultiScattering(Psi_ms).
 vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, bool media_phase,
     IN(vec3) ground_transfer) {
@@ -186,5 +199,6 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
   vec3 transfer_sum;
   SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, 0, 1, direction_count, sample_count,
       media_phase, ground_transfer, luminance_sum, transfer_sum);
-  return GetMultiScatteringFromMeans(luminance_sum / Number(direction_count), transfer_sum / Number(direction_count));
+  return EncodeMultiScattering(
+      GetMultiScatteringFromMeans(luminance_sum / Number(direction_count), transfer_sum / Number(direction_count)));
 }
