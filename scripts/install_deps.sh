@@ -4,7 +4,8 @@
 # KTX2 read-back test: configuring the build then installs the npm package ktx-parse into
 # <build>/node/node_modules (tests/CMakeLists.txt). They are tools, not libraries: a machine that
 # has them already (another distribution of Node.js, whose nodejs package bundles npm and
-# conflicts with Debian's npm) keeps them; only a machine without them gets Debian's.
+# conflicts with Debian's npm) keeps them; only a machine without them gets Debian's. clang and
+# its runtime libraries are for the sanitizer and libFuzzer build of .ci/run (scripts/fuzz.sh).
 set -euo pipefail
 
 SUDO=""
@@ -21,6 +22,7 @@ PACKAGES=(
   libglfw3-dev xvfb xauth
   pybind11-dev python3-dev python3-numpy python3-pytest
   libimgui-dev libstb-dev
+  clang libclang-rt-14-dev
 )
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   PACKAGES+=(nodejs npm)

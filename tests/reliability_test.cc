@@ -5,11 +5,15 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -303,6 +307,305 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
 INSTANTIATE_TEST_SUITE_P(Reliability, BadInputTest, ::testing::ValuesIn(kBadInputs),
                          [](const ::testing::TestParamInfo<BadInput>& info) { return info.param.name; });
 
+// ---------------------------------------------------------------------------------------------
+constexpr const char* kConfigArgs = "sample --config bad.json" ATMO_ONE " --out out.csv";
+
+// Every parameter key of a config out of range, of the wrong type or null, and malformed JSON
+// (generated: kBadInputs above are the audit's cases). Each through `atmo sample --config`, which
+// must refuse it in one line naming the key, before any work.
+
+// A generated bad input: `args` for atmo, the message part, and the text of bad.json (for the
+// configs) or bad.csv (for the grids) when there is one.
+struct GeneratedBadInput {
+  std::string name;
+  std::string args;
+  std::string message_part;
+  std::string file_text;
+};
+
+// A name for gtest: letters and digits only.
+std::string TestName(const std::string& text) {
+  std::string name;
+  bool upper = true;
+  for (const char c : text) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      name += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+      upper = false;
+    } else {
+      upper = true;
+    }
+  }
+  return name;
+}
+
+// {"a": {"b": {"c": VALUE}}} for the key path "a.b.c".
+std::string Nested(const std::string& path, const std::string& value) {
+  std::string json, closing;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t dot = path.find('.', start);
+    json += "{\"" + path.substr(start, dot == std::string::npos ? std::string::npos : dot - start) + "\": ";
+    closing += "}";
+    if (dot == std::string::npos) break;
+    start = dot + 1;
+  }
+  return json + value + closing;
+}
+
+std::vector<GeneratedBadInput> BadConfigs() {
+  std::vector<GeneratedBadInput> cases;
+  // One key with a bad value; the message names the key (and `part` what is wrong, when given).
+  const auto add = [&](const std::string& key, const std::string& value, const std::string& why,
+                       const std::string& part = "") {
+    cases.push_back({TestName(key) + TestName(why), kConfigArgs, part.empty() ? key : key + part, Nested(key, value)});
+  };
+  for (const char* medium : {"rayleigh", "mie", "ozone"}) {
+    const std::string m = medium;
+    for (const char* layer : {"lower", "upper"}) {
+      const std::string l = m + ".density." + layer;
+      add(l + ".width_m", "1e12", "too wide", " must be in");
+      add(l + ".width_m", "-1", "negative", " must be in");
+      add(l + ".width_m", "\"10\"", "string", " must be a number");
+      for (const char* term : {"exp_term", "exp_scale_per_m", "linear_term_per_m", "constant_term"}) {
+        add(l + "." + term, "2e6", "too large", " must be in [-1e+06, 1e+06]");
+        add(l + "." + term, "-1e300", "too small", " must be in [-1e+06, 1e+06]");
+        add(l + "." + term, "null", "null", " must be a number");
+      }
+      add(l, "5", "not an object", " must be an object");
+      add(l + ".width", "1", "unknown key");
+    }
+    add(m + ".density", "[]", "not an object", " must be an object");
+    add(m + ".density.middle", "{}", "unknown key");
+    for (const char* coefficient : {"scattering_per_m", "absorption_per_m"}) {
+      const std::string c = m + "." + coefficient;
+      add(c, "2e3", "too large", "[0] must be in [0, 1000]");
+      add(c, "[1e-6, 1e-6, -1e-9]", "negative", "[2] must be in [0, 1000]");
+      add(c, "[1e-6, \"x\", 1e-6]", "string element", " must be a number or an array of numbers");
+      add(c, "{}", "object", " must be a number or an array of numbers");
+      add(c, "[1e-6, 1e-6]", "two channels");
+    }
+    add(m + ".phase_g", "1", "one", " must");
+    add(m + ".phase_g", "-1", "minus one", " must");
+    add(m + ".phase_g", "0.9995", "beyond the bound", " must be in [-0.999, 0.999]");
+    add(m + ".phase_g", "true", "boolean", " must be a number");
+    add(m + ".phase_function", "\"mie\"", "unknown", ": unknown phase function 'mie'");
+    add(m + ".phase_function", "3", "number", " must be a string");
+    add(m, "1", "number", " must be an object");
+    add(m, "\"thin\"", "string", " must be an object");
+    add(m + ".scatter", "1", "unknown key");
+  }
+  add("ground_radius_m", "0.5", "below a metre", " must be in [1, 1e+10] m");
+  add("ground_radius_m", "1e11", "beyond the bound", " must be in [1, 1e+10] m");
+  add("ground_radius_m", "-6360000", "negative", " must be in [1, 1e+10] m");
+  add("ground_radius_m", "\"6360000\"", "string", " must be a number");
+  add("ground_radius_m", "null", "null", " must be a number");
+  add("ground_radius_m", "[6360000]", "array", " must be a number");
+  add("top_radius_m", "6000000", "below the ground");
+  add("top_radius_m", "1e9", "twelve radii", " - ground_radius_m must be in");
+  add("top_radius_m", "false", "boolean", " must be a number");
+  add("sun_angular_radius_rad", "0", "zero", " must be in [1e-06, pi/2)");
+  add("sun_angular_radius_rad", "1.6", "above pi over two", " must be in [1e-06, pi/2)");
+  add("sun_angular_radius_rad", "-0.004", "negative", " must be in [1e-06, pi/2)");
+  add("sun_angular_radius_rad", "{}", "object", " must be a number");
+  add("exposure", "0", "zero", " must be in [1e-10, 1e+10]");
+  add("exposure", "1e11", "too large", " must be in [1e-10, 1e+10]");
+  add("exposure", "-1", "negative", " must be in [1e-10, 1e+10]");
+  add("exposure", "\"1\"", "string", " must be a number");
+  add("observer_altitude_m", "1e12", "too far", " must be in");
+  add("observer_altitude_m", "-1", "below the ground", " must be >= 0 for spherical geometry");
+  add("observer_altitude_m", "[]", "array", " must be a number");
+  add("sun_limb_darkening", "1", "number", " must be true or false");
+  add("sun_limb_darkening", "\"yes\"", "string", " must be true or false");
+  add("sun_limb_darkening", "null", "null", " must be true or false");
+  add("preset", "\"venus\"", "unknown", "");
+  add("preset", "7", "number", " must be a string");
+  add("preset", "null", "null", " must be a string");
+  add("geometry", "\"flat\"", "unknown", ": unknown geometry 'flat'");
+  add("geometry", "1", "number", " must be a string");
+  add("wavelengths_nm", "[]", "empty", " must have at least one channel");
+  add("wavelengths_nm", "[0.5]", "too short", "[0] must be in [1, 1e+05] nm");
+  add("wavelengths_nm", "[680, 550, 1e6]", "too long", "[2] must be in [1, 1e+05] nm");
+  add("wavelengths_nm", "\"visible\"", "string", " must be a number or an array of numbers");
+  add("wavelengths_nm", "[550, null]", "null element", " must be a number or an array of numbers");
+  {
+    std::string many = "[";
+    for (int i = 0; i < 4097; ++i) many += (i ? ", " : "") + std::to_string(400 + i % 300);
+    add("wavelengths_nm", many + "]", "4097 channels", " has 4097 channels, more than the");
+  }
+  add("ground_albedo", "-0.1", "negative", "[0] must be in [0, 1]");
+  add("ground_albedo", "1.1", "above one", "[0] must be in [0, 1]");
+  add("ground_albedo", "[0.1, 0.2]", "two channels");
+  add("ground_albedo", "\"grey\"", "string", " must be a number or an array of numbers");
+  add("solar_irradiance", "-1", "negative", "[0] must be in [0, 1e+10]");
+  add("solar_irradiance", "1e11", "too large", "[0] must be in [0, 1e+10]");
+  add("solar_irradiance", "[1, 1, 1, 1]", "four channels");
+  add("solar_irradiance", "null", "null", " must be a number or an array of numbers");
+  for (const char* key : {"foo", "Ground_radius_m", "", "ground_radius_m "}) {
+    cases.push_back({"UnknownRootKey" + TestName(std::string("x") + key), kConfigArgs,
+                     "unknown key '" + std::string(key) + "'", Nested(key, "1")});
+  }
+  // Not an object, and malformed JSON: each names the config file.
+  const std::pair<const char*, std::string> documents[] = {
+      {"RootArray", "[]"}, {"RootNumber", "1"}, {"RootString", "\"earth\""}, {"RootNull", "null"}, {"RootTrue", "true"},
+  };
+  for (const auto& [name, json] : documents) cases.push_back({name, kConfigArgs, "the parameters must be a JSON object", json});
+  const std::pair<const char*, std::string> malformed[] = {
+      {"EmptyFile", ""},
+      {"OnlyBlanks", " \n\t "},
+      {"UnclosedObject", "{"},
+      {"MissingValue", "{\"exposure\": }"},
+      {"TrailingComma", "{\"exposure\": 1,}"},
+      {"NanLiteral", "{\"exposure\": NaN}"},
+      {"InfinityLiteral", "{\"exposure\": Infinity}"},
+      {"MinusInfinityLiteral", "{\"exposure\": -Infinity}"},
+      {"NumberUnderflowToMinusInfinity", "{\"exposure\": -1e400}"},
+      {"LineComment", "// settings\n{}"},
+      {"BlockComment", "{/* x */}"},
+      {"SingleQuotes", "{'exposure': 1}"},
+      {"UnquotedKey", "{exposure: 1}"},
+      {"TwoDocuments", "{} {}"},
+      {"HexNumber", "{\"exposure\": 0x10}"},
+      {"LeadingZero", "{\"exposure\": 01}"},
+      {"LeadingPlus", "{\"exposure\": +1}"},
+      {"BareFraction", "{\"exposure\": .5}"},
+      {"TrailingDot", "{\"exposure\": 1.}"},
+      {"InvalidUtf8", "{\"preset\": \"\xff\xfe\"}"},
+      {"UnterminatedString", "{\"preset\": \"earth}"},
+      {"RawTabInString", "{\"preset\": \"ea\trth\"}"},
+      {"LoneSurrogate", "{\"preset\": \"\\ud800\"}"},
+      {"BadEscape", "{\"preset\": \"\\q\"}"},
+      {"Utf16Text", std::string("\xff\xfe{\0}\0", 6)},
+  };
+  for (const auto& [name, json] : malformed) cases.push_back({name, kConfigArgs, "config 'bad.json': ", json});
+  // Deep nesting: parsed without recursion, then refused as a value of the wrong type.
+  cases.push_back({"DeeplyNestedArrays", kConfigArgs, "exposure must be a number",
+                   "{\"exposure\": " + std::string(100000, '[') + std::string(100000, ']') + "}"});
+  return cases;
+}
+
+class GeneratedBadInputTest : public ReliabilityCliTest, public ::testing::WithParamInterface<GeneratedBadInput> {};
+
+TEST_P(GeneratedBadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
+  const GeneratedBadInput& c = GetParam();
+  WriteFile(dir_ / (c.args.find("bad.csv") != std::string::npos ? "bad.csv" : "bad.json"), c.file_text);
+  ExpectFailureKeepingOutputs(c.args, c.message_part, {"out.csv", "sky.exr", "sky.png", "out.png", "out.json"});
+}
+
+std::string GeneratedName(const ::testing::TestParamInfo<GeneratedBadInput>& info) { return info.param.name; }
+
+INSTANTIATE_TEST_SUITE_P(Configs, GeneratedBadInputTest, ::testing::ValuesIn(BadConfigs()), GeneratedName);
+
+// ---------------------------------------------------------------------------------------------
+// Every command's flags with absurd values, unusable paths, bad grids: generated like the configs.
+
+std::vector<GeneratedBadInput> BadFlags() {
+  std::vector<GeneratedBadInput> cases;
+  const auto add = [&](const std::string& command, const std::string& flag, const std::string& value,
+                       const std::string& part = "") {
+    const std::string args = command + " " + flag + " " + value;
+    const std::string shown = !value.empty() && value[0] == '-' ? "minus " + value.substr(1) : value;
+    cases.push_back({TestName(command + " " + flag + " " + shown).substr(0, 100), args, part.empty() ? flag : part, ""});
+  };
+  // (Each command's other required arguments are given, so that the flag is what is wrong.)
+  const std::string render = "render" ATMO_TINY;
+  const std::string sample = "sample --out out.csv" ATMO_ONE;
+  for (const char* value : {"0", "-1", "99999999", "abc", "1.5", "nan"}) add(render, "--width", value);
+  for (const char* value : {"0", "1e9", "x"}) add(render, "--height", value);
+  for (const char* value : {"0", "360", "nan", "-10", "inf"}) add(render, "--fov", value);
+  for (const char* value : {"nan", "inf"}) add(render, "--yaw", value);
+  for (const char* value : {"91", "-91", "nan"}) add(render, "--pitch", value);
+  for (const char* value : {"0", "-1", "nan"}) add(render, "--exposure", value);
+  add(render, "--ev", "nan");
+  for (const char* value : {"0", "-1", "1e12"}) add(render, "--spp", value);
+  for (const char* value : {"0", "-5", "100000000"}) add(render, "--threads", value);
+  for (const char* value : {"0", "5000", "-3"}) add(render, "--spectral", value);
+  add(render, "--camera", "fish");
+  add(render, "--tonemap", "filmic");
+  for (const char* value : {"7", "0", "32"}) add(render, "--png-bits", value);
+  add(render, "--unit", "furlongs");
+  for (const char* value : {"91", "-91", "nan"}) add(render, "--sun-elevation", value);
+  for (const char* value : {"nan", "inf"}) add(render, "--sun-azimuth", value);
+  for (const char* value : {"0", "100", "nan"}) add(render, "--sun-size", value);
+  for (const char* value : {"nan", "inf", "-1e12"}) add(render, "--altitude", value);
+  add(render, "--model", "bruneton", "bruneton");
+  add(render, "--preset", "venus", "venus");
+  add(render, "--backend", "vulkan");
+  for (const char* value : {"0", "nan", "-1"}) add(render, "--gamma", value);
+  add(render, "--date", "yesterday");
+  add(render, "--date", "2024-13-45T25:61:00Z");
+  for (const char* value : {"91", "nan"}) add(render + " --date 2024-06-21T12:00:00Z", "--latitude", value);
+  add(render + " --date 2024-06-21T12:00:00Z --latitude 45", "--longitude", "inf");
+  add(render, "--option", "junk", "junk");
+  add(render, "--option", "transmittance_lut=0x0", "transmittance_lut");
+  add(render, "--option", "nonsense=1", "nonsense");
+  add(render + " --model elek", "--option", "size=1x1x1", "size");
+  add(render + " --model elek", "--option", "orders=0", "orders");
+  add(render + " --model reference", "--option", "samples=0", "samples");
+  add(render + " --model reference", "--option", "samples=1e99", "samples");
+  add(render, "--seed", "abc");
+  add(render, "--seed", "1e3");
+  add(render, "--exr", "sky.png", "sky.png");
+  add(render, "--png", "sky.exr", "sky.exr");
+  add(render, "--exr", "/nonexistent-folder/sky.exr", "/nonexistent-folder/sky.exr");
+  add(render, "--exr", "/proc/version", "/proc/version");
+  add(render, "--png", "/dev/full", "/dev/full");
+  add(render, "--exr", std::string(300, 'x') + ".exr", "xxxxxxxx");
+  add(render, "--width", "", "--width");
+  add(render, "--frobnicate", "1", "--frobnicate");
+  for (const char* value : {"-1", "181", "nan"}) add(sample, "--sun-zenith", value);
+  for (const char* value : {"-0.001", "180.5", "inf"}) add(sample, "--view-zenith", value);
+  for (const char* value : {"nan", "inf"}) add(sample, "--azimuth", value);
+  add("sample --out out.csv --sun-zenith 30 --view-zenith 60 --azimuth 90", "--altitude", "nan");
+  add(sample, "--unit", "candela", "--unit");
+  add(sample + " --model reference", "--samples", "0", "samples");
+  add(sample + " --model reference", "--samples", "x", "--samples");
+  add("sample" ATMO_ONE, "--out", "out.txt", "out.txt");
+  add("sample" ATMO_ONE, "--out", "/nonexistent-folder/out.csv", "/nonexistent-folder/out.csv");
+  add(sample, "--config", "missing.json", "missing.json");
+  add(sample + " --model elek --option size=4x8x4", "--table", "missing", "missing");
+  add("sample --out out.csv", "--grid", "missing.csv", "missing.csv");
+  const std::string cubemap = "render --camera cubemap --face-size 4 --no-png";
+  for (const char* value : {"0", "1000000", "-2"}) add("render --camera cubemap --no-png", "--face-size", value);
+  for (const char* value : {"0", "-1"}) add(cubemap, "--irradiance-size", value);
+  for (const char* value : {"0", "100"}) add(cubemap, "--specular-levels", value);
+  for (const char* value : {"0", "-1"}) add(cubemap, "--specular-samples", value);
+  for (const char* value : {"0", "-1", "x"}) add("bench --quick" ATMO_TINY, "--repeat", value);
+  add("bench --quick", "--width", "0");
+  add("compare --json out.json", "--against", "bruneton", "bruneton");
+  add("compare --json out.json", "--against-option", "junk", "junk");
+  for (const char* value : {"0x0", "axb", "100000x100000"}) add("compare --json out.csv --image out.png", "--image-size", value);
+  add("compare --json out.json", "--grid", "missing.csv", "missing.csv");
+  add("precompute --model hillaire", "--out", "table", "hillaire");
+  add("precompute --model elek --option size=4x8x4", "--out", "/nonexistent-folder/t", "/nonexistent-folder/t");
+  for (const char* value : {"91", "-91", "nan"}) add("illuminance", "--sun-elevation", value);
+  add("presets", "--dump", "venus", "venus");
+  add("frobnicate", "", "", "frobnicate");
+  // Bad grids through sample --grid.
+  const std::pair<const char*, std::string> grids[] = {
+      {"Empty", ""},
+      {"WrongHeader", "altitude,sun,view,azimuth\n0,30,60,90\n"},
+      {"ByteOrderMark", "\xef\xbb\xbf" + std::string(kGridHeader) + "\n0,30,60,90\n"},
+      {"ThreeFields", std::string(kGridHeader) + "\n0,30,60\n"},
+      {"FiveFields", std::string(kGridHeader) + "\n0,30,60,90,1\n"},
+      {"TextField", std::string(kGridHeader) + "\n0,thirty,60,90\n"},
+      {"NanField", std::string(kGridHeader) + "\n0,30,nan,90\n"},
+      {"InfField", std::string(kGridHeader) + "\ninf,30,60,90\n"},
+      {"SunZenithAbove180", std::string(kGridHeader) + "\n0,180.001,60,90\n"},
+      {"ViewZenithNegative", std::string(kGridHeader) + "\n0,30,-1,90\n"},
+      {"NumberOverflow", std::string(kGridHeader) + "\n1e400,30,60,90\n"},
+      {"HexNumber", std::string(kGridHeader) + "\n0x10,30,60,90\n"},
+      {"EmptyField", std::string(kGridHeader) + "\n0,,60,90\n"},
+      {"SemicolonSeparated", std::string(kGridHeader) + "\n0;30;60;90\n"},
+      {"BadRowAfterGoodRows", std::string(kGridHeader) + "\n0,30,60,90\n0,30,60,90\n0,30,60\n"},
+  };
+  for (const auto& [name, text] : grids) {
+    cases.push_back({std::string("Grid") + name, "sample --grid bad.csv --out out.csv", "bad.csv", text});
+  }
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Flags, GeneratedBadInputTest, ::testing::ValuesIn(BadFlags()), GeneratedName);
+
 // An elek table manifest whose integers are not integers, or beyond any table.
 TEST_F(ReliabilityCliTest, ElekManifestIntegersMustBeIntegers) {
   const std::string elek = "--model elek --preset atmosphere-plus --option size=4x8x4 --option orders=1";
@@ -331,6 +634,141 @@ TEST_F(ReliabilityCliTest, ElekManifestIntegersMustBeIntegers) {
     WriteFile(dir_ / "table.json", text);
     ExpectFailureKeepingOutputs("sample " + elek + " --table table" ATMO_ONE " --out out.csv", m.message, {"out.csv"});
   }
+}
+
+// Bad elek tables (--table NAME): a table exported, then one of its files damaged or replaced, or
+// loaded by a model it does not belong to. Each is refused in one line before any output.
+struct BadTable {
+  const char* name;
+  void (*damage)(const fs::path& dir);  // changes table.json / table.raw in dir
+  const char* model_args;               // the loading model's, when not the exporting one's
+  const char* message_part;
+};
+
+// The manifest with `from` replaced by `to` (the first occurrence).
+void EditManifest(const fs::path& dir, const std::string& from, const std::string& to) {
+  std::string text = ReadFile(dir / "table.json");
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) throw std::runtime_error("no '" + from + "' in the manifest");
+  text.replace(at, from.size(), to);
+  WriteFile(dir / "table.json", text);
+}
+
+const BadTable kBadTables[] = {
+    {"RawMissing", [](const fs::path& d) { fs::remove(d / "table.raw"); }, "", "table.raw"},
+    {"RawTruncated", [](const fs::path& d) { fs::resize_file(d / "table.raw", fs::file_size(d / "table.raw") - 1); }, "",
+     "bytes, expected"},
+    {"RawLonger", [](const fs::path& d) { fs::resize_file(d / "table.raw", fs::file_size(d / "table.raw") + 4); }, "",
+     "table.raw"},
+    {"RawOneByteChanged",
+     [](const fs::path& d) {
+       std::string raw = ReadFile(d / "table.raw");
+       raw[raw.size() / 2] ^= 0x40;
+       WriteFile(d / "table.raw", raw);
+     },
+     "", "data hash"},
+    {"RawIsAFolder",
+     [](const fs::path& d) {
+       fs::remove(d / "table.raw");
+       fs::create_directory(d / "table.raw");
+     },
+     "", "is a directory"},
+    {"RawIsAFifo",
+     [](const fs::path& d) {
+       fs::remove(d / "table.raw");
+       ::mkfifo((d / "table.raw").c_str(), 0600);
+     },
+     "", "is not a regular file"},
+    {"ManifestMissing", [](const fs::path& d) { fs::remove(d / "table.json"); }, "", "table.json"},
+    {"ManifestEmpty", [](const fs::path& d) { WriteFile(d / "table.json", ""); }, "", "malformed JSON"},
+    {"ManifestTruncated",
+     [](const fs::path& d) { WriteFile(d / "table.json", ReadFile(d / "table.json").substr(0, 100)); }, "",
+     "malformed JSON"},
+    {"ManifestAnArray", [](const fs::path& d) { WriteFile(d / "table.json", "[1, 2]"); }, "", "table.json"},
+    {"ManifestOtherFormat", [](const fs::path& d) { EditManifest(d, "atmo-elek-table", "atmo-hillaire-table"); }, "",
+     "not an elek table manifest"},
+    {"ManifestFormatVersion2", [](const fs::path& d) { EditManifest(d, "\"format_version\": 1", "\"format_version\": 2"); },
+     "", "format version 2 does not match"},
+    {"ManifestOtherAtmoVersion", [](const fs::path& d) { EditManifest(d, "\"atmo_version\": \"", "\"atmo_version\": \"9"); },
+     "", "precompute it again"},
+    {"ManifestWithoutParameterHash", [](const fs::path& d) { EditManifest(d, "\"parameter_hash\"", "\"parameter_hush\""); },
+     "", "missing or malformed key"},
+    {"ManifestHashNotAString", [](const fs::path& d) { EditManifest(d, "\"raw_hash_fnv1a64\": \"", "\"raw_hash_fnv1a64\": 7, \"x\": \""); },
+     "", "missing or malformed key"},
+    {"ManifestTwoBatches", [](const fs::path& d) { EditManifest(d, "\"batches\": 1", "\"batches\": 2"); }, "",
+     "channel batches differ"},
+    {"ManifestOptionsNotAnObject",
+     [](const fs::path& d) { EditManifest(d, "\"options\": {", "\"options\": 5, \"options_was\": {"); }, "",
+     "missing or malformed key"},
+    {"OtherPreset", [](const fs::path&) {}, "--model elek --preset earth --option size=4x8x4 --option orders=1",
+     "parameter hash"},
+    {"OtherSize", [](const fs::path&) {}, "--model elek --preset atmosphere-plus --option size=8x8x4 --option orders=1",
+     "does not match the model's"},
+    {"OtherOrders", [](const fs::path&) {}, "--model elek --preset atmosphere-plus --option size=4x8x4 --option orders=2",
+     "does not match the model's"},
+};
+
+class BadTableTest : public ReliabilityCliTest, public ::testing::WithParamInterface<BadTable> {};
+
+TEST_P(BadTableTest, IsRefusedInOneLineBeforeAnyOutput) {
+  const std::string elek = "--model elek --preset atmosphere-plus --option size=4x8x4 --option orders=1";
+  const RunResult made = Run("precompute " + elek + " --out table");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  GetParam().damage(dir_);
+  const std::string loading = *GetParam().model_args != '\0' ? GetParam().model_args : elek;
+  ExpectFailureKeepingOutputs("sample " + loading + " --table table" ATMO_ONE " --out out.csv", GetParam().message_part,
+                              {"out.csv"});
+}
+
+INSTANTIATE_TEST_SUITE_P(Reliability, BadTableTest, ::testing::ValuesIn(kBadTables),
+                         [](const ::testing::TestParamInfo<BadTable>& info) { return info.param.name; });
+
+// Bad EXR files through the library's reader (atmo::ReadExr; the command line reads none): one
+// atmo::Error line each, and a FIFO does not block.
+TEST_F(ReliabilityCliTest, ReadExrRefusesBadFilesInOneLine) {
+  atmo::Image image(16, 8, 3);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<float>(i % 7);
+  atmo::WriteExr(dir_ / "good.exr", image);
+  const std::string good = ReadFile(dir_ / "good.exr");
+  ASSERT_GT(good.size(), 100u);
+  WriteFile(dir_ / "empty.exr", "");
+  WriteFile(dir_ / "magic.exr", "v/1\x01");
+  WriteFile(dir_ / "header_only.exr", good.substr(0, good.size() / 4));
+  WriteFile(dir_ / "half.exr", good.substr(0, good.size() - 40));
+  WriteFile(dir_ / "garbage.exr", std::string(4096, '\x5a'));
+  WriteFile(dir_ / "png.exr", "\x89PNG\r\n\x1a\n" + std::string(100, '\0'));
+  std::string wrong_version = good;
+  wrong_version[4] = 9;
+  WriteFile(dir_ / "version9.exr", wrong_version);
+  ASSERT_EQ(::mkfifo((dir_ / "fifo.exr").c_str(), 0600), 0);
+  fs::create_directory(dir_ / "folder.exr");
+  const char* files[] = {"empty.exr", "magic.exr", "header_only.exr", "half.exr", "garbage.exr", "png.exr",
+                         "version9.exr", "fifo.exr", "folder.exr", "missing.exr"};
+  for (const char* file : files) {
+    try {
+      atmo::ReadExr(dir_ / file);
+      ADD_FAILURE() << file << " was read";
+    } catch (const atmo::Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(file), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  }
+  EXPECT_EQ(atmo::ReadExr(dir_ / "good.exr").pixels, image.pixels);
+}
+
+// The bad inputs of this file, counted for docs/reliability.md (at least 250, each refused in one
+// line with a non-zero exit and the outputs unchanged).
+TEST(BadInputCount, AtLeast250AreTried) {
+  const std::size_t tables = std::size(kBadInputs) + BadConfigs().size() + BadFlags().size() + std::size(kBadTables);
+  const std::size_t others = 5    // ElekManifestIntegersMustBeIntegers
+                             + 10   // ReadExrRefusesBadFilesInOneLine
+                             + 17   // PhysicalBounds.OutOfRangeValuesNameKeyValueAndRange
+                             + 8;   // WriteFileAtomicallyRefusesSpecialFiles, ReadFileBoundedRefuses...
+  std::printf("bad inputs: %zu audit, %zu configs, %zu flags and grids, %zu tables, %zu others: %zu\n",
+              std::size(kBadInputs), BadConfigs().size(), BadFlags().size(), std::size(kBadTables), others,
+              tables + others);
+  EXPECT_GE(tables + others, 250u);
 }
 
 TEST_F(ReliabilityCliTest, EveryTwentyDigitSeedUpToTwoTo64MinusOneIsAccepted) {
@@ -412,6 +850,16 @@ TEST_F(ReliabilityCliTest, ReferenceQueriesThatHungFinishInSeconds) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ExpectFiniteSamples(r, args);
     EXPECT_LT(seconds, 20.0) << args;
+  }
+  // The audit's own command: `--samples 2`, the ground of the 52 796 km planet, a view just above
+  // the horizon (at 90 degrees for an observer on the ground) and a sun near it.
+  for (const char* view : {"89.9999", "89.999999", "90"}) {
+    const auto start = std::chrono::steady_clock::now();
+    const RunResult r = Run(std::string("sample --model reference --samples 2 --config large_planet.json --altitude 0 "
+                                        "--sun-zenith 89 --azimuth 0 --view-zenith ") + view, 20);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ExpectFiniteSamples(r, view);
+    EXPECT_LT(seconds, 20.0) << view;
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -11,7 +12,7 @@
 
 #include "atmo/error.h"
 #include "atmo/image.h"
-#include "commands.h"
+#include "atmo/parameters.h"
 
 namespace atmo::cli {
 
@@ -36,6 +37,13 @@ std::vector<std::string_view> SplitCommas(std::string_view line) {
   return fields;
 }
 
+// "%.10g" of a value, for messages.
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
 }  // namespace
 
 void CheckPoint(const SamplePoint& point, const std::string& where) {
@@ -47,11 +55,11 @@ void CheckPoint(const SamplePoint& point, const std::string& where) {
     if (!std::isfinite(value)) throw Error(where + name + " is not a finite number");
   }
   if (!(std::fabs(point.altitude_m) <= kMaxAltitude_m)) {
-    throw Error(where + "altitude_m " + Format("%.10g", point.altitude_m) + " is outside [-1e+11, 1e+11] m");
+    throw Error(where + "altitude_m " + Number(point.altitude_m) + " is outside [-1e+11, 1e+11] m");
   }
   for (const auto& [name, value] : {values[1], values[2]}) {
     if (value < 0.0 || value > 180.0) {
-      throw Error(where + name + " " + Format("%.10g", value) + " is outside [0, 180]");
+      throw Error(where + name + " " + Number(value) + " is outside [0, 180]");
     }
   }
 }
@@ -75,7 +83,10 @@ std::vector<SamplePoint> ReadGrid(const std::string& given_path) {
   // standard input, named "<stdin>" in messages.
   const bool from_stdin = given_path == "-";
   const std::string path = from_stdin ? "<stdin>" : given_path;
-  const std::string text = from_stdin ? ReadStandardInput() : ReadFileBounded(path);
+  return ParseGrid(from_stdin ? ReadStandardInput() : ReadFileBounded(path), path);
+}
+
+std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& path) {
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
     throw Error(path + ": a NUL byte at byte " + std::to_string(nul + 1) + "; a grid is CSV text");
   }
@@ -87,7 +98,7 @@ std::vector<SamplePoint> ReadGrid(const std::string& given_path) {
   while (start < text.size()) {
     std::size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
-    const std::string_view line = Trim(std::string_view(text).substr(start, end - start));
+    const std::string_view line = Trim(text.substr(start, end - start));
     start = end + 1;
     ++line_number;
     if (line.empty()) continue;

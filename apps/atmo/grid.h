@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace atmo::cli {
@@ -28,5 +29,8 @@ void CheckPoint(const SamplePoint& point, const std::string& where);
 // Reads and checks a whole IN.csv grid before any model work, so a bad file fails fast; errors
 // name the file and line. `path` "-" reads standard input. Throws atmo::Error.
 std::vector<SamplePoint> ReadGrid(const std::string& path);
+
+// The same for the text of a grid; `path` names it in messages. Throws atmo::Error.
+std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& path);
 
 }  // namespace atmo::cli

@@ -229,6 +229,97 @@ std::vector<std::string> OrderExtraChannels(std::vector<std::string> extras, con
   return extras;
 }
 
+// The sizes an EXR header declares, checked before OpenEXR reads it: OpenEXR 3.1 allocates
+// what the header says before it finds that the file is shorter (found by fuzz_exr_reader): an
+// attribute of a declared 1.7 GB, line-offset tables and line buffers for a data window of 2^31
+// pixels. Walks the header (magic, version, then per attribute name\0 type\0 int32 size value,
+// up to an empty name; every part of a multi-part file) and returns the first problem: an
+// attribute longer than the rest of the file, or a data window (or tile) whose pixels,
+// uncompressed, would take more than kMaxCompressionRatio times the file's bytes. A header that
+// cannot be walked (a name beyond 255 bytes, or 31 without the long-names flag; cut off) is a problem too: OpenEXR would read it
+// differently.
+std::optional<std::string> ExrHeaderProblem(const fs::path& path) {
+  // zlib (ZIP, PXR24) compresses at most ~1032:1, RLE 64:1.
+  constexpr std::int64_t kMaxCompressionRatio = 2048;
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const std::int64_t file_bytes = static_cast<std::int64_t>(fs::file_size(path, ec));
+  if (!in || ec) return std::nullopt;  // OpenEXR reports what is wrong
+  const auto read_u32 = [&](std::uint32_t& value) {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), 4)) return false;
+    value = std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24;
+    return true;
+  };
+  std::size_t max_name = 255;  // 31 without the long-names flag (OpenEXR reads no more)
+  const auto read_name = [&](std::string& name) {
+    name.clear();
+    char c;
+    while (in.get(c)) {
+      if (c == '\0') return true;
+      if (name.size() >= max_name) return false;
+      name += c;
+    }
+    return false;
+  };
+  std::uint32_t magic = 0, version = 0;
+  if (!read_u32(magic) || !read_u32(version) || magic != 20000630u) return std::nullopt;
+  const bool multipart = (version & 0x1000u) != 0;
+  if ((version & 0x400u) == 0) max_name = 31;
+  for (int part = 0;; ++part) {
+    std::int64_t width = 0, height = 0, bytes_per_pixel = 0, tile_x = 0, tile_y = 0;
+    int attributes = 0;
+    std::string name, type;
+    while (true) {
+      if (!read_name(name)) return std::string("a name longer than " + std::to_string(max_name) + " bytes, or cut off");
+      if (name.empty()) break;
+      std::uint32_t size = 0;
+      if (!read_name(type) || !read_u32(size)) {
+        return "attribute '" + OneLine(name) + "' without its type or size (a type name too long, or cut off)";
+      }
+      const std::int64_t remaining = file_bytes - static_cast<std::int64_t>(in.tellg());
+      if (static_cast<std::int64_t>(static_cast<std::int32_t>(size)) < 0 || std::int64_t{size} > remaining) {
+        return "attribute '" + OneLine(name) + "' declares " + std::to_string(static_cast<std::int32_t>(size)) +
+               " bytes, more than the " + std::to_string(remaining) + " left in the file";
+      }
+      std::vector<unsigned char> value(size);
+      if (!in.read(reinterpret_cast<char*>(value.data()), size)) return "attribute '" + OneLine(name) + "' cut off";
+      const auto i32 = [&](std::size_t at) {
+        return static_cast<std::int32_t>(std::uint32_t(value[at]) | std::uint32_t(value[at + 1]) << 8 |
+                                         std::uint32_t(value[at + 2]) << 16 | std::uint32_t(value[at + 3]) << 24);
+      };
+      if (name == "dataWindow" && type == "box2i" && size == 16) {
+        width = std::int64_t{i32(8)} - i32(0) + 1;
+        height = std::int64_t{i32(12)} - i32(4) + 1;
+      } else if (name == "tiles" && type == "tiledesc" && size >= 8) {
+        tile_x = static_cast<std::uint32_t>(i32(0));
+        tile_y = static_cast<std::uint32_t>(i32(4));
+      } else if (name == "channels" && type == "chlist") {
+        // name\0, int32 pixel type (0 uint, 1 half, 2 float), 4 bytes, int32 x and y sampling.
+        for (std::size_t at = 0; at < value.size() && value[at] != 0;) {
+          while (at < value.size() && value[at] != 0) ++at;
+          if (at + 17 > value.size()) break;
+          bytes_per_pixel += i32(at + 1) == 1 ? 2 : 4;
+          at += 17;
+        }
+      }
+      if (++attributes > 100000) return std::string("more than 100000 attributes");
+    }
+    if (attributes == 0) break;                               // the empty header ending a multi-part list
+    const std::int64_t limit = kMaxCompressionRatio * (file_bytes + 4096) / std::max<std::int64_t>(bytes_per_pixel, 1);
+    if (width > 0 && height > 0 && (width > limit || height > limit || width * height > limit)) {
+      return "declares " + std::to_string(width) + "x" + std::to_string(height) + " pixels, more than its " +
+             std::to_string(file_bytes) + " bytes can hold";
+    }
+    if (tile_x > limit || tile_y > limit || tile_x * tile_y > limit) {
+      return "declares tiles of " + std::to_string(tile_x) + "x" + std::to_string(tile_y) + " pixels, more than its " +
+             std::to_string(file_bytes) + " bytes can hold";
+    }
+    if (!multipart) break;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 int Image::ChannelIndex(const std::string& name) const {
@@ -522,8 +613,12 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
 
 Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(ReadError(path, "no such file"));
-  if (fs::is_directory(path, ec)) throw Error(ReadError(path, "is a directory"));
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) throw Error(ReadError(path, "no such file"));
+  if (fs::is_directory(status)) throw Error(ReadError(path, "is a directory"));
+  // OpenEXR would open a FIFO and wait for a writer, and read a device forever.
+  if (!fs::is_regular_file(status)) throw Error(ReadError(path, "is not a regular file (a device, FIFO or socket)"));
+  if (auto problem = ExrHeaderProblem(path)) throw Error(ReadError(path, "corrupt header: " + *problem));
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
@@ -566,7 +661,6 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     if (width > kMaxValues / height || width * height > kMaxValues / static_cast<std::int64_t>(names.size() + 1)) {
       throw Error(ReadError(path, "image too large (" + std::to_string(width) + "x" + std::to_string(height) + ")"));
     }
-
     Image image(static_cast<int>(width), static_cast<int>(height), static_cast<int>(names.size()));
     if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width * height), 0.0f);
     Imf::FrameBuffer frame;

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The second half of .ci/run: builds build-asan with clang (-DATMO_FUZZ=ON, which sanitizes with
+# address,undefined + float-cast-overflow and adds libFuzzer's coverage), runs every test of it
+# under ASan/UBSan (LeakSanitizer on, Mesa's driver leaks suppressed by .ci/lsan.supp), then
+# scripts/fuzz.sh for SECONDS per target in the same build.
+# Usage: .ci/sanitize_and_fuzz.sh [SECONDS]     (default 60)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+start=$(date +%s)
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DATMO_FUZZ=ON \
+  -DATMO_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build build-asan -j2
+echo "ci: sanitizer build in $(( $(date +%s) - start )) s"
+
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export LSAN_OPTIONS="suppressions=$PWD/.ci/lsan.supp:print_suppressions=0"
+start=$(date +%s)
+# The windowed GL test (GLFW/GLX under Xvfb) leaks 112 bytes from a Mesa module that is unloaded
+# before exit, which no suppression can name ("<unknown module>"): that test alone runs without
+# leak detection.
+ctest --test-dir build-asan --output-on-failure -j2 -E '^gl_window_under_xvfb$'
+if ctest --test-dir build-asan -N -R '^gl_window_under_xvfb$' | grep -q 'Total Tests: 1'; then
+  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --test-dir build-asan --output-on-failure -R '^gl_window_under_xvfb$'
+fi
+echo "ci: sanitizer tests in $(( $(date +%s) - start )) s"
+
+start=$(date +%s)
+./scripts/fuzz.sh "$seconds" build-asan
+echo "ci: fuzzing in $(( $(date +%s) - start )) s"
