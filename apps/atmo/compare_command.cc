@@ -370,46 +370,64 @@ std::size_t WorstRow(const std::vector<Row>& rows) {
   return worst;
 }
 
-std::string Table(const Summaries& s, bool with_z) {
-  std::string text = Format("%-22s %7s %8s %10s %10s %10s %10s %10s", "group", "rows", "excluded", "median|e|",
-                            "p95|e|", "max|e|", "rel_mae", "mean e");
-  if (with_z) text += Format(" %10s %10s", "median|z|", "p95|z|");
-  text += "\n";
-  const auto line = [&](const GroupSummary& g) {
-    text += Format("%-22s %7zu %8zu %10s %10s %10s %10s %10s", g.label.c_str(), g.errors.count, g.excluded,
-                   Percent(g.errors.median_abs).c_str(), Percent(g.errors.p95_abs).c_str(),
-                   Percent(g.errors.max_abs).c_str(), Percent(g.errors.rel_mae).c_str(),
-                   Percent(g.errors.mean).c_str());
-    if (with_z) text += Format(" %10s %10s", Number(g.z.median_abs).c_str(), Number(g.z.p95_abs).c_str());
-    text += "\n";
+// The summary's rows as cells: one per group (overall, channels, sun-zenith bands, altitudes), in
+// the columns of the header below; the z columns only `with_z`.
+std::vector<std::vector<std::string>> TableRows(const Summaries& s, bool with_z) {
+  std::vector<std::vector<std::string>> rows;
+  const auto add = [&](const GroupSummary& g) {
+    std::vector<std::string> row = {g.label,
+                                    std::to_string(g.errors.count),
+                                    std::to_string(g.excluded),
+                                    Percent(g.errors.median_abs),
+                                    Percent(g.errors.p95_abs),
+                                    Percent(g.errors.max_abs),
+                                    Percent(g.errors.rel_mae),
+                                    Percent(g.errors.mean)};
+    if (with_z) {
+      row.push_back(Number(g.z.median_abs));
+      row.push_back(Number(g.z.p95_abs));
+    }
+    rows.push_back(std::move(row));
   };
-  line(s.overall);
-  for (const GroupSummary& g : s.channels) line(g);
-  for (const GroupSummary& g : s.bands) line(g);
-  for (const GroupSummary& g : s.altitudes) line(g);
+  add(s.overall);
+  for (const GroupSummary& g : s.channels) add(g);
+  for (const GroupSummary& g : s.bands) add(g);
+  for (const GroupSummary& g : s.altitudes) add(g);
+  return rows;
+}
+
+// The table on stdout: fixed-width columns.
+std::string Table(const Summaries& s, bool with_z) {
+  static constexpr int kWidths[] = {-22, 7, 8, 10, 10, 10, 10, 10, 10, 10};
+  const auto line = [](const std::vector<std::string>& cells) {
+    std::string text;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      text += Format(i == 0 ? "%*s" : " %*s", kWidths[i], cells[i].c_str());
+    }
+    return text + "\n";
+  };
+  std::vector<std::string> header = {"group", "rows", "excluded", "median|e|", "p95|e|", "max|e|", "rel_mae", "mean e"};
+  if (with_z) header.insert(header.end(), {"median|z|", "p95|z|"});
+  std::string text = line(header);
+  for (const auto& row : TableRows(s, with_z)) text += line(row);
   return text;
 }
 
 // The same table in Markdown, as docs/accuracy.md shows it ("abs(e)" for "|e|", which would end a
-// cell), with the largest |e| row after it.
+// cell).
 std::string MarkdownTable(const Summaries& s, bool with_z) {
-  std::string text = "| group | rows | excluded | median abs(e) | p95 abs(e) | max abs(e) | rel_mae | mean e |";
-  if (with_z) text += " median abs(z) | p95 abs(z) |";
-  text += "\n|---|---:|---:|---:|---:|---:|---:|---:|";
-  if (with_z) text += "---:|---:|";
-  text += "\n";
-  const auto line = [&](const GroupSummary& g) {
-    text += Format("| %s | %zu | %zu | %s | %s | %s | %s | %s |", g.label.c_str(), g.errors.count, g.excluded,
-                   Percent(g.errors.median_abs).c_str(), Percent(g.errors.p95_abs).c_str(),
-                   Percent(g.errors.max_abs).c_str(), Percent(g.errors.rel_mae).c_str(),
-                   Percent(g.errors.mean).c_str());
-    if (with_z) text += Format(" %s | %s |", Number(g.z.median_abs).c_str(), Number(g.z.p95_abs).c_str());
-    text += "\n";
+  const auto line = [](const std::vector<std::string>& cells) {
+    std::string text = "|";
+    for (const std::string& cell : cells) text += " " + cell + " |";
+    return text + "\n";
   };
-  line(s.overall);
-  for (const GroupSummary& g : s.channels) line(g);
-  for (const GroupSummary& g : s.bands) line(g);
-  for (const GroupSummary& g : s.altitudes) line(g);
+  std::vector<std::string> header = {"group", "rows", "excluded", "median abs(e)", "p95 abs(e)", "max abs(e)",
+                                     "rel_mae", "mean e"};
+  if (with_z) header.insert(header.end(), {"median abs(z)", "p95 abs(z)"});
+  std::string text = line(header) + "|---|";
+  for (std::size_t i = 1; i < header.size(); ++i) text += "---:|";
+  text += "\n";
+  for (const auto& row : TableRows(s, with_z)) text += line(row);
   return text;
 }
 
