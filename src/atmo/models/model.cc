@@ -9,6 +9,7 @@
 #include "models/hillaire_model.h"
 #include "models/reference_model.h"
 #include "models/simple_model.h"
+#include "models/source4d_model.h"
 
 namespace atmo {
 
@@ -64,7 +65,7 @@ void SkyView::ScatteringAlongSegment(const glm::dvec3&, double, std::span<double
   throw Error("this model does not provide aerial perspective");
 }
 
-std::vector<std::string> ModelNames() { return {"elek", "hillaire", "reference", "simple"}; }
+std::vector<std::string> ModelNames() { return {"elek", "hillaire", "reference", "simple", "source4d"}; }
 
 std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParameters& parameters,
                                    const ModelOptions& options) {
@@ -89,6 +90,9 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
     model = std::make_unique<HillaireModel>(parameters, HillaireSettings::FromOptions(model_options));
   } else if (name == "reference") {
     model = std::make_unique<ReferenceModel>(parameters, ReferenceSettings::FromOptions(model_options));
+  } else if (name == "source4d") {
+    model_options.erase("seed");
+    model = std::make_unique<Source4dModel>(parameters, Source4dModelSettings::FromOptions(model_options));
   } else if (name == "simple") {
     model_options.erase("seed");
     model = std::make_unique<SimpleModel>(parameters, model_options);

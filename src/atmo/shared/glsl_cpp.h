@@ -139,5 +139,6 @@ inline vec4 texture(const Texture3D& t, const vec3& uvw) {
 using TransmittanceTexture = Texture2D;
 using MultiScatteringTexture = Texture2D;
 using SkyViewTexture = Texture2D;
+using Source4dTexture = Texture3D;
 
 }  // namespace atmo::shared

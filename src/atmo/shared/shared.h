@@ -25,6 +25,7 @@ namespace {
 #include "tables.glsl"
 #include "elek.glsl"
 #include "simple.glsl"
+#include "source4d.glsl"
 }  // namespace
 }  // namespace atmo::shared
 

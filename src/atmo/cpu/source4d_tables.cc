@@ -1,0 +1,338 @@
+#include "cpu/source4d_tables.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "cpu/hillaire_tables.h"
+#include "models/model_options.h"
+
+namespace atmo::cpu {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kSubSamples = 4;  // per cell and axis, for the quadrature matrices
+constexpr double kLogFloor = 1e-30;
+
+double NodeAngle(int i, int n, double range) { return range * i / (n - 1); }
+
+// The incident radiance of one order on the gathering grid: values[ab * columns + column], with
+// column = (i * mu_s_size + j) * 3 + channel for node (r_i, theta_s_j).
+struct GatherField {
+  int in_count = 0;
+  int columns = 0;
+  std::vector<float> values;
+};
+
+struct Grid {
+  const shared::AtmosphereParameters& atmosphere;
+  const Source4dSettings& s;
+  int nodes() const { return s.r_size * s.mu_s_size; }
+  double r(int i) const { return shared::GetSource4dRFromUnit(atmosphere, double(i) / (s.r_size - 1)); }
+  double mu_s(int j) const { return std::cos(NodeAngle(j, s.mu_s_size, shared::kSource4dMaxSunZenith)); }
+};
+
+// 1D table of a ground irradiance over the table's sun-zenith nodes.
+shared::Texture2D IrradianceTable(const std::vector<glm::dvec3>& e) {
+  shared::Texture2D t(static_cast<int>(e.size()), 1);
+  for (std::size_t j = 0; j < e.size(); ++j) t.at(static_cast<int>(j), 0) = glm::vec3(e[j]);
+  return t;
+}
+
+// Integrates one order along every gathering ray. order == 1: single scattering and the
+// reflection of the direct sun; otherwise the table of that order and the reflection of the
+// previous order's ground irradiance.
+GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmittance,
+                           const shared::Texture3D& rayleigh, const shared::Texture3D& mie,
+                           const shared::Texture2D& previous_irradiance, int order) {
+  const Source4dSettings& s = grid.s;
+  const auto& atmosphere = grid.atmosphere;
+  GatherField field;
+  field.in_count = s.gather_zeniths * s.gather_azimuths;
+  field.columns = grid.nodes() * 3;
+  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
+  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  oneapi::tbb::parallel_for(0, grid.nodes(), [&](int node) {
+    const int i = node / s.mu_s_size;
+    const int j = node % s.mu_s_size;
+    const double r = grid.r(i);
+    const double mu_s = grid.mu_s(j);
+    const double sin_s = std::sqrt(std::max(1.0 - mu_s * mu_s, 0.0));
+    for (int a = 0; a < s.gather_zeniths; ++a) {
+      const double theta = NodeAngle(a, s.gather_zeniths, shared::kPi);
+      const double mu = std::cos(theta);
+      const double sin_v = std::sin(theta);
+      const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const double nu = shared::ClampCosine(mu * mu_s + sin_v * sin_s * std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi)));
+        glm::dvec3 path_transmittance;
+        glm::dvec3 L = shared::IntegrateSource4dRadianceInside(
+            atmosphere, transmittance, rayleigh, mie, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
+            std::numeric_limits<double>::infinity(), s.gather_samples, order == 1 ? 1.0 : 0.0, order == 1 ? 0.0 : 1.0,
+            path_transmittance);
+        if (hits_ground && ground) {
+          const double t = shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
+          const double mu_s_ground = shared::ClampCosine((r * mu_s + t * nu) / atmosphere.bottom_radius);
+          glm::dvec3 e;
+          if (order == 1) {
+            e = mu_s_ground > 0.0 ? mu_s_ground * shared::GetTransmittanceToSun(atmosphere, transmittance,
+                                                                                 atmosphere.bottom_radius, mu_s_ground)
+                                  : glm::dvec3(0.0);
+          } else {
+            e = shared::GetSource4dGroundIrradiance(previous_irradiance, mu_s_ground);
+          }
+          L += path_transmittance * albedo_over_pi * e;
+        }
+        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
+      }
+    }
+  });
+  return field;
+}
+
+// G[cd * columns + column] = sum over ab of W[cd][ab] field[ab][column].
+std::vector<float> Convolve(const std::vector<float>& w, int out_count, const GatherField& field) {
+  std::vector<float> g(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
+  oneapi::tbb::parallel_for(0, out_count, [&](int cd) {
+    float* out = g.data() + static_cast<std::size_t>(cd) * field.columns;
+    const float* weights = w.data() + static_cast<std::size_t>(cd) * field.in_count;
+    for (int ab = 0; ab < field.in_count; ++ab) {
+      const float weight = weights[ab];
+      if (weight == 0.0f) continue;
+      const float* in = field.values.data() + static_cast<std::size_t>(ab) * field.columns;
+      for (int k = 0; k < field.columns; ++k) out[k] += weight * in[k];
+    }
+  });
+  return g;
+}
+
+// The ground node's irradiance from a field, per sun-zenith node.
+std::vector<glm::dvec3> GroundIrradiance(const Grid& grid, const Source4dQuadrature& q, const GatherField& field) {
+  std::vector<glm::dvec3> e(grid.s.mu_s_size, glm::dvec3(0.0));
+  for (int ab = 0; ab < field.in_count; ++ab) {
+    const double w = q.irradiance[ab];
+    if (w == 0.0) continue;
+    const float* in = field.values.data() + static_cast<std::size_t>(ab) * field.columns;
+    for (int j = 0; j < grid.s.mu_s_size; ++j) {
+      for (int c = 0; c < 3; ++c) e[j][c] += w * in[j * 3 + c];  // node i = 0: the ground
+    }
+  }
+  return e;
+}
+
+// ln G into the table layout (x = azimuth d, y = zenith c, z = i * mu_s_size + j).
+void WriteLogTable(const Grid& grid, const std::vector<float>& g, shared::Texture3D& table) {
+  const Source4dSettings& s = grid.s;
+  table = shared::Texture3D(s.phi_size, s.mu_size, grid.nodes());
+  const int columns = grid.nodes() * 3;
+  oneapi::tbb::parallel_for(0, grid.nodes(), [&](int node) {
+    for (int c = 0; c < s.mu_size; ++c) {
+      for (int d = 0; d < s.phi_size; ++d) {
+        const float* v = g.data() + static_cast<std::size_t>(c * s.phi_size + d) * columns + node * 3;
+        table.at(d, c, node) = glm::vec3(std::log(std::max(double(v[0]), kLogFloor)),
+                                         std::log(std::max(double(v[1]), kLogFloor)),
+                                         std::log(std::max(double(v[2]), kLogFloor)));
+      }
+    }
+  });
+}
+
+}  // namespace
+
+Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
+                                             const Source4dSettings& s) {
+  Source4dQuadrature q;
+  q.out_count = s.mu_size * s.phi_size;
+  q.in_count = s.gather_zeniths * s.gather_azimuths;
+  q.rayleigh.assign(static_cast<std::size_t>(q.out_count) * q.in_count, 0.0f);
+  q.mie.assign(q.rayleigh.size(), 0.0f);
+  q.irradiance.assign(q.in_count, 0.0);
+  const double d_theta = shared::kPi / (s.gather_zeniths - 1);
+  const double d_phi = shared::kPi / (s.gather_azimuths - 1);
+  // The sub-samples of every cell: direction, solid angle (both mirror halves together are
+  // handled per output), and the four hat weights.
+  struct SubSample {
+    double cos_theta, sin_theta, phi, solid_angle;
+    int node[4];
+    double hat[4];
+  };
+  std::vector<SubSample> subs;
+  for (int a = 0; a + 1 < s.gather_zeniths; ++a) {
+    for (int b = 0; b + 1 < s.gather_azimuths; ++b) {
+      for (int u = 0; u < kSubSamples; ++u) {
+        for (int v = 0; v < kSubSamples; ++v) {
+          const double fu = (u + 0.5) / kSubSamples;
+          const double fv = (v + 0.5) / kSubSamples;
+          const double theta = (a + fu) * d_theta;
+          SubSample sub;
+          sub.cos_theta = std::cos(theta);
+          sub.sin_theta = std::sin(theta);
+          sub.phi = (b + fv) * d_phi;
+          sub.solid_angle = sub.sin_theta * d_theta * d_phi / (kSubSamples * kSubSamples);
+          const int n00 = a * s.gather_azimuths + b;
+          sub.node[0] = n00;
+          sub.node[1] = n00 + s.gather_azimuths;
+          sub.node[2] = n00 + 1;
+          sub.node[3] = n00 + s.gather_azimuths + 1;
+          sub.hat[0] = (1 - fu) * (1 - fv);
+          sub.hat[1] = fu * (1 - fv);
+          sub.hat[2] = (1 - fu) * fv;
+          sub.hat[3] = fu * fv;
+          subs.push_back(sub);
+        }
+      }
+    }
+  }
+  for (const SubSample& sub : subs) {
+    if (sub.cos_theta <= 0.0) continue;
+    for (int k = 0; k < 4; ++k) q.irradiance[sub.node[k]] += 2.0 * sub.solid_angle * sub.cos_theta * sub.hat[k];
+  }
+  double irradiance_sum = 0.0;
+  for (double w : q.irradiance) irradiance_sum += w;
+  for (double& w : q.irradiance) w *= shared::kPi / irradiance_sum;  // a uniform unit radiance gives pi
+  oneapi::tbb::parallel_for(0, q.out_count, [&](int cd) {
+    const int c = cd / s.phi_size;
+    const int d = cd % s.phi_size;
+    const double theta_v = NodeAngle(c, s.mu_size, shared::kPi);
+    const double phi_v = NodeAngle(d, s.phi_size, shared::kPi);
+    const double cv = std::cos(theta_v);
+    const double sv = std::sin(theta_v);
+    std::vector<double> wr(q.in_count, 0.0);
+    std::vector<double> wm(q.in_count, 0.0);
+    double sum_r = 0.0;
+    double sum_m = 0.0;
+    for (const SubSample& sub : subs) {
+      double pr = 0.0;
+      double pm = 0.0;
+      for (int mirror = 0; mirror < 2; ++mirror) {
+        const double dphi = mirror == 0 ? sub.phi - phi_v : sub.phi + phi_v;
+        const double nu = shared::ClampCosine(cv * sub.cos_theta + sv * sub.sin_theta * std::cos(dphi));
+        pr += shared::GetRayleighPhase(atmosphere, nu);
+        pm += shared::GetMiePhase(atmosphere, nu);
+      }
+      pr *= sub.solid_angle;
+      pm *= sub.solid_angle;
+      sum_r += pr;
+      sum_m += pm;
+      for (int k = 0; k < 4; ++k) {
+        wr[sub.node[k]] += pr * sub.hat[k];
+        wm[sub.node[k]] += pm * sub.hat[k];
+      }
+    }
+    for (int ab = 0; ab < q.in_count; ++ab) {
+      q.rayleigh[static_cast<std::size_t>(cd) * q.in_count + ab] = static_cast<float>(wr[ab] / sum_r);
+      q.mie[static_cast<std::size_t>(cd) * q.in_count + ab] = static_cast<float>(wm[ab] / sum_m);
+    }
+  });
+  return q;
+}
+
+void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,
+                           Source4dTables& tables, const std::function<void(std::string_view, double)>& record) {
+  const auto note = [&](std::string_view pass, Clock::time_point start) {
+    if (record) record(pass, MillisecondsSince(start));
+  };
+  auto start = Clock::now();
+  tables.mu_s_size = s.mu_s_size;
+  tables.transmittance = shared::Texture2D(s.transmittance_lut.x, s.transmittance_lut.y);
+  ComputeTransmittanceTable(atmosphere, s.transmittance_samples, tables.transmittance);
+  note("source4d_transmittance_lut", start);
+
+  start = Clock::now();
+  const Grid grid{atmosphere, s};
+  const Source4dQuadrature q = ComputeSource4dQuadrature(atmosphere, s);
+  note("source4d_quadrature", start);
+
+  const int columns = grid.nodes() * 3;
+  const std::size_t table_size = static_cast<std::size_t>(q.out_count) * columns;
+  std::vector<float> sum_r(table_size, 0.0f);
+  std::vector<float> sum_m(table_size, 0.0f);
+  std::vector<float> previous_r;
+  std::vector<float> g_r;
+  std::vector<float> g_m;
+  // E^(0): the direct sun on the ground.
+  std::vector<glm::dvec3> irradiance_sum(s.mu_s_size);
+  for (int j = 0; j < s.mu_s_size; ++j) {
+    const double mu_s = grid.mu_s(j);
+    irradiance_sum[j] = mu_s > 0.0 ? mu_s * shared::GetTransmittanceToSun(atmosphere, tables.transmittance,
+                                                                         atmosphere.bottom_radius, mu_s)
+                                   : glm::dvec3(0.0);
+  }
+  std::vector<glm::dvec3> previous_e;
+  std::vector<glm::dvec3> e;
+  shared::Texture3D order_r;
+  shared::Texture3D order_m;
+  shared::Texture2D order_irradiance;
+
+  start = Clock::now();
+  GatherField field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, 1);
+  note("source4d_gather_1", start);
+  for (int n = 2; n <= s.orders; ++n) {
+    start = Clock::now();
+    previous_r = std::move(g_r);
+    g_r = Convolve(q.rayleigh, q.out_count, field);
+    g_m = Convolve(q.mie, q.out_count, field);
+    for (std::size_t k = 0; k < table_size; ++k) {
+      sum_r[k] += g_r[k];
+      sum_m[k] += g_m[k];
+    }
+    previous_e = std::move(e);
+    e = GroundIrradiance(grid, q, field);
+    for (int j = 0; j < s.mu_s_size; ++j) irradiance_sum[j] += e[j];
+    note("source4d_convolve_" + std::to_string(n), start);
+    if (n == s.orders) break;
+    start = Clock::now();
+    WriteLogTable(grid, g_r, order_r);
+    WriteLogTable(grid, g_m, order_m);
+    order_irradiance = IrradianceTable(e);
+    field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, n);
+    note("source4d_gather_" + std::to_string(n), start);
+  }
+
+  start = Clock::now();
+  if (s.tail && s.orders >= 3) {
+    // Per node and channel, the ratio of the last two orders summed over directions.
+    std::vector<double> last(columns, 0.0);
+    std::vector<double> before(columns, 0.0);
+    for (int cd = 0; cd < q.out_count; ++cd) {
+      for (int k = 0; k < columns; ++k) {
+        last[k] += g_r[static_cast<std::size_t>(cd) * columns + k];
+        before[k] += previous_r[static_cast<std::size_t>(cd) * columns + k];
+      }
+    }
+    std::vector<float> factor(columns, 0.0f);
+    for (int k = 0; k < columns; ++k) {
+      const double ratio = before[k] > 0.0 ? std::clamp(last[k] / before[k], 0.0, kSource4dMaxTailRatio) : 0.0;
+      factor[k] = static_cast<float>(ratio / (1.0 - ratio));
+    }
+    for (int cd = 0; cd < q.out_count; ++cd) {
+      for (int k = 0; k < columns; ++k) {
+        const std::size_t i = static_cast<std::size_t>(cd) * columns + k;
+        sum_r[i] += factor[k] * g_r[i];
+        sum_m[i] += factor[k] * g_m[i];
+      }
+    }
+    // The ground: E^(N-1) q / (1 - q) with q = E^(N-1) / E^(N-2) (for orders = 3, E^(1) / E^(0)).
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        const double before_e = previous_e.empty() ? 0.0 : previous_e[j][c];
+        const double ratio = before_e > 0.0 ? std::clamp(e[j][c] / before_e, 0.0, kSource4dMaxTailRatio) : 0.0;
+        irradiance_sum[j][c] += e[j][c] * ratio / (1.0 - ratio);
+      }
+    }
+  }
+  WriteLogTable(grid, sum_r, tables.rayleigh);
+  WriteLogTable(grid, sum_m, tables.mie);
+  tables.ground_irradiance = IrradianceTable(irradiance_sum);
+  note("source4d_sum", start);
+}
+
+}  // namespace atmo::cpu

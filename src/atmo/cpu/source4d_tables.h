@@ -1,0 +1,77 @@
+// The tables of model source4d (shared/source4d.glsl, docs/models/source4d.md), built on the CPU
+// order by order by gathering.
+//
+// For each node (r_i, theta_s_j) of the table's r and sun-zenith axes, the radiance of order n
+// arriving from a fixed grid of directions (theta'_a uniform on [0, pi], azimuth phi'_b from the
+// sun's uniform on [0, pi]; the field is mirror-symmetric about the sun's vertical plane) is
+// integrated along each direction's ray:
+//   L1    single scattering (shadow-split march) + the ground's reflection of the direct sun,
+//   Ln    the march of J = sigma_R G_R^(n) + sigma_M G_M^(n) + the ground's reflection of E^(n-1),
+// and the next order's phase-weighted radiance follows by a matrix product over the grid,
+//   G_m^(n+1)(v_cd) = sum_ab W_m[cd][ab] L^(n)(w_ab),
+// where W_m[cd][ab] is the phase function p_m(v_cd . w) integrated against the bilinear hat of
+// node ab over the sphere (both mirror halves), by 4 x 4 sub-samples per cell, rows normalised
+// to 1 (the phase function's integral). The ground irradiance E^(n)(theta_s_j) is the
+// cosine-weighted integral of L^(n) at the ground node by the same hats. After the last order a
+// geometric tail G^(N) q / (1 - q), q = G^(N) / G^(N-1) per node and channel (summed over
+// directions; at most kSource4dMaxTailRatio), stands for the orders above N.
+#pragma once
+
+#include <functional>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shared/shared.h"
+
+namespace atmo::cpu {
+
+struct Source4dSettings {
+  // The table: r layers, view zeniths, sun zeniths, azimuths.
+  int r_size = 24;
+  int mu_size = 32;
+  int mu_s_size = 32;
+  int phi_size = 16;
+  // The gathering grid of incident directions (zenith nodes over [0, pi], azimuth nodes over
+  // [0, pi]) and the steps of each gathering ray.
+  int gather_zeniths = 25;
+  int gather_azimuths = 13;
+  int gather_samples = 24;
+  // Orders computed explicitly (>= 2; the geometric tail adds the rest).
+  int orders = 5;
+  bool tail = true;
+  glm::ivec2 transmittance_lut{256, 64};
+  int transmittance_samples = 200;
+};
+
+inline constexpr double kSource4dMaxTailRatio = 0.9;
+
+struct Source4dTables {
+  shared::Texture2D transmittance;
+  shared::Texture3D rayleigh;           // ln G_R, orders >= 2
+  shared::Texture3D mie;                // ln G_M
+  shared::Texture2D ground_irradiance;  // E of all orders (the direct sun included), mu_s_size x 1
+  int mu_s_size = 0;
+};
+
+// Builds the tables of one channel batch. `record(pass, ms)` receives each pass's time.
+void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
+                           Source4dTables& tables,
+                           const std::function<void(std::string_view, double)>& record = {});
+
+// Quadrature matrices of the gathering grid (exposed for tests): W[cd * in + ab] for the output
+// directions of the table (cd = c * phi_size + d: view zenith c, azimuth d) and the gathering
+// grid's nodes (ab = a * gather_azimuths + b), and the cosine-weighted weights of the upper
+// hemisphere for the ground irradiance.
+struct Source4dQuadrature {
+  int out_count = 0;
+  int in_count = 0;
+  std::vector<float> rayleigh;  // out_count x in_count
+  std::vector<float> mie;
+  std::vector<double> irradiance;  // in_count
+};
+Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
+                                             const Source4dSettings& settings);
+
+}  // namespace atmo::cpu

@@ -1,0 +1,201 @@
+#include "models/source4d_model.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/error.h"
+#include "models/model_options.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo {
+namespace {
+
+// "AxBxCxD": four sizes, each in [lo, hi].
+std::vector<int> ParseSizes(const std::string& key, const std::string& value, std::size_t count, int lo, int hi) {
+  std::vector<int> sizes;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t x = value.find('x', begin);
+    sizes.push_back(ParseIntOption(key, value.substr(begin, x == std::string::npos ? std::string::npos : x - begin),
+                                   lo, hi));
+    if (x == std::string::npos) break;
+    begin = x + 1;
+  }
+  if (sizes.size() != count) {
+    throw Error("option " + key + "=" + value + ": expected " + std::to_string(count) + " sizes joined by 'x'");
+  }
+  return sizes;
+}
+
+}  // namespace
+
+Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& options) {
+  Source4dModelSettings s;
+  cpu::Source4dSettings& t = s.tables;
+  for (const auto& [key, value] : options) {
+    if (key == "table") {
+      const std::vector<int> n = ParseSizes(key, value, 4, 2, 512);
+      t.r_size = n[0];
+      t.mu_size = n[1];
+      t.mu_s_size = n[2];
+      t.phi_size = n[3];
+    } else if (key == "gather") {
+      const std::vector<int> n = ParseSizes(key, value, 2, 3, 512);
+      t.gather_zeniths = n[0];
+      t.gather_azimuths = n[1];
+    } else if (key == "gather_samples") {
+      t.gather_samples = ParseIntOption(key, value, 2, 10000);
+    } else if (key == "orders") {
+      t.orders = ParseIntOption(key, value, 2, 32);
+    } else if (key == "tail") {
+      if (value != "on" && value != "off") throw Error("option tail=" + value + ": expected on or off");
+      t.tail = value == "on";
+    } else if (key == "samples") {
+      s.samples = ParseIntOption(key, value, 2, 100000);
+    } else if (key == "transmittance_lut") {
+      t.transmittance_lut = ParseSizeOption(key, value, 2, 4096);
+    } else if (key == "transmittance_samples") {
+      t.transmittance_samples = ParseIntOption(key, value, 1, 100000);
+    } else {
+      throw Error("unknown option '" + key + "' for model source4d (known: table, gather, gather_samples, orders, "
+                  "tail, samples, transmittance_lut, transmittance_samples)");
+    }
+  }
+  const double texels = double(t.r_size) * t.mu_size * t.mu_s_size * t.phi_size;
+  if (texels > 64.0 * 1024 * 1024) {
+    throw Error("option table: " + std::to_string(t.r_size) + "x" + std::to_string(t.mu_size) + "x" +
+                std::to_string(t.mu_s_size) + "x" + std::to_string(t.phi_size) +
+                " has more than 2^26 texels (the limit)");
+  }
+  return s;
+}
+
+Source4dModel::Source4dModel(const AtmosphereParameters& parameters, const Source4dModelSettings& settings)
+    : Model(parameters), settings_(settings) {
+  Validate(parameters);
+  if (parameters.geometry != Geometry::kSpherical) {
+    throw Error("model source4d needs a spherical atmosphere; the half-space of preset '" + parameters.name +
+                "' is the geometry of the simple model");
+  }
+  for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
+    Batch batch;
+    batch.atmosphere = ToSharedParameters(parameters, b);
+    batches_.push_back(std::move(batch));
+  }
+}
+
+void Source4dModel::Precompute() {
+  for (Batch& batch : batches_) {
+    cpu::ComputeSource4dTables(batch.atmosphere, settings_.tables, batch.tables,
+                               [&](std::string_view pass, double ms) { RecordPass(pass, ms); });
+  }
+}
+
+namespace {
+
+class Source4dSkyView final : public SkyView {
+ public:
+  Source4dSkyView(const Source4dModel& model, double altitude_m, const glm::dvec3& sun)
+      : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
+        model_(model),
+        r_(model.parameters().ground_radius_m + altitude_m),
+        mu_s_(shared::ClampCosine(sun.z)) {}
+
+  void Radiance(const glm::dvec3& view, std::span<double> out) const override {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      shared::vec3 ground;
+      return Evaluate(model_.batches()[b], view, ground);
+    });
+  }
+
+  void GroundRadiance(const glm::dvec3& view, std::span<double> out) const override {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      shared::vec3 ground;
+      Evaluate(model_.batches()[b], view, ground);
+      return ground;
+    });
+  }
+
+  void Transmittance(const glm::dvec3& view, std::span<double> out) const override {
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const Source4dModel::Batch& batch = model_.batches()[b];
+      return shared::GetViewTransmittance(batch.atmosphere, batch.tables.transmittance, r_,
+                                          shared::ClampCosine(view.z));
+    });
+  }
+
+  void SunDiscRadiance(const glm::dvec3& view, std::span<double> out) const override {
+    const double nu = glm::dot(view, sun_direction());
+    ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+      const Source4dModel::Batch& batch = model_.batches()[b];
+      return shared::GetSunDiscRadiance(batch.atmosphere, batch.tables.transmittance, r_,
+                                        shared::ClampCosine(view.z), nu);
+    });
+  }
+
+  void ScatteringAlongSegment(const glm::dvec3& view, double distance_m, std::span<double> radiance,
+                              std::span<double> transmittance) const override {
+    const double nu = shared::ClampCosine(glm::dot(view, sun_direction()));
+    const std::size_t n = channel_count();
+    for (std::size_t b = 0; b < model_.batches().size(); ++b) {
+      const Source4dModel::Batch& batch = model_.batches()[b];
+      const cpu::Source4dTables& t = batch.tables;
+      shared::vec3 segment_transmittance;
+      const shared::vec3 l = shared::IntegrateSource4dRadiance(
+          batch.atmosphere, t.transmittance, t.rayleigh, t.mie, t.mu_s_size, r_, shared::ClampCosine(view.z), mu_s_,
+          nu, distance_m, model_.settings().samples, segment_transmittance);
+      for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) {
+        radiance[3 * b + c] = l[c];
+        transmittance[3 * b + c] = segment_transmittance[c];
+      }
+    }
+  }
+
+  // Both terms from one march per batch.
+  void RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                     std::span<float> out) const override {
+    const std::size_t n = channel_count();
+    oneapi::tbb::parallel_for(std::size_t{0}, views.size(), [&](std::size_t i) {
+      const glm::dvec3& view = views[i];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) return;
+      std::vector<double> disc(n, 0.0);
+      if (terms.sun_disc) SunDiscRadiance(view, disc);
+      for (std::size_t b = 0; b < model_.batches().size(); ++b) {
+        shared::vec3 ground;
+        shared::vec3 l = Evaluate(model_.batches()[b], view, ground);
+        if (terms.ground) l += ground;
+        for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) {
+          out[i * n + 3 * b + c] = static_cast<float>(l[c] + disc[3 * b + c]);
+        }
+      }
+    });
+  }
+
+ private:
+  shared::vec3 Evaluate(const Source4dModel::Batch& batch, const glm::dvec3& view, shared::vec3& ground) const {
+    const cpu::Source4dTables& t = batch.tables;
+    const double nu = shared::ClampCosine(glm::dot(view, sun_direction()));
+    return shared::GetSource4dRadiance(batch.atmosphere, t.transmittance, t.rayleigh, t.mie, t.ground_irradiance,
+                                       t.mu_s_size, r_, shared::ClampCosine(view.z), mu_s_, nu,
+                                       model_.settings().samples, ground);
+  }
+
+  const Source4dModel& model_;
+  double r_;
+  double mu_s_;
+};
+
+}  // namespace
+
+std::unique_ptr<SkyView> Source4dModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
+  if (!std::isfinite(altitude_m) || altitude_m < 0.0) {
+    throw Error("altitude_m must be finite and >= 0 for model source4d (got " + std::to_string(altitude_m) + ")");
+  }
+  CheckDirection(sun_direction, "the sun direction");
+  return std::make_unique<Source4dSkyView>(*this, altitude_m, glm::normalize(sun_direction));
+}
+
+}  // namespace atmo

@@ -1,0 +1,51 @@
+// Model `source4d`: exact single scattering along each view ray plus a 4D table of the
+// phase-weighted incident radiance of orders >= 2, built order by order by gathering
+// (shared/source4d.glsl, cpu/source4d_tables.h; docs/models/source4d.md).
+//
+// Options (`--option key=value`):
+//   table=24x32x32x16      r layers x view zeniths x sun zeniths x azimuths of the 4D table
+//   gather=25x13           zenith x azimuth nodes of the incident-direction grid (each >= 3)
+//   gather_samples=24      steps of each gathering ray
+//   orders=5               orders computed explicitly (2..32); a geometric tail adds the rest
+//   tail=on                on | off: the geometric tail after the last order
+//   samples=64             steps of the per-view ray march (split at the shadow's edges)
+//   transmittance_lut=256x64, transmittance_samples=200   the 2D transmittance table
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "atmo/model.h"
+#include "cpu/source4d_tables.h"
+#include "shared/shared.h"
+
+namespace atmo {
+
+struct Source4dModelSettings {
+  cpu::Source4dSettings tables;
+  int samples = 64;
+  // Throws atmo::Error for an unknown key or a value out of range.
+  static Source4dModelSettings FromOptions(const ModelOptions& options);
+};
+
+class Source4dModel final : public Model {
+ public:
+  Source4dModel(const AtmosphereParameters& parameters, const Source4dModelSettings& settings);
+
+  std::string_view name() const override { return "source4d"; }
+  void Precompute() override;
+  std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const override;
+
+  struct Batch {
+    shared::AtmosphereParameters atmosphere;
+    cpu::Source4dTables tables;
+  };
+  const std::vector<Batch>& batches() const { return batches_; }
+  const Source4dModelSettings& settings() const { return settings_; }
+
+ private:
+  Source4dModelSettings settings_;
+  std::vector<Batch> batches_;
+};
+
+}  // namespace atmo
