@@ -35,7 +35,7 @@ struct Grid {
   const Source4dSettings& s;
   int nodes() const { return s.r_size * s.mu_s_size; }
   double r(int i) const { return shared::GetSource4dRFromUnit(atmosphere, double(i) / (s.r_size - 1)); }
-  double mu_s(int j) const { return std::cos(NodeAngle(j, s.mu_s_size, shared::kSource4dMaxSunZenith)); }
+  double mu_s(int j) const { return std::cos(shared::GetSource4dSunZenithFromUnit(double(j) / (s.mu_s_size - 1))); }
 };
 
 // 1D table of a ground irradiance over the table's sun-zenith nodes.
@@ -98,6 +98,97 @@ GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmitta
   return field;
 }
 
+// GatherRadiance for an order n >= 2 (the table's orders alone, no single scattering), with the
+// work that does not depend on the sun done once per ray: a ray of given (r_i, theta'_a) has the
+// same steps, media, throughputs and view-zenith and layer coordinates for every sun zenith and
+// azimuth of the grid; only the sun's coordinates and the lookups differ. The steps are those of
+// shared::IntegrateSource4dRadianceInside with single_weight = 0 (tests/source4d_test.cc checks
+// that the two agree).
+GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& rayleigh, const shared::Texture3D& mie,
+                                   const shared::Texture2D& previous_irradiance) {
+  const Source4dSettings& s = grid.s;
+  const auto& atmosphere = grid.atmosphere;
+  GatherField field;
+  field.in_count = s.gather_zeniths * s.gather_azimuths;
+  field.columns = grid.nodes() * 3;
+  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
+  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  struct Step {
+    double t, r, y, layer;
+    glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
+  };
+  oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
+    const int i = ray / s.gather_zeniths;
+    const int a = ray % s.gather_zeniths;
+    const double r = grid.r(i);
+    const double theta = NodeAngle(a, s.gather_zeniths, shared::kPi);
+    const double mu = std::cos(theta);
+    const double sin_v = std::sin(theta);
+    const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
+    const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
+    std::vector<Step> steps;
+    glm::dvec3 transmittance(1.0);
+    if (t_max > 0.0) {
+      const double t_low = -r * mu;
+      double breaks[2];
+      int break_count = 0;
+      if (t_low > 0.0 && t_low < t_max) breaks[break_count++] = t_low;
+      breaks[break_count++] = t_max;
+      const int per_segment = std::max(2, (s.gather_samples + break_count - 1) / break_count);
+      double t_a = 0.0;
+      for (int k = 0; k < break_count; ++k) {
+        const double t_b = breaks[k];
+        const bool dense_at_a = !(t_b <= t_low);
+        for (int n = 0; n < per_segment; ++n) {
+          const double t_0 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n, per_segment);
+          const double t_1 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n + 1, per_segment);
+          const double dt = t_1 - t_0;
+          const double t = 0.5 * (t_0 + t_1);
+          const double r_t = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+          const double mu_t = shared::ClampCosine((r * mu + t) / r_t);
+          const shared::MediumSample medium = shared::SampleMedium(atmosphere, r_t);
+          const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
+          const glm::dvec3 weight =
+              transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+          steps.push_back({t, r_t, shared::GetSource4dZenithCoord(rayleigh, mu_t),
+                           shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, r_t),
+                           weight * medium.rayleigh_scattering, weight * medium.mie_scattering});
+          transmittance *= step_transmittance;
+        }
+        t_a = std::max(t_a, t_b);
+      }
+    }
+    const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      const double mu_s = grid.mu_s(j);
+      const double sin_s = std::sqrt(std::max(1.0 - mu_s * mu_s, 0.0));
+      const int node = i * s.mu_s_size + j;
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const double nu =
+            shared::ClampCosine(mu * mu_s + sin_v * sin_s * std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi)));
+        glm::dvec3 L(0.0);
+        for (const Step& step : steps) {
+          const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
+          const double mu_t = shared::ClampCosine((r * mu + step.t) / step.r);
+          glm::dvec3 log_rayleigh, log_mie;
+          shared::GetSource4dLogTermsAt(rayleigh, mie, s.mu_s_size, shared::GetSource4dAzimuthCoord(rayleigh, mu_t, mu_s_t, nu),
+                                        step.y, shared::GetSource4dSunRow(s.mu_s_size, mu_s_t), step.layer, log_rayleigh,
+                                        log_mie);
+          L += step.weight_rayleigh * glm::exp(log_rayleigh) + step.weight_mie * glm::exp(log_mie);
+        }
+        if (hits_ground && ground) {
+          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * nu) / atmosphere.bottom_radius);
+          L += transmittance * albedo_over_pi * shared::GetSource4dGroundIrradiance(previous_irradiance, mu_s_ground);
+        }
+        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
+      }
+    }
+  });
+  return field;
+}
+
 // G[cd * columns + column] = sum over ab of W[cd][ab] field[ab][column].
 std::vector<float> Convolve(const std::vector<float>& w, int out_count, const GatherField& field) {
   std::vector<float> g(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
@@ -146,6 +237,15 @@ void WriteLogTable(const Grid& grid, const std::vector<float>& g, shared::Textur
 }
 
 }  // namespace
+
+std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
+                                       const Source4dTables& tables, int order, bool shared_geometry) {
+  const Grid grid{atmosphere, settings};
+  if (order >= 2 && shared_geometry) {
+    return GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
+  }
+  return GatherRadiance(grid, tables.transmittance, tables.rayleigh, tables.mie, tables.ground_irradiance, order).values;
+}
 
 Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
                                              const Source4dSettings& s) {
@@ -258,14 +358,9 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
   std::vector<float> previous_r;
   std::vector<float> g_r;
   std::vector<float> g_m;
-  // E^(0): the direct sun on the ground.
-  std::vector<glm::dvec3> irradiance_sum(s.mu_s_size);
-  for (int j = 0; j < s.mu_s_size; ++j) {
-    const double mu_s = grid.mu_s(j);
-    irradiance_sum[j] = mu_s > 0.0 ? mu_s * shared::GetTransmittanceToSun(atmosphere, tables.transmittance,
-                                                                         atmosphere.bottom_radius, mu_s)
-                                   : glm::dvec3(0.0);
-  }
+  // The sky's irradiance of the ground, orders >= 1 (the direct sun is added exactly where it is
+  // used: its cos(theta_s) T would not interpolate well between sun-zenith rows).
+  std::vector<glm::dvec3> irradiance_sum(s.mu_s_size, glm::dvec3(0.0));
   std::vector<glm::dvec3> previous_e;
   std::vector<glm::dvec3> e;
   shared::Texture3D order_r;
@@ -273,8 +368,11 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
   shared::Texture2D order_irradiance;
 
   start = Clock::now();
-  GatherField field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, 1);
-  note("source4d_gather_1", start);
+  GatherField field;
+  if (s.orders >= 2) {
+    field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, 1);
+    note("source4d_gather_1", start);
+  }
   for (int n = 2; n <= s.orders; ++n) {
     start = Clock::now();
     previous_r = std::move(g_r);
@@ -293,7 +391,7 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
     WriteLogTable(grid, g_r, order_r);
     WriteLogTable(grid, g_m, order_m);
     order_irradiance = IrradianceTable(e);
-    field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, n);
+    field = GatherMultipleRadiance(grid, order_r, order_m, order_irradiance);
     note("source4d_gather_" + std::to_string(n), start);
   }
 
@@ -320,7 +418,7 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
         sum_m[i] += factor[k] * g_m[i];
       }
     }
-    // The ground: E^(N-1) q / (1 - q) with q = E^(N-1) / E^(N-2) (for orders = 3, E^(1) / E^(0)).
+    // The ground: E^(N-1) q / (1 - q) with q = E^(N-1) / E^(N-2).
     for (int j = 0; j < s.mu_s_size; ++j) {
       for (int c = 0; c < 3; ++c) {
         const double before_e = previous_e.empty() ? 0.0 : previous_e[j][c];

@@ -29,16 +29,17 @@ namespace atmo::cpu {
 
 struct Source4dSettings {
   // The table: r layers, view zeniths, sun zeniths, azimuths.
-  int r_size = 24;
-  int mu_size = 32;
+  int r_size = 16;
+  int mu_size = 24;
   int mu_s_size = 32;
-  int phi_size = 16;
+  int phi_size = 8;
   // The gathering grid of incident directions (zenith nodes over [0, pi], azimuth nodes over
   // [0, pi]) and the steps of each gathering ray.
-  int gather_zeniths = 25;
-  int gather_azimuths = 13;
+  int gather_zeniths = 49;
+  int gather_azimuths = 9;
   int gather_samples = 24;
-  // Orders computed explicitly (>= 2; the geometric tail adds the rest).
+  // Orders computed explicitly (>= 2; the geometric tail adds the rest). 1: single scattering
+  // alone (the tables hold 0; for validation).
   int orders = 5;
   bool tail = true;
   glm::ivec2 transmittance_lut{256, 64};
@@ -51,7 +52,7 @@ struct Source4dTables {
   shared::Texture2D transmittance;
   shared::Texture3D rayleigh;           // ln G_R, orders >= 2
   shared::Texture3D mie;                // ln G_M
-  shared::Texture2D ground_irradiance;  // E of all orders (the direct sun included), mu_s_size x 1
+  shared::Texture2D ground_irradiance;  // E of the sky, orders >= 1 (not the direct sun), mu_s_size x 1
   int mu_s_size = 0;
 };
 
@@ -71,6 +72,14 @@ struct Source4dQuadrature {
   std::vector<float> mie;
   std::vector<double> irradiance;  // in_count
 };
+// The radiance of one order on the gathering grid, values[ab * columns + (node * 3 + channel)],
+// with `tables` as the order below (exposed for tests): order 1 from single scattering; order
+// n >= 2 by marching `tables.rayleigh`/`mie` and reflecting `tables.ground_irradiance`, either
+// by the general per-ray march (shared::IntegrateSource4dRadianceInside) or, with
+// `shared_geometry`, by the path that does the sun-independent work once per ray.
+std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
+                                       const Source4dTables& tables, int order, bool shared_geometry);
+
 Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
                                              const Source4dSettings& settings);
 

@@ -49,7 +49,7 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
     } else if (key == "gather_samples") {
       t.gather_samples = ParseIntOption(key, value, 2, 10000);
     } else if (key == "orders") {
-      t.orders = ParseIntOption(key, value, 2, 32);
+      t.orders = ParseIntOption(key, value, 1, 32);
     } else if (key == "tail") {
       if (value != "on" && value != "off") throw Error("option tail=" + value + ": expected on or off");
       t.tail = value == "on";

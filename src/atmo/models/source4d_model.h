@@ -3,10 +3,11 @@
 // (shared/source4d.glsl, cpu/source4d_tables.h; docs/models/source4d.md).
 //
 // Options (`--option key=value`):
-//   table=24x32x32x16      r layers x view zeniths x sun zeniths x azimuths of the 4D table
-//   gather=25x13           zenith x azimuth nodes of the incident-direction grid (each >= 3)
+//   table=16x24x32x8       r layers x view zeniths x sun zeniths x azimuths of the 4D table
+//   gather=49x9            zenith x azimuth nodes of the incident-direction grid (each >= 3)
 //   gather_samples=24      steps of each gathering ray
-//   orders=5               orders computed explicitly (2..32); a geometric tail adds the rest
+//   orders=5               orders computed explicitly (2..32); a geometric tail adds the rest;
+//                          1: single scattering alone (for validation)
 //   tail=on                on | off: the geometric tail after the last order
 //   samples=64             steps of the per-view ray march (split at the shadow's edges)
 //   transmittance_lut=256x64, transmittance_samples=200   the 2D transmittance table

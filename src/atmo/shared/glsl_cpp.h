@@ -136,6 +136,29 @@ inline vec4 texture(const Texture3D& t, const vec3& uvw) {
   return vec4(mix(plane(z0), plane(z1), wz), 1.0);
 }
 
+// Two textures of one size sampled at one coordinate: the taps are found once (GLSL, where the
+// sampler does this in hardware, defines it as two texture() calls).
+inline void TexturePair3D(const Texture3D& a, const Texture3D& b, const vec3& uvw, vec3& out_a, vec3& out_b) {
+  int x0, x1, y0, y1, z0, z1;
+  double wx, wy, wz;
+  detail::LinearTaps(uvw.x, a.width, false, x0, x1, wx);
+  detail::LinearTaps(uvw.y, a.height, false, y0, y1, wy);
+  detail::LinearTaps(uvw.z, a.depth, false, z0, z1, wz);
+  const std::size_t sx = 1, sy = static_cast<std::size_t>(a.width), sz = sy * static_cast<std::size_t>(a.height);
+  const std::size_t i000 = x0 * sx + y0 * sy + z0 * sz;
+  const std::size_t dx = (x1 - x0) * sx, dy = (y1 - y0) * sy, dz = (z1 - z0) * sz;
+  const float fx = static_cast<float>(wx), fy = static_cast<float>(wy), fz = static_cast<float>(wz);
+  auto trilinear = [&](const std::vector<glm::vec3>& t) {
+    const glm::vec3 c00 = glm::mix(t[i000], t[i000 + dx], fx);
+    const glm::vec3 c10 = glm::mix(t[i000 + dy], t[i000 + dy + dx], fx);
+    const glm::vec3 c01 = glm::mix(t[i000 + dz], t[i000 + dz + dx], fx);
+    const glm::vec3 c11 = glm::mix(t[i000 + dz + dy], t[i000 + dz + dy + dx], fx);
+    return vec3(glm::mix(glm::mix(c00, c10, fy), glm::mix(c01, c11, fy), fz));
+  };
+  out_a = trilinear(a.texels);
+  out_b = trilinear(b.texels);
+}
+
 using TransmittanceTexture = Texture2D;
 using MultiScatteringTexture = Texture2D;
 using SkyViewTexture = Texture2D;

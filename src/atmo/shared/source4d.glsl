@@ -21,11 +21,57 @@
 // layers are blended by hand: the z coordinate of one lookup stays inside its layer.
 
 // The sun zeniths the table covers; beyond it the table's last row (sun 120 degrees, where G is
-// about 1e-6 of its daytime value) is used.
-const Number kSource4dMaxSunZenith = 2.0943951023931953;  // 2 pi / 3
+// about 1e-6 of its daytime value) is used. The axis is piecewise linear in the sun zenith, with
+// knots at 80 and 110 degrees: G is smooth and slowly varying with the sun up, and falls by
+// decades between 90 and 110 degrees, where 55 % of the rows lie.
+const Number kSource4dMaxSunZenith = 2.0943951023931953;    // 120 degrees
+const Number kSource4dTwilightStart = 1.3962634015954636;   // 80 degrees
+const Number kSource4dTwilightEnd = 1.9198621771937625;     // 110 degrees
+const Number kSource4dTwilightStartUnit = 0.3;
+const Number kSource4dTwilightEndUnit = 0.85;
+
+Number GetSource4dUnitFromSunZenith(Number theta_s) {
+  if (theta_s < kSource4dTwilightStart) {
+    return kSource4dTwilightStartUnit * theta_s / kSource4dTwilightStart;
+  }
+  if (theta_s < kSource4dTwilightEnd) {
+    return kSource4dTwilightStartUnit + (kSource4dTwilightEndUnit - kSource4dTwilightStartUnit) *
+        (theta_s - kSource4dTwilightStart) / (kSource4dTwilightEnd - kSource4dTwilightStart);
+  }
+  return min(kSource4dTwilightEndUnit + (1.0 - kSource4dTwilightEndUnit) * (theta_s - kSource4dTwilightEnd) /
+      (kSource4dMaxSunZenith - kSource4dTwilightEnd), 1.0);
+}
+
+Number GetSource4dSunZenithFromUnit(Number x) {
+  if (x < kSource4dTwilightStartUnit) {
+    return kSource4dTwilightStart * x / kSource4dTwilightStartUnit;
+  }
+  if (x < kSource4dTwilightEndUnit) {
+    return kSource4dTwilightStart + (kSource4dTwilightEnd - kSource4dTwilightStart) *
+        (x - kSource4dTwilightStartUnit) / (kSource4dTwilightEndUnit - kSource4dTwilightStartUnit);
+  }
+  return kSource4dTwilightEnd + (kSource4dMaxSunZenith - kSource4dTwilightEnd) * (x - kSource4dTwilightEndUnit) /
+      (1.0 - kSource4dTwilightEndUnit);
+}
+
+// acos by Abramowitz and Stegun 4.4.46 (|error| <= 2e-8 rad): the table's three coordinates
+// need one each per lookup, and this is several times cheaper than the library's on the CPU.
+Number Source4dAcos(Number x) {
+  Number a = min(abs(x), 1.0);
+  Number p = -0.0012624911;
+  p = p * a + 0.0066700901;
+  p = p * a - 0.0170881256;
+  p = p * a + 0.0308918810;
+  p = p * a - 0.0501743046;
+  p = p * a + 0.0889789874;
+  p = p * a - 0.2145988016;
+  p = p * a + 1.5707963050;
+  Number angle = sqrt(1.0 - a) * p;
+  return x < 0.0 ? kPi - angle : angle;
+}
 
 Number GetSource4dUnitSunZenith(Number mu_s) {
-  return ClampToRange(acos(ClampCosine(mu_s)) / kSource4dMaxSunZenith, 0.0, 1.0);
+  return GetSource4dUnitFromSunZenith(Source4dAcos(ClampCosine(mu_s)));
 }
 
 Number GetSource4dUnitR(IN(AtmosphereParameters) atmosphere, Number r) {
@@ -46,26 +92,58 @@ Number GetSource4dRFromUnit(IN(AtmosphereParameters) atmosphere, Number x_r) {
 // cosine mu and the sun mu_s, nu = cos(view, sun); 0 where it is undefined (either at a pole).
 Number GetSource4dAzimuth(Number mu, Number mu_s, Number nu) {
   Number s = SafeSqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
-  return s > 1e-9 ? acos(ClampCosine((nu - mu * mu_s) / s)) : 0.0;
+  return s > 1e-9 ? Source4dAcos(ClampCosine((nu - mu * mu_s) / s)) : 0.0;
 }
 
-// ln G of both media, per channel, at (r, mu, mu_s, nu); `size` is the textures' size and
-// `mu_s_size` the number of sun-zenith rows per r layer.
+// The texture coordinates of a lookup: x (azimuth) and y (view zenith) of the textures, s the
+// sun-zenith row within an r layer (in texels, 0.5 .. mu_s_size - 0.5), and the r layer's
+// position (0 .. r_size - 1).
+Number GetSource4dAzimuthCoord(IN(Source4dTexture) rayleigh_texture, Number mu, Number mu_s, Number nu) {
+  return GetTextureCoordFromUnitRange(GetSource4dAzimuth(mu, mu_s, nu) / kPi, textureSize(rayleigh_texture, 0).x);
+}
+
+Number GetSource4dZenithCoord(IN(Source4dTexture) rayleigh_texture, Number mu) {
+  return GetTextureCoordFromUnitRange(Source4dAcos(ClampCosine(mu)) / kPi, textureSize(rayleigh_texture, 0).y);
+}
+
+Number GetSource4dSunRow(int mu_s_size, Number mu_s) {
+  return 0.5 + GetSource4dUnitSunZenith(mu_s) * Number(mu_s_size - 1);
+}
+
+Number GetSource4dLayer(IN(AtmosphereParameters) atmosphere, IN(Source4dTexture) rayleigh_texture, int mu_s_size,
+    Number r) {
+  int r_size = textureSize(rayleigh_texture, 0).z / mu_s_size;
+  return GetSource4dUnitR(atmosphere, r) * Number(r_size - 1);
+}
+
+// ln G of both media, per channel, at the coordinates above.
+void GetSource4dLogTermsAt(IN(Source4dTexture) rayleigh_texture, IN(Source4dTexture) mie_texture, int mu_s_size,
+    Number x, Number y, Number s, Number layer, OUT(vec3) log_rayleigh, OUT(vec3) log_mie) {
+  int depth = textureSize(rayleigh_texture, 0).z;
+  int r_size = depth / mu_s_size;
+  int layer_0 = int(min(floor(layer), Number(r_size - 2)));
+  Number w = layer - Number(layer_0);
+  vec3 uvw_0 = vec3(x, y, (Number(layer_0 * mu_s_size) + s) / Number(depth));
+  vec3 uvw_1 = vec3(x, y, (Number((layer_0 + 1) * mu_s_size) + s) / Number(depth));
+  vec3 rayleigh_0;
+  vec3 mie_0;
+  vec3 rayleigh_1;
+  vec3 mie_1;
+  TexturePair3D(rayleigh_texture, mie_texture, uvw_0, rayleigh_0, mie_0);
+  TexturePair3D(rayleigh_texture, mie_texture, uvw_1, rayleigh_1, mie_1);
+  log_rayleigh = mix(rayleigh_0, rayleigh_1, w);
+  log_mie = mix(mie_0, mie_1, w);
+}
+
+// ln G of both media, per channel, at (r, mu, mu_s, nu); `mu_s_size` is the number of
+// sun-zenith rows per r layer.
 void GetSource4dLogTerms(IN(AtmosphereParameters) atmosphere, IN(Source4dTexture) rayleigh_texture,
     IN(Source4dTexture) mie_texture, int mu_s_size, Number r, Number mu, Number mu_s, Number nu,
     OUT(vec3) log_rayleigh, OUT(vec3) log_mie) {
-  ivec3 size = textureSize(rayleigh_texture, 0);
-  int r_size = size.z / mu_s_size;
-  Number x = GetTextureCoordFromUnitRange(GetSource4dAzimuth(mu, mu_s, nu) / kPi, size.x);
-  Number y = GetTextureCoordFromUnitRange(acos(ClampCosine(mu)) / kPi, size.y);
-  Number s = 0.5 + GetSource4dUnitSunZenith(mu_s) * Number(mu_s_size - 1);
-  Number layer = GetSource4dUnitR(atmosphere, r) * Number(r_size - 1);
-  int layer_0 = int(min(floor(layer), Number(r_size - 2)));
-  Number w = layer - Number(layer_0);
-  vec3 uvw_0 = vec3(x, y, (Number(layer_0 * mu_s_size) + s) / Number(size.z));
-  vec3 uvw_1 = vec3(x, y, (Number((layer_0 + 1) * mu_s_size) + s) / Number(size.z));
-  log_rayleigh = mix(vec3(texture(rayleigh_texture, uvw_0)), vec3(texture(rayleigh_texture, uvw_1)), w);
-  log_mie = mix(vec3(texture(mie_texture, uvw_0)), vec3(texture(mie_texture, uvw_1)), w);
+  GetSource4dLogTermsAt(rayleigh_texture, mie_texture, mu_s_size,
+      GetSource4dAzimuthCoord(rayleigh_texture, mu, mu_s, nu), GetSource4dZenithCoord(rayleigh_texture, mu),
+      GetSource4dSunRow(mu_s_size, mu_s), GetSource4dLayer(atmosphere, rayleigh_texture, mu_s_size, r),
+      log_rayleigh, log_mie);
 }
 
 // The source function of orders >= 2 (per length, per unit solar irradiance, per sr) at a point
@@ -79,8 +157,8 @@ vec3 GetSource4dMultipleScattering(IN(AtmosphereParameters) atmosphere, IN(Sourc
   return medium.rayleigh_scattering * exp(log_rayleigh) + medium.mie_scattering * exp(log_mie);
 }
 
-// Irradiance of the ground (per unit solar irradiance) from a table over the sun zenith (the
-// table's sun-zenith rows, one texel each, height 1).
+// The sky's irradiance of the ground (per unit solar irradiance, orders >= 1) from a table over
+// the sun zenith (the table's sun-zenith rows, one texel each, height 1).
 vec3 GetSource4dGroundIrradiance(IN(TransmittanceTexture) irradiance_texture, Number mu_s) {
   int width = textureSize(irradiance_texture, 0).x;
   return vec3(texture(irradiance_texture,
@@ -231,7 +309,7 @@ vec3 IntegrateSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(Transmitt
 
 // Radiance scattered towards an observer anywhere along (mu, nu) with all orders, and in
 // `ground_radiance` the light that the Lambertian ground reflects towards it where the ray
-// meets the ground (all orders of the ground's irradiance, the direct sun included), attenuated.
+// meets the ground (the direct sun, exactly, and the sky's irradiance from the table), attenuated.
 vec3 GetSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(Source4dTexture) rayleigh_texture, IN(Source4dTexture) mie_texture,
     IN(TransmittanceTexture) irradiance_texture, int mu_s_size, Number r, Number mu, Number mu_s, Number nu,
@@ -248,8 +326,11 @@ vec3 GetSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTe
   if (hits_ground) {
     Number t = DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
     Number mu_s_ground = ClampCosine((r * mu_s + t * nu) / atmosphere.bottom_radius);
+    vec3 direct = mu_s_ground > 0.0 ?
+        mu_s_ground * GetTransmittanceToSun(atmosphere, transmittance_texture, atmosphere.bottom_radius, mu_s_ground) :
+        vec3(0.0);
     ground_radiance = transmittance * atmosphere.ground_albedo / kPi *
-        GetSource4dGroundIrradiance(irradiance_texture, mu_s_ground);
+        (direct + GetSource4dGroundIrradiance(irradiance_texture, mu_s_ground));
   }
   return radiance;
 }
