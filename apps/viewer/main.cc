@@ -1,4 +1,5 @@
-// atmo-viewer: the sky of model hillaire live in a window, on the GL backend (docs/viewer.md).
+// atmo-viewer: the sky of models hillaire, elek, simple and reference live in a window, on the GL
+// backend (docs/viewer.md).
 //
 //   atmo-viewer [--preset P | --config F.json] [--option K=V] [render flags of `atmo render`:
 //               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
@@ -21,7 +22,8 @@
 
 int main(int argc, char** argv) {
   atmo::InstallInterruptHandlers("atmo-viewer");
-  CLI::App app{"atmo-viewer: the sky of model hillaire live in a window (docs/viewer.md)", "atmo-viewer"};
+  CLI::App app{"atmo-viewer: the sky of hillaire, elek, simple or reference live in a window (docs/viewer.md)",
+               "atmo-viewer"};
   app.set_version_flag("--version", std::string("atmo-viewer ") + ATMO_VERSION);
   atmo::viewer::ViewerOptions options;
   // The screenshot of the last --frames frame goes where `atmo render` writes (--exr, --png, -o);
@@ -49,6 +51,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-panels", options.no_panels, "the sky alone, without the panels");
   app.add_option("--window-screenshot", options.window_screenshot,
                  "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
+  app.add_option("--frame-log", options.frame_log,
+                 "write one line per frame: number, ms, model shown, model being built, its progress");
+  app.add_option("--reference-divisor", options.reference_divisor,
+                 "model reference renders at the window's size divided by this (default 4)")
+      ->check(CLI::Range(1, 64));
   app.add_flag("--hidden", options.hidden, "an invisible window (scripted runs; a display is still needed)");
   try {
     app.parse(argc, argv);

@@ -28,6 +28,8 @@
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "models/reference_model.h"
+#include "skies.h"
 #include "physics/shared_parameters.h"
 #include "script.h"
 
@@ -74,7 +76,8 @@ layout(binding = 7) uniform sampler2D frame7;
 layout(binding = 8) uniform sampler1D encode_table;
 uniform mat3 weights[8];
 uniform float exposure;
-uniform int frame_height;
+uniform ivec2 frame_size;   // the frame textures' size (reference's is smaller than the window)
+uniform ivec2 window_size;
 out vec4 colour;
 
 float Curve(float v) {
@@ -89,7 +92,9 @@ float Curve(float v) {
 }
 float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
 void main() {
-  ivec2 texel = ivec2(int(gl_FragCoord.x), frame_height - 1 - int(gl_FragCoord.y));
+  // The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
+  ivec2 texel = ivec2(gl_FragCoord.xy * vec2(frame_size) / vec2(window_size));
+  texel = ivec2(min(texel.x, frame_size.x - 1), frame_size.y - 1 - min(texel.y, frame_size.y - 1));
   vec3 rgb = weights[0] * texelFetch(frame0, texel, 0).rgb;
 #if BATCH_COUNT > 1
   rgb += weights[1] * texelFetch(frame1, texel, 0).rgb;
@@ -158,7 +163,7 @@ class DisplayPass {
   DisplayPass(const DisplayPass&) = delete;
   DisplayPass& operator=(const DisplayPass&) = delete;
 
-  void Draw(const gl::HillaireGl& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
+  void Draw(const Sky& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
             int height) const {
     glViewport(0, 0, width, height);
     const int batches = static_cast<int>(sky.batch_count());
@@ -169,7 +174,9 @@ class DisplayPass {
     glUniform1f(glGetUniformLocation(program, "exposure"), static_cast<float>(mapping.exposure));
     if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
     glBindTextureUnit(8, encode_table_);
-    glUniform1i(glGetUniformLocation(program, "frame_height"), height);
+    const shared::ivec2 frame_size = sky.frame_texture(0).size2();
+    glUniform2i(glGetUniformLocation(program, "frame_size"), frame_size.x, frame_size.y);
+    glUniform2i(glGetUniformLocation(program, "window_size"), width, height);
     glBindVertexArray(vao_);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
@@ -295,6 +302,25 @@ void WriteConfig(const std::string& path, const AtmosphereParameters& parameters
   });
 }
 
+// Whether two states have the same atmosphere knobs.
+bool SameKnobs(const ViewState& a, const ViewState& b) {
+  return a.rayleigh_density == b.rayleigh_density && a.mie_density == b.mie_density &&
+         a.ozone_density == b.ozone_density && a.mie_g == b.mie_g && a.ground_albedo == b.ground_albedo &&
+         a.ground_radius_m == b.ground_radius_m;
+}
+
+void CopyKnobs(const ViewState& from, ViewState& to) {
+  to.rayleigh_density = from.rayleigh_density;
+  to.mie_density = from.mie_density;
+  to.ozone_density = from.ozone_density;
+  to.mie_g = from.mie_g;
+  to.ground_albedo = from.ground_albedo;
+  to.ground_radius_m = from.ground_radius_m;
+}
+
+// Elek's table steps per frame run until this much time went on them (then the frame is drawn).
+constexpr double kBuildBudgetMs = 25.0;
+
 class Viewer {
  public:
   explicit Viewer(const ViewerOptions& options);
@@ -302,8 +328,14 @@ class Viewer {
   int Run();
 
  private:
-  // A new HillaireGl for `parameters` and settings_ (tables not computed yet); throws atmo::Error.
-  std::unique_ptr<gl::HillaireGl> MakeSky(const AtmosphereParameters& parameters) const;
+  // A new sky of `model` for `parameters` and the settings (tables not computed yet); throws
+  // atmo::Error.
+  std::unique_ptr<Sky> MakeSky(const std::string& model, const AtmosphereParameters& parameters) const;
+  // Builds the sky the state asks for (a model, an atmosphere, settings) as a pending one and
+  // shows it once complete; on an error goes back to what is shown.
+  void UpdateSky();
+  // Whether what is shown is final: no sky pending, and the shown one converged (reference).
+  bool Settled() const { return pending_ == nullptr && sky_ != nullptr && sky_->Converged(); }
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
   void DrawPanels();
@@ -322,11 +354,20 @@ class Viewer {
   HillaireSettings shown_settings_;
   bool settings_changed_ = false;  // the panel's hillaire options moved
   HillaireSettings settings_;
+  ElekSettings elek_settings_;     // --option of --model elek, else elek's defaults
+  ModelOptions reference_options_;  // --option and --seed of --model reference
+  std::string shown_model_;        // the model of sky_
   ViewState state_;
   ViewState loaded_;  // the knobs of base_
-  ViewState built_;   // what the GPU tables and sky view were last made for
+  ViewState built_;   // what the sky view was last made for
+  ViewState shown_knobs_;  // the atmosphere knobs of what is shown
   std::unique_ptr<gl::Context> context_;
-  std::unique_ptr<gl::HillaireGl> sky_;
+  std::unique_ptr<Sky> sky_;      // shown
+  std::unique_ptr<Sky> pending_;  // being built (elek), shown once complete
+  std::string pending_model_;
+  AtmosphereParameters pending_parameters_;
+  HillaireSettings pending_settings_;
+  std::FILE* frame_log_ = nullptr;
   std::unique_ptr<DisplayPass> display_;
   std::vector<glm::mat3> weights_;
   ViewerScript script_;
@@ -342,6 +383,10 @@ class Viewer {
   PassTimings run_timings_;  // every frame's but the first, for the summary of a --frames run
   double frame_ms_ = 0.0;
   double metered_ev100_ = 0.0;
+  bool metered_ = false;  // metered_ev100_ is of the shown sky
+  int settings_generation_ = 0;          // counts the panel's hillaire option changes
+  int pending_settings_generation_ = 0;  // of pending_
+  std::string requested_model_;          // state_.model when UpdateSky last ran
   int frame_ = 0;
   // --date: the sun follows the date plus state_.date_hours, played at play_speed_ hours per
   // second, until the sun is moved by hand (date_follows_ false).
@@ -356,22 +401,38 @@ class Viewer {
 };
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
-  if (options_.common.model != "hillaire") {
-    throw Error("atmo-viewer shows model hillaire in this version (got --model " + options_.common.model + ")");
+  const std::vector<std::string>& models = ViewerModelNames();
+  if (std::find(models.begin(), models.end(), options_.common.model) == models.end()) {
+    throw Error("atmo-viewer shows models hillaire, elek, simple and reference (got --model " + options_.common.model +
+                ")");
   }
   if (options_.common.backend != "cpu" && options_.common.backend != "gl") {
     throw Error("unknown backend '" + options_.common.backend + "'");
   }
   options_.common.backend = "gl";  // the viewer runs on the GL backend; the metadata says so
   if (options_.render.camera == "cubemap") throw Error("atmo-viewer has no cubemap camera (use atmo render)");
-  if (options_.render.spp) throw Error("--spp is for model reference, which atmo-viewer does not show yet");
+  if (options_.render.spp && options_.common.model != "reference") {
+    throw Error("--spp is the path count of model reference; model '" + options_.common.model +
+                "' is deterministic and takes no --spp");
+  }
   plan_ = cli::PlanRender(options_.common, options_.render);
   base_ = plan_.parameters;
   if (static_cast<int>(ChannelBatchCount(base_.channel_count())) > kMaxDisplayBatches) {
     throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
                 std::to_string(base_.channel_count()) + "); use fewer --spectral wavelengths");
   }
-  settings_ = cli::GlHillaireSettings(options_.common);
+  // --option configures the model of --model; the others shown from the panel use their defaults.
+  const std::string& model = options_.common.model;
+  cli::CommonOptions defaults = options_.common;
+  defaults.options.clear();
+  settings_ = cli::GlHillaireSettings(model == "hillaire" ? options_.common : defaults);
+  elek_settings_ = cli::GlElekSettings(model == "elek" ? options_.common : defaults);
+  if (model == "reference") {
+    reference_options_ = cli::ParseModelOptions(options_.common.options);
+    ReferenceSettings::FromOptions(reference_options_);  // a bad option is refused now
+  }
+  if (options_.common.seed_given) reference_options_["seed"] = std::to_string(options_.common.seed);
+  state_.model = model;
   mapping_ = plan_.mapping;
   const RenderSettings& s = plan_.settings;
   state_.camera = s.camera.kind;
@@ -401,7 +462,14 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   dated_sun_ = plan_.dated_sun;
   ResetAtmosphereKnobs(base_, state_);
   loaded_ = state_;
+  shown_knobs_ = state_;
   current_ = base_;
+  if (!options_.frame_log.empty()) {
+    cli::CheckOutputWritable(options_.frame_log);
+    frame_log_ = std::fopen(options_.frame_log.c_str(), "w");
+    if (frame_log_ == nullptr) throw Error("cannot write " + options_.frame_log);
+    std::fprintf(frame_log_, "frame ms shown_model pending_model progress\n");
+  }
   if (!options_.script_path.empty()) {
     script_ = ParseViewerScript(ReadFileBounded(options_.script_path, "script "), options_.script_path);
   }
@@ -429,6 +497,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
 }
 
 Viewer::~Viewer() {
+  if (frame_log_ != nullptr) std::fclose(frame_log_);
+  pending_.reset();
   sky_.reset();
   display_.reset();
   ImGui_ImplOpenGL3_Shutdown();
@@ -450,14 +520,23 @@ void Viewer::UpdateDisplayWeights() {
   for (std::size_t c = 0; c < nc; ++c) weights_[c / 3][c % 3] = per_channel[c];
 }
 
-std::unique_ptr<gl::HillaireGl> Viewer::MakeSky(const AtmosphereParameters& parameters) const {
+std::unique_ptr<Sky> Viewer::MakeSky(const std::string& model, const AtmosphereParameters& parameters) const {
   if (static_cast<int>(ChannelBatchCount(parameters.channel_count())) > kMaxDisplayBatches) {
     throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
                 std::to_string(parameters.channel_count()) + ")");
   }
-  AtmosphereParameters model_parameters = parameters;
-  if (plan_.unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
-  return std::make_unique<gl::HillaireGl>(*context_, model_parameters, settings_);
+  SkyRequest request;
+  request.model = model;
+  request.parameters = parameters;
+  if (plan_.unit != RadianceUnit::kRelative) {
+    request.parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
+  }
+  request.hillaire = settings_;
+  request.elek = elek_settings_;
+  request.reference_options = reference_options_;
+  request.reference_spp = options_.render.spp.value_or(0);
+  request.reference_divisor = options_.reference_divisor;
+  return viewer::MakeSky(*context_, request);
 }
 
 cli::RenderPlan Viewer::CurrentPlan() const {
@@ -477,20 +556,19 @@ cli::RenderPlan Viewer::CurrentPlan() const {
   return plan;
 }
 
-// As `atmo render --backend gl` renders a frame (gl::RenderHillaireGl): the frame pass without the
-// disc, read back, the disc integrated over the pixels on the host, then the same writer.
+// As `atmo render --backend gl` renders a frame (Sky::Screenshot: for hillaire and elek the frame
+// pass without the disc, read back, the disc integrated over the pixels on the host; reference's
+// estimate so far with its standard error), then the same writer.
 void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path) {
+  if (sky_ == nullptr) throw Error("no sky shown yet: nothing to write");
   const auto start = std::chrono::steady_clock::now();
-  const cli::RenderPlan plan = CurrentPlan();
-  RadianceTerms terms = plan.settings.terms;
-  terms.sun_disc = false;
-  sky_->RenderFrame(ToSharedCamera(plan.settings.camera), terms);
-  Image image = sky_->ReadFrame();
-  if (plan.settings.terms.sun_disc) {
-    std::vector<shared::Texture2D> transmittance;
-    for (std::size_t b = 0; b < sky_->batch_count(); ++b) transmittance.push_back(sky_->ReadTransmittance(b));
-    gl::AddSunDiscOnHost(plan.model_parameters, transmittance, plan.settings, image);
-  }
+  cli::RenderPlan plan = CurrentPlan();
+  Image standard_error;
+  std::uint64_t samples_per_pixel = 0;
+  Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
+  // Reference's estimate has its own (smaller) size.
+  plan.settings.camera.width = image.width;
+  plan.settings.camera.height = image.height;
   const double render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   cli::RenderCommand command = options_.render;
   // The PNG's exposure is the one on screen.
@@ -498,34 +576,115 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   command.ev100.reset();
   command.auto_exposure = state_.auto_exposure;
   if (!state_.auto_exposure) command.ev100 = state_.ev100;
-  // The --option flags, with the panel's hillaire options where they differ from them: what
-  // `atmo render --option ...` needs to render this frame.
+  // The --option flags of the shown model (none for a model other than --model's), with the
+  // panel's hillaire options where they differ from them: what `atmo render --option ...` needs
+  // to render this frame.
   cli::CommonOptions common = options_.common;
-  const HillaireSettings flags = cli::GlHillaireSettings(options_.common);
-  const auto set_option = [&](const std::string& key, const std::string& value) {
-    std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
-    common.options.push_back(key + "=" + value);
-  };
-  if (settings_.sky_view_samples != flags.sky_view_samples) {
-    set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+  common.model = shown_model_;
+  if (shown_model_ != options_.common.model) common.options.clear();
+  if (shown_model_ == "reference") common.backend = "cpu";  // the CPU's path tracer
+  if (shown_model_ == "hillaire") {
+    const HillaireSettings flags = cli::GlHillaireSettings(common);
+    const auto set_option = [&](const std::string& key, const std::string& value) {
+      std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+      common.options.push_back(key + "=" + value);
+    };
+    if (settings_.sky_view_samples != flags.sky_view_samples) {
+      set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+    }
+    if (settings_.ray_march_samples != flags.ray_march_samples) {
+      set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
+    }
+    if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
+      set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
+    }
+    if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
+      set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
   }
-  if (settings_.ray_march_samples != flags.ray_march_samples) {
-    set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
-  }
-  if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
-    set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
-  }
-  if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
-    set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
-  cli::RenderOutputs outputs(common, command, plan, "hillaire");
+  command.width = image.width;
+  command.height = image.height;
+  cli::RenderOutputs outputs(common, command, plan, shown_model_);
   outputs.SetMetadata("atmo:writer", "atmo-viewer");
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
-  const std::vector<std::string> written = outputs.Write(exr_path, png_path, image, nullptr, render_ms);
+  const bool monte_carlo = standard_error.width > 0;
+  if (monte_carlo) {
+    outputs.SetMetadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+    outputs.SetMetadata("atmo:samplesPerPixel", std::to_string(samples_per_pixel));
+  }
+  const std::vector<std::string> written =
+      outputs.Write(exr_path, png_path, image, monte_carlo ? &standard_error : nullptr, render_ms);
   std::string files;
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
   status_ = "wrote " + files;
   std::printf("atmo-viewer: frame %d: wrote %s (%dx%d %s)\n", frame_, files.c_str(), image.width, image.height,
               std::string(ToString(plan.settings.camera.kind)).c_str());
+}
+
+void Viewer::UpdateSky() {
+  // A model chosen for a geometry it cannot show: simple needs the half-space of preset simple,
+  // the others a planet (earth).
+  if (state_.model != requested_model_ && !requested_model_.empty()) {
+    const bool half_space = base_.geometry != Geometry::kSpherical;
+    const char* preset = state_.model == "simple" && !half_space  ? "simple"
+                         : state_.model != "simple" && half_space ? "earth"
+                                                                  : nullptr;
+    if (preset != nullptr) {
+      base_ = Preset(preset);
+      ResetAtmosphereKnobs(base_, state_);
+      loaded_ = state_;
+      const std::vector<std::string> presets = PresetNames();
+      preset_index_ = static_cast<int>(std::find(presets.begin(), presets.end(), preset) - presets.begin());
+    }
+  }
+  requested_model_ = state_.model;
+  const bool wanted = sky_ == nullptr || !SameKnobs(state_, shown_knobs_) || !(base_ == current_base_) ||
+                      settings_changed_ || state_.model != shown_model_;
+  if (!wanted) {
+    pending_.reset();  // a change undone before its sky was complete
+    if (options_.recompute_every_frame) {
+      sky_->Recompute(&timings_);
+      view_dirty_ = true;
+    }
+    return;
+  }
+  try {
+    // All or nothing: the new sky replaces the shown one only once all of its tables are built.
+    AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
+    if (pending_ == nullptr || state_.model != pending_model_ || !(next == pending_parameters_) ||
+        settings_generation_ != pending_settings_generation_) {
+      pending_.reset();
+      pending_ = MakeSky(state_.model, next);
+      pending_model_ = state_.model;
+      pending_parameters_ = next;
+      pending_settings_generation_ = settings_generation_;
+    }
+    if (!pending_->Build(kBuildBudgetMs, &timings_)) return;  // shown in a later frame
+    sky_ = std::move(pending_);
+    shown_model_ = pending_model_;
+    current_ = std::move(next);
+    current_base_ = base_;
+    current_loaded_ = loaded_;
+    current_preset_index_ = preset_index_;
+    shown_settings_ = settings_;
+    settings_changed_ = false;
+    shown_knobs_ = state_;
+    UpdateDisplayWeights();
+    view_dirty_ = true;
+    metered_ = false;
+  } catch (const Error& error) {
+    pending_.reset();
+    if (sky_ == nullptr) throw;  // the first sky: nothing to go back to
+    // A knob out of bounds, a preset or config the model refuses: back to what is shown.
+    status_ = error.what();
+    base_ = current_base_;
+    loaded_ = current_loaded_;
+    preset_index_ = current_preset_index_;
+    settings_ = shown_settings_;
+    settings_changed_ = false;
+    state_.model = shown_model_;
+    requested_model_ = shown_model_;
+    CopyKnobs(shown_knobs_, state_);
+  }
 }
 
 void Viewer::FollowDate() {
@@ -597,6 +756,17 @@ void Viewer::DrawPanels() {
   ImGui::Begin("atmo-viewer");
   ImGui::Text("%.2f ms/frame (%.1f fps), %s", frame_ms_, frame_ms_ > 0.0 ? 1000.0 / frame_ms_ : 0.0,
               context_->renderer().c_str());
+  {
+    // The model: a new one is built while the last one stays on screen (elek: a progress bar).
+    const std::vector<std::string>& models = ViewerModelNames();
+    int index = static_cast<int>(std::find(models.begin(), models.end(), state_.model) - models.begin());
+    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0")) state_.model = models[index];
+    if (pending_ != nullptr) {
+      const std::string label = "building " + pending_model_;
+      ImGui::ProgressBar(static_cast<float>(pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
+    }
+    if (sky_ != nullptr && !sky_->Status().empty()) ImGui::TextWrapped("%s", sky_->Status().c_str());
+  }
   if (ImGui::CollapsingHeader("GPU passes (ms)", ImGuiTreeNodeFlags_DefaultOpen)) {
     for (const PassTiming& pass : timings_.entries()) ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
   }
@@ -678,7 +848,7 @@ void Viewer::DrawPanels() {
       ResetAtmosphereKnobs(base_, state_);
     }
   }
-  if (ImGui::CollapsingHeader("hillaire options")) {
+  if (state_.model == "hillaire" && ImGui::CollapsingHeader("hillaire options")) {
     HillaireSettings s = settings_;
     ImGui::SliderInt("sky_view_samples", &s.sky_view_samples, 1, 128);
     ImGui::SliderInt("ray_march_samples", &s.ray_march_samples, 1, 256);
@@ -689,6 +859,7 @@ void Viewer::DrawPanels() {
         s.use_sky_view_lut != settings_.use_sky_view_lut) {
       settings_ = s;
       settings_changed_ = true;  // every table again, with the new settings
+      ++settings_generation_;
     }
   }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -746,7 +917,9 @@ int Viewer::Run() {
   const int frames = options_.frames;
   const std::string final_exr = options_.render.exr_path;
   const std::string final_png = options_.render.png_path;
-  for (frame_ = 0; frames == 0 || frame_ < frames; ++frame_) {
+  // With --frames N the run ends at frame N - 1, or later when the shown sky is not final yet
+  // (elek's tables still building, reference short of --spp).
+  for (frame_ = 0;; ++frame_) {
     if (glfwWindowShouldClose(window)) break;
     glfwPollEvents();
     const auto now = std::chrono::steady_clock::now();
@@ -763,55 +936,23 @@ int Viewer::Run() {
     if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
     FollowDate();
 
-    // The atmosphere: a knob that moved rebuilds every table (a new HillaireGl: its channels may
-    // have changed); --recompute-every-frame recomputes them anyway.
-    const bool atmosphere_changed = state_.rayleigh_density != built_.rayleigh_density ||
-                                    state_.mie_density != built_.mie_density ||
-                                    state_.ozone_density != built_.ozone_density || state_.mie_g != built_.mie_g ||
-                                    state_.ground_albedo != built_.ground_albedo ||
-                                    state_.ground_radius_m != built_.ground_radius_m || !(base_ == current_base_);
     timings_.Clear();
-    try {
-      if (sky_ == nullptr || atmosphere_changed || settings_changed_) {
-        // All or nothing: the new atmosphere and its tables replace the shown ones only once built.
-        AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
-        std::unique_ptr<gl::HillaireGl> sky = MakeSky(next);
-        sky->Precompute(&timings_);
-        sky_ = std::move(sky);
-        current_ = std::move(next);
-        current_base_ = base_;
-        current_loaded_ = loaded_;
-        current_preset_index_ = preset_index_;
-        shown_settings_ = settings_;
-        settings_changed_ = false;
-        UpdateDisplayWeights();
-        view_dirty_ = true;
-      } else if (options_.recompute_every_frame) {
-        sky_->Precompute(&timings_);
-        view_dirty_ = true;
+    UpdateSky();
+    if (sky_ != nullptr &&
+        (view_dirty_ || state_.altitude_m != built_.altitude_m ||
+         state_.sun_elevation_deg != built_.sun_elevation_deg || state_.sun_azimuth_deg != built_.sun_azimuth_deg ||
+         state_.ground != built_.ground)) {
+      try {
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
+      } catch (const Error& error) {
+        // An altitude the model refuses (below elek's ground): back to the last one.
+        status_ = error.what();
+        state_.altitude_m = built_.altitude_m;
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
       }
-    } catch (const Error& error) {
-      if (sky_ == nullptr) throw;  // the first atmosphere: nothing to go back to
-      // A knob out of bounds, or a preset or config hillaire refuses: back to what is shown.
-      status_ = error.what();
-      base_ = current_base_;
-      loaded_ = current_loaded_;
-      preset_index_ = current_preset_index_;
-      settings_ = shown_settings_;
-      settings_changed_ = false;
-      state_.rayleigh_density = built_.rayleigh_density;
-      state_.mie_density = built_.mie_density;
-      state_.ozone_density = built_.ozone_density;
-      state_.mie_g = built_.mie_g;
-      state_.ground_albedo = built_.ground_albedo;
-      state_.ground_radius_m = built_.ground_radius_m;
-    }
-    if (view_dirty_ || state_.altitude_m != built_.altitude_m || state_.sun_elevation_deg != built_.sun_elevation_deg ||
-        state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground) {
-      sky_->SetView(state_.altitude_m, SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg), state_.ground,
-                    &timings_);
       view_dirty_ = false;
     }
+    const bool last_frame = frames > 0 && frame_ >= frames - 1 && Settled();
     built_ = state_;
     int width = 0;
     int height = 0;
@@ -825,18 +966,25 @@ int Viewer::Run() {
       else
         throw Error("script screenshot '" + path + "' must end in .exr or .png");
     }
-    if (frames > 0 && frame_ == frames - 1 && (!final_exr.empty() || !final_png.empty())) {
+    if (last_frame && (!final_exr.empty() || !final_png.empty())) {
       Screenshot(final_exr, final_png);
     }
-    if (width > 0 && height > 0) {
+    if (sky_ == nullptr) {
+      // Nothing built yet (elek's first tables): a black window under the panels.
+      glViewport(0, 0, width, height);
+      glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+      glClear(GL_COLOR_BUFFER_BIT);
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    } else if (width > 0 && height > 0) {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      sky_->RenderFrame(ToSharedCamera(ViewCamera(state_, width, height)), terms, &timings_);
+      sky_->RenderFrame(ViewCamera(state_, width, height), terms, &timings_);
       // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
       // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
-      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2)) {
+      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
         const Image frame = sky_->ReadFrame();
+        metered_ = true;
         const Image srgb =
             plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
                 ? frame
@@ -853,7 +1001,7 @@ int Viewer::Run() {
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       glFinish();
     }
-    if (frames > 0 && frame_ == frames - 1 && !options_.window_screenshot.empty()) {
+    if (last_frame && !options_.window_screenshot.empty()) {
       WriteWindow(options_.window_screenshot, width, height);
     }
     {
@@ -869,6 +1017,14 @@ int Viewer::Run() {
       ++timed_frames;
     }
     frame_ms_ = 1e3 * dt_s;
+    if (frame_log_ != nullptr) {
+      std::fprintf(frame_log_, "%d %.3f %s %s %.6f\n", frame_, frame_ms_, sky_ ? shown_model_.c_str() : "-",
+                   pending_ ? pending_model_.c_str() : "-", pending_ ? pending_->progress() : 1.0);
+    }
+    if (last_frame) {
+      ++frame_;
+      break;
+    }
   }
   if (!options_.save_config.empty()) {
     WriteConfig(options_.save_config, current_);
@@ -876,8 +1032,10 @@ int Viewer::Run() {
   }
   if (frames > 0) {
     const double mean_ms = timed_frames > 0 ? frame_ms_sum / timed_frames : 0.0;
-    std::printf("atmo-viewer: %d frames at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames 1..%d, on %s\n",
-                frame_, options_.render.width, options_.render.height, std::string(ToString(state_.camera)).c_str(),
+    std::printf("atmo-viewer: %d frames of %s at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames "
+                "1..%d, on %s\n",
+                frame_, shown_model_.c_str(), options_.render.width, options_.render.height,
+                std::string(ToString(state_.camera)).c_str(),
                 options_.recompute_every_frame ? ", every table every frame" : "", mean_ms,
                 mean_ms > 0.0 ? 1000.0 / mean_ms : 0.0, frame_ - 1, context_->renderer().c_str());
     std::string passes;
@@ -885,6 +1043,7 @@ int Viewer::Run() {
       passes += cli::Format("%s%s %.2f", passes.empty() ? "" : ", ", pass.name.c_str(), pass.total_ms / pass.calls);
     }
     std::printf("atmo-viewer: mean ms per frame that ran it: %s\n", passes.c_str());
+    if (sky_ != nullptr && !sky_->Status().empty()) std::printf("atmo-viewer: %s\n", sky_->Status().c_str());
   }
   return 0;
 }

@@ -426,7 +426,8 @@ shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_
 // The passes of ElekModel::ComputeTables, in its order, as a list of stages (a pass, or one
 // dispatch of a pass with several); a 3D stage runs in steps of some work-group rows.
 struct ElekTablesBuilder::State {
-  State(const Context& c, const shared::AtmosphereParameters& k, const ElekSettings& s) : context(c), km(k), settings(s) {}
+  State(const Context& c, const shared::AtmosphereParameters& k, const ElekSettings& s)
+      : context(c), km(k), settings(s) {}
   const Context& context;
   shared::AtmosphereParameters km;
   ElekSettings settings;
