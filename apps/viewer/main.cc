@@ -56,6 +56,15 @@ int main(int argc, char** argv) {
   app.add_option("--reference-divisor", options.reference_divisor,
                  "model reference renders at the window's size divided by this (default 4)")
       ->check(CLI::Range(1, 64));
+  app.add_option("--compare", options.compare,
+                 "compare mode: a second model (hillaire, elek, simple, reference) on the same atmosphere and view");
+  app.add_option("--compare-view", options.compare_view,
+                 "split (the first model left of the split, the second right) or difference ((B - A) / A of "
+                 "luminance in false colour)");
+  app.add_option("--split", options.split, "compare split: the fraction of the width left of the line (default 0.5)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--false-colour", options.false_colour,
+                 "luminance: log10 of the luminance in false colour instead of the tone-mapped image");
   app.add_flag("--hidden", options.hidden, "an invisible window (scripted runs; a display is still needed)");
   try {
     app.parse(argc, argv);

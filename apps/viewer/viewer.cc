@@ -43,6 +43,25 @@ constexpr int kMaxDisplayBatches = 8;
 // The altitude slider's range, metres: the ground to 1000 km (issue's "orbit"); the command line
 // and scripts may go higher.
 constexpr float kMaxSliderAltitude_m = 1e6f;
+// The luminance false colour's scale: log10 of the luminance (cd/m^2, or the relative unit's) at
+// its ends: 0.1 to 10^5 cd/m^2, a night-lit horizon to a hazy sky beside the sun.
+constexpr float kLogLuminanceRange[2] = {-1.0f, 5.0f};
+
+// The display's colour scales on the host, for the colour bar (the shader's Diverging and
+// Sequential).
+ImU32 DivergingColour(float t) {
+  const glm::vec3 end = t < 0.0f ? glm::vec3(0.05f, 0.25f, 0.85f) : glm::vec3(0.85f, 0.05f, 0.05f);
+  const glm::vec3 c = glm::mix(glm::vec3(1.0f), end, std::abs(t));
+  return IM_COL32(static_cast<int>(255 * c.x), static_cast<int>(255 * c.y), static_cast<int>(255 * c.z), 255);
+}
+ImU32 SequentialColour(float t) {
+  const glm::vec3 stops[5] = {{0.05f, 0.0f, 0.3f}, {0.0f, 0.4f, 1.0f}, {0.0f, 0.8f, 0.3f}, {1.0f, 0.9f, 0.0f},
+                              {1.0f, 1.0f, 1.0f}};
+  const float x = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(static_cast<int>(x), 3);
+  const glm::vec3 c = glm::mix(stops[i], stops[i + 1], x - static_cast<float>(i));
+  return IM_COL32(static_cast<int>(255 * c.x), static_cast<int>(255 * c.y), static_cast<int>(255 * c.z), 255);
+}
 
 // Full-screen triangle; the fragment shader reads the frame texel of its pixel (row 0 at the top).
 constexpr const char* kDisplayVertexShader = R"glsl(#version 450 core
@@ -55,13 +74,11 @@ void main() {
 // The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
 // atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
 // luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
-// float, without the PNG's dither.
-// The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
-// atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
-// luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
 // float, without the PNG's dither. BATCH_COUNT, TONE_OP (atmo::ToneMapper's order: exp, aces,
-// none) and PER_CHANNEL are compiled in (DisplayPass keeps one program per choice): llvmpipe ran
-// the uniform branches on them at about twice the cost of the whole pass without them.
+// none), PER_CHANNEL, VIEW (0 one sky, 1 split, 2 difference) and FALSE_COLOUR are compiled in
+// (DisplayPass keeps one program per choice): llvmpipe ran the uniform branches on them at about
+// twice the cost of the whole pass without them. SkyA and SkyB (the compared sky) are written
+// out per batch by DisplayPass (SKY_A_SUM, SKY_B_SUM).
 constexpr const char* kDisplayFragmentShader = R"glsl(
 layout(binding = 0) uniform sampler2D frame0;
 layout(binding = 1) uniform sampler2D frame1;
@@ -71,13 +88,25 @@ layout(binding = 4) uniform sampler2D frame4;
 layout(binding = 5) uniform sampler2D frame5;
 layout(binding = 6) uniform sampler2D frame6;
 layout(binding = 7) uniform sampler2D frame7;
+layout(binding = 9) uniform sampler2D compare0;
+layout(binding = 10) uniform sampler2D compare1;
+layout(binding = 11) uniform sampler2D compare2;
+layout(binding = 12) uniform sampler2D compare3;
+layout(binding = 13) uniform sampler2D compare4;
+layout(binding = 14) uniform sampler2D compare5;
+layout(binding = 15) uniform sampler2D compare6;
+layout(binding = 16) uniform sampler2D compare7;
 // EncodeDisplay(u^2) at u = (i + 0.5) / size: the display transfer as a table, read at sqrt(v),
 // where the sRGB curve is nearly linear.
 layout(binding = 8) uniform sampler1D encode_table;
 uniform mat3 weights[8];
 uniform float exposure;
-uniform ivec2 frame_size;   // the frame textures' size (reference's is smaller than the window)
+uniform ivec2 frame_size;    // the frame textures' size (reference's is smaller than the window)
+uniform ivec2 compare_size;  // the compared sky's
 uniform ivec2 window_size;
+uniform int split_column;    // split: columns left of it show the sky, the others the compared one
+uniform bool split_line;     // a white line at the split (off for --no-panels)
+uniform vec2 log_luminance_range;  // false colour: log10 of the luminance at the scale's ends
 out vec4 colour;
 
 float Curve(float v) {
@@ -91,42 +120,78 @@ float Curve(float v) {
   return clamp(t, 0.0, 1.0);
 }
 float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
-void main() {
-  // The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
-  ivec2 texel = ivec2(gl_FragCoord.xy * vec2(frame_size) / vec2(window_size));
-  texel = ivec2(min(texel.x, frame_size.x - 1), frame_size.y - 1 - min(texel.y, frame_size.y - 1));
-  vec3 rgb = weights[0] * texelFetch(frame0, texel, 0).rgb;
-#if BATCH_COUNT > 1
-  rgb += weights[1] * texelFetch(frame1, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 2
-  rgb += weights[2] * texelFetch(frame2, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 3
-  rgb += weights[3] * texelFetch(frame3, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 4
-  rgb += weights[4] * texelFetch(frame4, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 5
-  rgb += weights[5] * texelFetch(frame5, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 6
-  rgb += weights[6] * texelFetch(frame6, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 7
-  rgb += weights[7] * texelFetch(frame7, texel, 0).rgb;
-#endif
+// The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
+ivec2 Texel(ivec2 size) {
+  ivec2 texel = ivec2(gl_FragCoord.xy * vec2(size) / vec2(window_size));
+  return ivec2(min(texel.x, size.x - 1), size.y - 1 - min(texel.y, size.y - 1));
+}
+vec3 SkyA(ivec2 texel) {
+  vec3 rgb = vec3(0.0);
+  SKY_A_SUM
+  return rgb;
+}
+vec3 SkyB(ivec2 texel) {
+  vec3 rgb = vec3(0.0);
+  SKY_B_SUM
+  return rgb;
+}
+float Luminance(vec3 rgb) { return dot(rgb, vec3(0.2126, 0.7152, 0.0722)); }
+vec3 ToneMap(vec3 rgb) {
   vec3 v = max(rgb, vec3(0.0)) * exposure;
 #if PER_CHANNEL
   v = vec3(Curve(v.r), Curve(v.g), Curve(v.b));
 #else
-  float y = dot(v, vec3(0.2126, 0.7152, 0.0722));
+  float y = Luminance(v);
   v = y > 0.0 ? v * (Curve(y) / y) : vec3(0.0);
   float largest = max(v.r, max(v.g, v.b));
   if (largest > 1.0) v /= largest;
 #endif
-  colour = vec4(Encode(v.r), Encode(v.g), Encode(v.b), 1.0);
+  return vec3(Encode(v.r), Encode(v.g), Encode(v.b));
+}
+)glsl"
+    // The colour scales, the same as the colour bar's (DivergingColour, SequentialColour).
+    R"glsl(
+vec3 Diverging(float t) {  // t in [-1, 1]: blue, white at 0, red
+  return t < 0.0 ? mix(vec3(1.0), vec3(0.05, 0.25, 0.85), -t) : mix(vec3(1.0), vec3(0.85, 0.05, 0.05), t);
+}
+vec3 Sequential(float t) {  // t in [0, 1]: dark blue, blue, green, yellow, white
+  const vec3 stops[5] = vec3[5](vec3(0.05, 0.0, 0.3), vec3(0.0, 0.4, 1.0), vec3(0.0, 0.8, 0.3),
+                                vec3(1.0, 0.9, 0.0), vec3(1.0, 1.0, 1.0));
+  float x = clamp(t, 0.0, 1.0) * 4.0;
+  int i = min(int(x), 3);
+  return mix(stops[i], stops[i + 1], x - float(i));
+}
+// (B - A) / A on a log-symmetric scale: 0 below 0.1 %, +-1/3 at 1 %, +-2/3 at 10 %, +-1 from 100 %.
+float DifferenceCoordinate(float a, float b) {
+  if (a <= 0.0) return b <= 0.0 ? 0.0 : 1.0;
+  float d = (b - a) / a;
+  if (abs(d) < 1e-3) return 0.0;
+  return sign(d) * clamp((log(abs(d)) / log(10.0) + 3.0) / 3.0, 0.0, 1.0);
+}
+void main() {
+  ivec2 texel = Texel(frame_size);
+#if VIEW == 2
+  colour = vec4(Diverging(DifferenceCoordinate(Luminance(SkyA(texel)), Luminance(SkyB(Texel(compare_size))))), 1.0);
+  return;
+#else
+#if VIEW == 1
+  int x = int(gl_FragCoord.x);
+  if (split_line && x == split_column) {
+    colour = vec4(1.0);
+    return;
+  }
+  vec3 rgb = x < split_column ? SkyA(texel) : SkyB(Texel(compare_size));
+#else
+  vec3 rgb = SkyA(texel);
+#endif
+#if FALSE_COLOUR
+  float y = Luminance(max(rgb, vec3(0.0)));
+  float t = (log(max(y, 1e-30)) / log(10.0) - log_luminance_range.x) / (log_luminance_range.y - log_luminance_range.x);
+  colour = vec4(Sequential(t), 1.0);
+#else
+  colour = vec4(ToneMap(rgb), 1.0);
+#endif
+#endif
 }
 )glsl";
 
@@ -163,15 +228,33 @@ class DisplayPass {
   DisplayPass(const DisplayPass&) = delete;
   DisplayPass& operator=(const DisplayPass&) = delete;
 
-  void Draw(const Sky& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
-            int height) const {
+  // What the window shows: one sky, or two (split or difference); false colour of luminance.
+  struct View {
+    int mode = 0;  // 0 one sky, 1 split, 2 difference
+    bool false_colour = false;
+    int split_column = 0;
+    bool split_line = false;
+  };
+
+  void Draw(const Sky& sky, const Sky* compared, const View& view, const std::vector<glm::mat3>& weights,
+            const ToneMapping& mapping, int width, int height) const {
     glViewport(0, 0, width, height);
     const int batches = static_cast<int>(sky.batch_count());
-    const GLuint program = Program(batches, static_cast<int>(mapping.op), mapping.per_channel);
+    const int mode = compared != nullptr ? view.mode : 0;
+    const GLuint program =
+        Program(batches, static_cast<int>(mapping.op), mapping.per_channel, mode, view.false_colour && mode != 2);
     glUseProgram(program);
     for (int b = 0; b < batches; ++b) glBindTextureUnit(b, sky.frame_texture(b).id());
+    if (mode != 0) {
+      for (int b = 0; b < batches; ++b) glBindTextureUnit(9 + b, compared->frame_texture(b).id());
+      const shared::ivec2 size = compared->frame_texture(0).size2();
+      glUniform2i(glGetUniformLocation(program, "compare_size"), size.x, size.y);
+      glUniform1i(glGetUniformLocation(program, "split_column"), view.split_column);
+      glUniform1i(glGetUniformLocation(program, "split_line"), view.split_line ? 1 : 0);
+    }
     glUniformMatrix3fv(glGetUniformLocation(program, "weights"), batches, GL_FALSE, &weights[0][0][0]);
     glUniform1f(glGetUniformLocation(program, "exposure"), static_cast<float>(mapping.exposure));
+    glUniform2f(glGetUniformLocation(program, "log_luminance_range"), kLogLuminanceRange[0], kLogLuminanceRange[1]);
     if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
     glBindTextureUnit(8, encode_table_);
     const shared::ivec2 frame_size = sky.frame_texture(0).size2();
@@ -185,13 +268,23 @@ class DisplayPass {
 
  private:
   // The program for a batch count, tone curve and mode, compiled on first use.
-  GLuint Program(int batches, int tone_op, bool per_channel) const {
-    const int key = batches * 100 + tone_op * 10 + (per_channel ? 1 : 0);
+  GLuint Program(int batches, int tone_op, bool per_channel, int mode, bool false_colour) const {
+    const int key = batches * 10000 + mode * 1000 + (false_colour ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
     const auto found = programs_.find(key);
     if (found != programs_.end()) return found->second;
+    std::string sum_a;
+    std::string sum_b;
+    for (int b = 0; b < batches; ++b) {
+      const std::string index = std::to_string(b);
+      sum_a += "rgb += weights[" + index + "] * texelFetch(frame" + index + ", texel, 0).rgb; ";
+      sum_b += "rgb += weights[" + index + "] * texelFetch(compare" + index + ", texel, 0).rgb; ";
+    }
     const std::string source = "#version 450 core\n#define BATCH_COUNT " + std::to_string(batches) +
                                "\n#define TONE_OP " + std::to_string(tone_op) + "\n#define PER_CHANNEL " +
-                               std::to_string(per_channel ? 1 : 0) + "\n" + kDisplayFragmentShader;
+                               std::to_string(per_channel ? 1 : 0) + "\n#define VIEW " + std::to_string(mode) +
+                               "\n#define FALSE_COLOUR " + std::to_string(false_colour ? 1 : 0) +
+                               "\n#define SKY_A_SUM " + sum_a + "\n#define SKY_B_SUM " + sum_b + "\n" +
+                               kDisplayFragmentShader;
     const GLuint vs = CompileShader(GL_VERTEX_SHADER, kDisplayVertexShader);
     const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, source.c_str());
     const GLuint program = glCreateProgram();
@@ -335,7 +428,14 @@ class Viewer {
   // shows it once complete; on an error goes back to what is shown.
   void UpdateSky();
   // Whether what is shown is final: no sky pending, and the shown one converged (reference).
-  bool Settled() const { return pending_ == nullptr && sky_ != nullptr && sky_->Converged(); }
+  bool Settled() const {
+    const bool compare_settled =
+        compare_model_.empty() || (compare_pending_ == nullptr && compare_sky_ != nullptr && compare_sky_->Converged());
+    return pending_ == nullptr && sky_ != nullptr && sky_->Converged() && compare_settled;
+  }
+  // The compared sky (compare mode): compare_model_ on the shown atmosphere, built as the main one.
+  void UpdateCompareSky();
+  void DrawColourBar(int mode, bool false_colour);
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
   void DrawPanels();
@@ -368,6 +468,19 @@ class Viewer {
   AtmosphereParameters pending_parameters_;
   HillaireSettings pending_settings_;
   std::FILE* frame_log_ = nullptr;
+  // Compare mode: the compared model (empty: none), how it shows (1 split, 2 difference), where
+  // the split is (a fraction of the width), luminance in false colour.
+  std::string compare_model_;
+  int compare_view_ = 1;
+  double split_ = 0.5;
+  bool false_colour_ = false;
+  std::unique_ptr<Sky> compare_sky_;
+  std::unique_ptr<Sky> compare_pending_;
+  std::string compare_shown_model_;
+  std::string compare_pending_model_;
+  AtmosphereParameters compare_parameters_;          // of compare_sky_
+  AtmosphereParameters compare_pending_parameters_;  // of compare_pending_
+  bool compare_view_dirty_ = false;
   std::unique_ptr<DisplayPass> display_;
   std::vector<glm::mat3> weights_;
   ViewerScript script_;
@@ -464,6 +577,19 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   loaded_ = state_;
   shown_knobs_ = state_;
   current_ = base_;
+  compare_model_ = options_.compare;
+  if (!compare_model_.empty() && std::find(models.begin(), models.end(), compare_model_) == models.end()) {
+    throw Error("--compare takes hillaire, elek, simple or reference (got " + compare_model_ + ")");
+  }
+  if (options_.compare_view != "split" && options_.compare_view != "difference") {
+    throw Error("--compare-view takes split or difference (got " + options_.compare_view + ")");
+  }
+  compare_view_ = options_.compare_view == "split" ? 1 : 2;
+  split_ = options_.split;
+  if (!options_.false_colour.empty() && options_.false_colour != "luminance") {
+    throw Error("--false-colour takes luminance (got " + options_.false_colour + ")");
+  }
+  false_colour_ = options_.false_colour == "luminance";
   if (!options_.frame_log.empty()) {
     cli::CheckOutputWritable(options_.frame_log);
     frame_log_ = std::fopen(options_.frame_log.c_str(), "w");
@@ -498,6 +624,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
 
 Viewer::~Viewer() {
   if (frame_log_ != nullptr) std::fclose(frame_log_);
+  compare_pending_.reset();
+  compare_sky_.reset();
   pending_.reset();
   sky_.reset();
   display_.reset();
@@ -687,6 +815,78 @@ void Viewer::UpdateSky() {
   }
 }
 
+void Viewer::UpdateCompareSky() {
+  if (compare_model_.empty() || sky_ == nullptr) {
+    compare_sky_.reset();
+    compare_pending_.reset();
+    return;
+  }
+  if (compare_sky_ != nullptr && compare_shown_model_ == compare_model_ && compare_parameters_ == current_) {
+    compare_pending_.reset();
+    return;
+  }
+  try {
+    if (compare_pending_ == nullptr || compare_pending_model_ != compare_model_ ||
+        !(compare_pending_parameters_ == current_)) {
+      compare_pending_.reset();
+      compare_pending_ = MakeSky(compare_model_, current_);
+      compare_pending_model_ = compare_model_;
+      compare_pending_parameters_ = current_;
+    }
+    if (!compare_pending_->Build(kBuildBudgetMs, &timings_)) return;
+    compare_sky_ = std::move(compare_pending_);
+    compare_shown_model_ = compare_pending_model_;
+    compare_parameters_ = compare_pending_parameters_;
+    compare_view_dirty_ = true;
+  } catch (const Error& error) {
+    // A model that cannot show this atmosphere (simple against a planet): compare mode off.
+    status_ = std::string("compare: ") + error.what();
+    compare_pending_.reset();
+    compare_sky_.reset();
+    compare_model_.clear();
+  }
+}
+
+// The scale of the difference view (log-symmetric, ticks at +-1 %, 10 %, 100 %) or of the
+// luminance false colour (log10 cd/m^2, a tick per decade), below the panel.
+void Viewer::DrawColourBar(int mode, bool false_colour) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(10.0f, io.DisplaySize.y - 90.0f), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(420.0f, 80.0f), ImGuiCond_FirstUseEver);
+  ImGui::Begin(mode == 2 ? "(B - A) / A" : "luminance, log10 cd/m^2");
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  const float width = std::max(ImGui::GetContentRegionAvail().x, 50.0f);
+  const float height = 18.0f;
+  constexpr int kSteps = 128;
+  for (int i = 0; i < kSteps; ++i) {
+    const float u = (i + 0.5f) / kSteps;
+    const ImU32 c = mode == 2 ? DivergingColour(2.0f * u - 1.0f) : SequentialColour(u);
+    draw->AddRectFilled(ImVec2(origin.x + width * i / kSteps, origin.y),
+                        ImVec2(origin.x + width * (i + 1) / kSteps, origin.y + height), c);
+  }
+  const auto tick = [&](float u, const char* label) {
+    const float x = origin.x + width * u;
+    draw->AddLine(ImVec2(x, origin.y + height), ImVec2(x, origin.y + height + 4.0f), IM_COL32(255, 255, 255, 255));
+    const float text = ImGui::CalcTextSize(label).x;
+    draw->AddText(ImVec2(std::clamp(x - text / 2.0f, origin.x, origin.x + width - text), origin.y + height + 5.0f),
+                  IM_COL32(255, 255, 255, 255), label);
+  };
+  if (mode == 2) {
+    // t = sign(d) (log10 |d| + 3) / 3 at u = (t + 1) / 2.
+    const char* labels[7] = {"-100%", "-10%", "-1%", "0", "+1%", "+10%", "+100%"};
+    for (int k = 0; k < 7; ++k) tick(k / 6.0f, labels[k]);
+  } else if (false_colour) {
+    for (int decade = static_cast<int>(kLogLuminanceRange[0]); decade <= static_cast<int>(kLogLuminanceRange[1]);
+         ++decade) {
+      const std::string label = std::to_string(decade);
+      tick((decade - kLogLuminanceRange[0]) / (kLogLuminanceRange[1] - kLogLuminanceRange[0]), label.c_str());
+    }
+  }
+  ImGui::Dummy(ImVec2(width, height + 22.0f));
+  ImGui::End();
+}
+
 void Viewer::FollowDate() {
   if (!date_follows_) return;
   const double julian_day = plan_.dated_sun->julian_day_utc + state_.date_hours / 24.0;
@@ -874,6 +1074,28 @@ void Viewer::DrawPanels() {
     mapping_.op = static_cast<ToneMapper>(op);
     ImGui::Checkbox("per channel", &mapping_.per_channel);
   }
+  if (ImGui::CollapsingHeader("Compare", ImGuiTreeNodeFlags_DefaultOpen)) {
+    // Model B beside or against the shown model A, on the same atmosphere and view.
+    const char* names[] = {"none", "hillaire", "elek", "simple", "reference"};
+    int index = 0;
+    for (int i = 1; i < 5; ++i) {
+      if (compare_model_ == names[i]) index = i;
+    }
+    if (ImGui::Combo("compare with", &index, names, 5)) compare_model_ = index == 0 ? "" : names[index];
+    ImGui::RadioButton("split", &compare_view_, 1);
+    ImGui::SameLine();
+    ImGui::RadioButton("difference (B - A) / A", &compare_view_, 2);
+    float split = static_cast<float>(split_);
+    if (ImGui::SliderFloat("split", &split, 0.0f, 1.0f, "%.3f")) split_ = split;
+    ImGui::Checkbox("false colour: luminance", &false_colour_);
+    if (compare_pending_ != nullptr) {
+      const std::string label = "building " + compare_pending_model_;
+      ImGui::ProgressBar(static_cast<float>(compare_pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
+    }
+    if (compare_sky_ != nullptr && !compare_sky_->Status().empty()) {
+      ImGui::TextWrapped("B: %s", compare_sky_->Status().c_str());
+    }
+  }
   if (ImGui::CollapsingHeader("Files", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::InputText("config", config_path_, sizeof config_path_);
     if (ImGui::Button("save config")) {
@@ -931,17 +1153,22 @@ int Viewer::Run() {
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
     HandleInput(dt_s);
-    if (!options_.no_panels) DrawPanels();
+    if (!options_.no_panels) {
+      DrawPanels();
+      const int mode = compare_sky_ != nullptr ? compare_view_ : 0;
+      if (mode == 2 || false_colour_) DrawColourBar(mode, false_colour_);
+    }
     ImGui::Render();
     if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
     FollowDate();
 
     timings_.Clear();
     UpdateSky();
-    if (sky_ != nullptr &&
-        (view_dirty_ || state_.altitude_m != built_.altitude_m ||
-         state_.sun_elevation_deg != built_.sun_elevation_deg || state_.sun_azimuth_deg != built_.sun_azimuth_deg ||
-         state_.ground != built_.ground)) {
+    UpdateCompareSky();
+    const bool view_changed = view_dirty_ || state_.altitude_m != built_.altitude_m ||
+                              state_.sun_elevation_deg != built_.sun_elevation_deg ||
+                              state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground;
+    if (sky_ != nullptr && view_changed) {
       try {
         sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
       } catch (const Error& error) {
@@ -951,6 +1178,17 @@ int Viewer::Run() {
         sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
       }
       view_dirty_ = false;
+    }
+    if (compare_sky_ != nullptr && (view_changed || compare_view_dirty_)) {
+      try {
+        compare_sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                              &timings_);
+      } catch (const Error& error) {
+        status_ = std::string("compare: ") + error.what();
+        compare_sky_.reset();
+        compare_model_.clear();
+      }
+      compare_view_dirty_ = false;
     }
     const bool last_frame = frames > 0 && frame_ >= frames - 1 && Settled();
     built_ = state_;
@@ -980,6 +1218,7 @@ int Viewer::Run() {
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
       sky_->RenderFrame(ViewCamera(state_, width, height), terms, &timings_);
+      if (compare_sky_ != nullptr) compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, &timings_);
       // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
       // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
       if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
@@ -994,7 +1233,12 @@ int Viewer::Run() {
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
       {
         ScopedPassTimer timer(timings_, "display");
-        display_->Draw(*sky_, weights_, mapping_, width, height);
+        DisplayPass::View view;
+        view.mode = compare_sky_ != nullptr ? compare_view_ : 0;
+        view.false_colour = false_colour_;
+        view.split_column = static_cast<int>(std::lround(split_ * width));
+        view.split_line = !options_.no_panels;
+        display_->Draw(*sky_, compare_sky_.get(), view, weights_, mapping_, width, height);
         glFinish();
       }
       ScopedPassTimer timer(timings_, "panels");

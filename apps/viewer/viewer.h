@@ -36,6 +36,12 @@ struct ViewerOptions {
   // its progress (0..1); empty: none.
   std::string frame_log;
   int reference_divisor = 4;  // model reference renders at the window's size / this
+  // Compare mode: a second model (empty: none) shown split or as the relative difference of its
+  // luminance; split: the fraction of the width that shows the first model.
+  std::string compare;
+  std::string compare_view = "split";  // split | difference
+  double split = 0.5;
+  std::string false_colour;  // empty, or luminance
 };
 
 int RunViewer(const ViewerOptions& options);

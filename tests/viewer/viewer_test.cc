@@ -495,6 +495,60 @@ TEST_F(Viewer, ReferenceAccumulatesToAtmoRendersEstimate) {
   EXPECT_LT(MaxRelativeDifference(viewer_image, render_image, 1.0), 1e-6);
 }
 
+// Compare mode, difference view: a model against itself is (B - A) / A = 0 everywhere, the scale's
+// neutral white; against another model (elek has no lit ground, hillaire has) it is not.
+TEST_F(Viewer, DifferenceOfAModelWithItselfIsNeutral) {
+  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3 --compare-view difference";
+  RunResult v = RunViewer(flags + " --compare hillaire --window-screenshot same.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  int width = 0, height = 0;
+  const std::vector<unsigned char> same = ReadPngRgb(dir_ / "same.png", width, height);
+  int off = 0;
+  for (const unsigned char code : same) off += code != 255 ? 1 : 0;
+  EXPECT_EQ(off, 0) << "of " << same.size() << " samples";
+  v = RunViewer(flags + " --model elek --option size=16x64x16 --compare hillaire --window-screenshot other.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const std::vector<unsigned char> other = ReadPngRgb(dir_ / "other.png", width, height);
+  // The ground (the bottom row): hillaire's lit ground against elek's black is +100 %, red.
+  const std::size_t bottom = (static_cast<std::size_t>(height - 1) * width + width / 2) * 3;
+  EXPECT_GT(other[bottom], 200);
+  EXPECT_LT(other[bottom + 2], 50);
+}
+
+// Compare mode, split view: left of the split the first model's window, right of it the second's,
+// pixel for pixel (the same display pass on each one's frame).
+TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
+  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3";
+  const std::string elek = " --model elek --option size=16x64x16";
+  RunResult v = RunViewer(flags + elek + " --compare hillaire --split 0.4 --window-screenshot split.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  v = RunViewer(flags + elek + " --window-screenshot a.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  v = RunViewer(flags + " --window-screenshot b.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  int width = 0, height = 0;
+  const std::vector<unsigned char> split = ReadPngRgb(dir_ / "split.png", width, height);
+  const std::vector<unsigned char> a = ReadPngRgb(dir_ / "a.png", width, height);
+  const std::vector<unsigned char> b = ReadPngRgb(dir_ / "b.png", width, height);
+  const int column = static_cast<int>(std::lround(0.4 * width));  // 64 of 160
+  int differ_a = 0;
+  int differ_b = 0;
+  int differ_ab = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3 + c;
+        if (x < column) differ_a += split[i] != a[i] ? 1 : 0;
+        if (x >= column) differ_b += split[i] != b[i] ? 1 : 0;
+        differ_ab += a[i] != b[i] ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(differ_a, 0);
+  EXPECT_EQ(differ_b, 0);
+  EXPECT_GT(differ_ab, 1000);  // the two models do differ, so the halves say something
+}
+
 TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   WriteFile(dir_ / "bad.txt", "at 0 yaw 10\nat 1 sun-height 3\n");
   RunResult r = RunViewer("--frames 2 --script bad.txt");
@@ -510,6 +564,12 @@ TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   r = RunViewer("--frames 1 --model elek --spp 4");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("takes no --spp"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --compare bruneton");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--compare takes"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --compare elek --compare-view blend");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--compare-view takes split or difference"), std::string::npos) << r.err;
   r = RunViewer("--frames 1 --width 0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_FALSE(fs::exists(dir_ / "x.exr"));
