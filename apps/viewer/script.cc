@@ -92,7 +92,7 @@ bool PutSunAtPixel(ViewState& state, int width, int height, double x, double y) 
 }
 
 std::vector<std::string> ViewKeyNames() {
-  std::vector<std::string> names = {"camera", "model"};
+  std::vector<std::string> names = {"camera", "model", "spectral"};
   for (const NumberKey& k : kNumberKeys) names.emplace_back(k.name);
   return names;
 }
@@ -100,6 +100,11 @@ std::vector<std::string> ViewKeyNames() {
 void SetViewValue(ViewState& state, std::string_view key, std::string_view value) {
   if (key == "camera") {
     state.camera = ParseCameraKind(std::string(value));  // throws for an unknown camera
+    return;
+  }
+  if (key == "spectral") {
+    if (value != "on" && value != "off") throw Error("spectral takes on or off, got '" + std::string(value) + "'");
+    state.spectral = value == "on";
     return;
   }
   if (key == "model") {
@@ -161,7 +166,7 @@ ViewerScript ParseViewerScript(std::string_view text, const std::string& name) {
       if (command.last_frame <= command.first_frame) throw Error(where + "a ramp's LAST frame must come after FIRST");
       command.key = w[3];
       if (FindNumberKey(command.key) == nullptr) {
-        const std::string numbers = KeyList().substr(std::string("camera, model, ").size());
+        const std::string numbers = KeyList().substr(std::string("camera, model, spectral, ").size());
         throw Error(where + "'" + command.key + "' cannot ramp (a number key: " + numbers + ")");
       }
       if (!ParseNumber(w[4], command.from) || !ParseNumber(w[5], command.to)) {

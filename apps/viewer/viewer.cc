@@ -25,6 +25,7 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/parameters.h"
+#include "atmo/spectrum.h"
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
@@ -435,6 +436,12 @@ class Viewer {
   }
   // The compared sky (compare mode): compare_model_ on the shown atmosphere, built as the main one.
   void UpdateCompareSky();
+  // A loaded atmosphere (preset or config) as the base: made spectral when state_.spectral.
+  void LoadBase(const AtmosphereParameters& parameters) {
+    rgb_base_ = parameters;
+    base_spectral_ = state_.spectral;
+    base_ = base_spectral_ ? MakeSpectral(rgb_base_, spectral_count_) : rgb_base_;
+  }
   void DrawColourBar(int mode, bool false_colour);
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
@@ -481,6 +488,13 @@ class Viewer {
   AtmosphereParameters compare_parameters_;          // of compare_sky_
   AtmosphereParameters compare_pending_parameters_;  // of compare_pending_
   bool compare_view_dirty_ = false;
+  // The spectral toggle: base_ is rgb_base_ or MakeSpectral(rgb_base_, spectral_count_)
+  // (base_spectral_); spectral_count_ is --spectral's, or 15 (earth-spectral's).
+  AtmosphereParameters rgb_base_;
+  AtmosphereParameters current_rgb_base_;
+  bool base_spectral_ = false;
+  bool shown_spectral_ = false;
+  int spectral_count_ = 15;
   std::unique_ptr<DisplayPass> display_;
   std::vector<glm::mat3> weights_;
   ViewerScript script_;
@@ -530,6 +544,18 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   }
   plan_ = cli::PlanRender(options_.common, options_.render);
   base_ = plan_.parameters;
+  rgb_base_ = base_;
+  if (options_.common.spectral != 0) {
+    // The RGB form of --spectral's atmosphere, for the panel's toggle.
+    cli::CommonOptions rgb = options_.common;
+    rgb.spectral = 0;
+    rgb_base_ = cli::PlanRender(rgb, options_.render).parameters;
+    spectral_count_ = options_.common.spectral;
+    state_.spectral = true;
+    base_spectral_ = true;
+  }
+  current_rgb_base_ = rgb_base_;
+  shown_spectral_ = base_spectral_;
   if (static_cast<int>(ChannelBatchCount(base_.channel_count())) > kMaxDisplayBatches) {
     throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
                 std::to_string(base_.channel_count()) + "); use fewer --spectral wavelengths");
@@ -711,6 +737,7 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   common.model = shown_model_;
   if (shown_model_ != options_.common.model) common.options.clear();
   if (shown_model_ == "reference") common.backend = "cpu";  // the CPU's path tracer
+  common.spectral = shown_spectral_ ? spectral_count_ : 0;
   if (shown_model_ == "hillaire") {
     const HillaireSettings flags = cli::GlHillaireSettings(common);
     const auto set_option = [&](const std::string& key, const std::string& value) {
@@ -757,7 +784,7 @@ void Viewer::UpdateSky() {
                          : state_.model != "simple" && half_space ? "earth"
                                                                   : nullptr;
     if (preset != nullptr) {
-      base_ = Preset(preset);
+      LoadBase(Preset(preset));
       ResetAtmosphereKnobs(base_, state_);
       loaded_ = state_;
       const std::vector<std::string> presets = PresetNames();
@@ -765,6 +792,18 @@ void Viewer::UpdateSky() {
     }
   }
   requested_model_ = state_.model;
+  if (state_.spectral != base_spectral_) {
+    // The RGB preset or its spectral form, the knobs kept: a knob at the loaded value of one form
+    // is at the loaded value of the other.
+    base_spectral_ = state_.spectral;
+    base_ = base_spectral_ ? MakeSpectral(rgb_base_, spectral_count_) : rgb_base_;
+    ViewState fresh = state_;
+    ResetAtmosphereKnobs(base_, fresh);
+    if (state_.mie_g == loaded_.mie_g) state_.mie_g = fresh.mie_g;
+    if (state_.ground_albedo == loaded_.ground_albedo) state_.ground_albedo = fresh.ground_albedo;
+    if (state_.ground_radius_m == loaded_.ground_radius_m) state_.ground_radius_m = fresh.ground_radius_m;
+    loaded_ = fresh;
+  }
   const bool wanted = sky_ == nullptr || !SameKnobs(state_, shown_knobs_) || !(base_ == current_base_) ||
                       settings_changed_ || state_.model != shown_model_;
   if (!wanted) {
@@ -791,6 +830,8 @@ void Viewer::UpdateSky() {
     shown_model_ = pending_model_;
     current_ = std::move(next);
     current_base_ = base_;
+    current_rgb_base_ = rgb_base_;
+    shown_spectral_ = base_spectral_;
     current_loaded_ = loaded_;
     current_preset_index_ = preset_index_;
     shown_settings_ = settings_;
@@ -805,6 +846,9 @@ void Viewer::UpdateSky() {
     // A knob out of bounds, a preset or config the model refuses: back to what is shown.
     status_ = error.what();
     base_ = current_base_;
+    rgb_base_ = current_rgb_base_;
+    base_spectral_ = shown_spectral_;
+    state_.spectral = shown_spectral_;
     loaded_ = current_loaded_;
     preset_index_ = current_preset_index_;
     settings_ = shown_settings_;
@@ -1024,7 +1068,7 @@ void Viewer::DrawPanels() {
         if (ImGui::Selectable(presets[i].c_str(), static_cast<int>(i) == preset_index_)) {
           // Made in the next frame; a preset hillaire refuses (simple's half-space) is reported there.
           preset_index_ = static_cast<int>(i);
-          base_ = Preset(presets[i]);
+          LoadBase(Preset(presets[i]));
           ResetAtmosphereKnobs(base_, state_);
           loaded_ = state_;
         }
@@ -1044,6 +1088,8 @@ void Viewer::DrawPanels() {
     if (ImGui::SliderFloat("planet radius km", &radius_km, 100.0f, 100000.0f, "%.0f", ImGuiSliderFlags_Logarithmic)) {
       state_.ground_radius_m = 1000.0 * radius_km;
     }
+    const std::string spectral_label = "spectral (" + std::to_string(spectral_count_) + " wavelengths)";
+    ImGui::Checkbox(spectral_label.c_str(), &state_.spectral);
     if (ImGui::Button("reset atmosphere")) {
       ResetAtmosphereKnobs(base_, state_);
     }
@@ -1109,7 +1155,7 @@ void Viewer::DrawPanels() {
     ImGui::SameLine();
     if (ImGui::Button("load config")) {
       try {
-        base_ = LoadParametersFile(config_path_);
+        LoadBase(LoadParametersFile(config_path_));
         preset_index_ = -1;
         ResetAtmosphereKnobs(base_, state_);
         loaded_ = state_;

@@ -549,6 +549,39 @@ TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
   EXPECT_GT(differ_ab, 1000);  // the two models do differ, so the halves say something
 }
 
+// The spectral toggle (the panel's checkbox, the script key `spectral`): the RGB preset, then its
+// 15-wavelength form in the same run, each frame what `atmo render` renders without and with
+// --spectral 15; and back.
+TEST_F(Viewer, SpectralToggleSwitchesWithoutRestarting) {
+  WriteFile(dir_ / "toggle.txt",
+            "screenshot 0 rgb.exr\n"
+            "at 1 spectral on\n"
+            "screenshot 1 spectral.exr\n"
+            "at 2 spectral off\n"
+            "screenshot 2 back.exr\n");
+  const RunResult v = RunViewer(std::string(kSameFlags) + " --frames 3 --script toggle.txt");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  RunResult r = Run("render --backend gl " + std::string(kSameFlags) + " --exr render_rgb.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Run("render --backend gl --spectral 15 " + std::string(kSameFlags) + " --exr render_spectral.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata sm;
+  ImageMetadata rm;
+  const Image rgb = ReadExr(dir_ / "rgb.exr");
+  const Image spectral = ReadExr(dir_ / "spectral.exr", &sm);
+  const Image back = ReadExr(dir_ / "back.exr");
+  const Image render_rgb = ReadExr(dir_ / "render_rgb.exr");
+  const Image render_spectral = ReadExr(dir_ / "render_spectral.exr", &rm);
+  EXPECT_LT(MaxRelativeDifference(rgb, render_rgb, 1.0), 1e-5);
+  EXPECT_LT(MaxRelativeDifference(spectral, render_spectral, 1.0), 1e-5);
+  EXPECT_LT(MaxRelativeDifference(back, render_rgb, 1.0), 1e-5);
+  EXPECT_EQ(Metadata(sm, "atmo:parameterHash"), Metadata(rm, "atmo:parameterHash"));
+  // The spectral form is another sky (its own quadrature of the spectrum): a visible change.
+  const double change = MaxRelativeDifference(spectral, rgb, 1.0);
+  std::printf("[ figures ] spectral toggle: max relative change RGB -> 15 wavelengths %.3g\n", change);
+  EXPECT_GT(change, 1e-3);
+}
+
 TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   WriteFile(dir_ / "bad.txt", "at 0 yaw 10\nat 1 sun-height 3\n");
   RunResult r = RunViewer("--frames 2 --script bad.txt");
