@@ -414,6 +414,9 @@ void CopyKnobs(const ViewState& from, ViewState& to) {
 
 // Elek's table steps per frame run until this much time went on them (then the frame is drawn).
 constexpr double kBuildBudgetMs = 25.0;
+// The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
+// 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
+constexpr int kTimedEvery = 4;
 
 class Viewer {
  public:
@@ -507,7 +510,8 @@ class Viewer {
   char screenshot_name_[512] = "viewer";
   int preset_index_ = -1;
   PassTimings timings_;      // this frame's passes (GPU time; display and swap on the host)
-  PassTimings run_timings_;  // every frame's but the first, for the summary of a --frames run
+  PassTimings run_timings_;  // every timed frame's but the first, for the summary of a --frames run
+  PassTimings* pass_timings_ = nullptr;  // &timings_ in a timed frame, else null (no GPU waits)
   double frame_ms_ = 0.0;
   double metered_ev100_ = 0.0;
   bool metered_ = false;  // metered_ev100_ is of the shown sky
@@ -809,7 +813,7 @@ void Viewer::UpdateSky() {
   if (!wanted) {
     pending_.reset();  // a change undone before its sky was complete
     if (options_.recompute_every_frame) {
-      sky_->Recompute(&timings_);
+      sky_->Recompute(pass_timings_);
       view_dirty_ = true;
     }
     return;
@@ -825,7 +829,7 @@ void Viewer::UpdateSky() {
       pending_parameters_ = next;
       pending_settings_generation_ = settings_generation_;
     }
-    if (!pending_->Build(kBuildBudgetMs, &timings_)) return;  // shown in a later frame
+    if (!pending_->Build(kBuildBudgetMs, pass_timings_)) return;  // shown in a later frame
     sky_ = std::move(pending_);
     shown_model_ = pending_model_;
     current_ = std::move(next);
@@ -877,7 +881,7 @@ void Viewer::UpdateCompareSky() {
       compare_pending_model_ = compare_model_;
       compare_pending_parameters_ = current_;
     }
-    if (!compare_pending_->Build(kBuildBudgetMs, &timings_)) return;
+    if (!compare_pending_->Build(kBuildBudgetMs, pass_timings_)) return;
     compare_sky_ = std::move(compare_pending_);
     compare_shown_model_ = compare_pending_model_;
     compare_parameters_ = compare_pending_parameters_;
@@ -1208,7 +1212,11 @@ int Viewer::Run() {
     if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
     FollowDate();
 
-    timings_.Clear();
+    // The passes are timed every kTimedEvery-th frame (a timer waits for the GPU: glFinish on
+    // llvmpipe); the panel shows the last timed frame's.
+    const bool timed = frame_ % kTimedEvery == 1 % kTimedEvery;
+    pass_timings_ = timed ? &timings_ : nullptr;
+    if (timed) timings_.Clear();
     UpdateSky();
     UpdateCompareSky();
     const bool view_changed = view_dirty_ || state_.altitude_m != built_.altitude_m ||
@@ -1216,19 +1224,21 @@ int Viewer::Run() {
                               state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground;
     if (sky_ != nullptr && view_changed) {
       try {
-        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                      pass_timings_);
       } catch (const Error& error) {
         // An altitude the model refuses (below elek's ground): back to the last one.
         status_ = error.what();
         state_.altitude_m = built_.altitude_m;
-        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, &timings_);
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                      pass_timings_);
       }
       view_dirty_ = false;
     }
     if (compare_sky_ != nullptr && (view_changed || compare_view_dirty_)) {
       try {
         compare_sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
-                              &timings_);
+                              pass_timings_);
       } catch (const Error& error) {
         status_ = std::string("compare: ") + error.what();
         compare_sky_.reset();
@@ -1263,8 +1273,10 @@ int Viewer::Run() {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      sky_->RenderFrame(ViewCamera(state_, width, height), terms, &timings_);
-      if (compare_sky_ != nullptr) compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, &timings_);
+      sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      if (compare_sky_ != nullptr) {
+        compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      }
       // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
       // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
       if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
@@ -1278,27 +1290,30 @@ int Viewer::Run() {
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
       {
-        ScopedPassTimer timer(timings_, "display");
+        std::optional<ScopedPassTimer> timer;
+        if (timed) timer.emplace(timings_, "display");
         DisplayPass::View view;
         view.mode = compare_sky_ != nullptr ? compare_view_ : 0;
         view.false_colour = false_colour_;
         view.split_column = static_cast<int>(std::lround(split_ * width));
         view.split_line = !options_.no_panels;
         display_->Draw(*sky_, compare_sky_.get(), view, weights_, mapping_, width, height);
-        glFinish();
+        if (timed) glFinish();
       }
-      ScopedPassTimer timer(timings_, "panels");
+      std::optional<ScopedPassTimer> timer;
+      if (timed) timer.emplace(timings_, "panels");
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      glFinish();
+      if (timed) glFinish();
     }
     if (last_frame && !options_.window_screenshot.empty()) {
       WriteWindow(options_.window_screenshot, width, height);
     }
     {
-      ScopedPassTimer timer(timings_, "swap");
+      std::optional<ScopedPassTimer> timer;
+      if (timed) timer.emplace(timings_, "swap");
       context_->SwapBuffers();
     }
-    if (frame_ > 0) {
+    if (frame_ > 0 && timed) {
       for (const PassTiming& pass : timings_.entries()) run_timings_.Add(pass.name, pass.last_ms);
     }
     // The frame time: from one swap to the next (the first frame compiles the shaders: left out).
