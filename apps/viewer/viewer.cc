@@ -527,6 +527,7 @@ class Viewer {
   std::optional<cli::SunAtInstant> dated_sun_;  // the instant the sun shows, when it follows the date
   bool dragging_view_ = false;
   bool dragging_sun_ = false;
+  bool dragging_split_ = false;
   double last_x_ = 0.0;
   double last_y_ = 0.0;
 };
@@ -966,8 +967,20 @@ void Viewer::HandleInput(double dt_s) {
   } else {
     dragging_sun_ = false;
   }
+  // Left button on the split line (compare split): the line follows the mouse.
+  int window_width = 1;
+  int window_height = 1;
+  glfwGetWindowSize(window, &window_width, &window_height);
+  const bool split_shown = compare_sky_ != nullptr && compare_view_ == 1;
+  if (left && !shift && split_shown &&
+      (dragging_split_ || (free_mouse && !dragging_view_ && std::abs(x - split_ * window_width) <= 6.0))) {
+    dragging_split_ = true;
+    split_ = std::clamp(x / std::max(window_width, 1), 0.0, 1.0);
+  } else {
+    dragging_split_ = false;
+  }
   // Left button: look around (the sky follows the mouse).
-  if (left && !shift && (dragging_view_ || free_mouse)) {
+  if (left && !shift && !dragging_split_ && (dragging_view_ || free_mouse)) {
     if (dragging_view_) {
       int width = 1;
       int height = 1;
