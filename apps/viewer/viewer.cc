@@ -435,7 +435,7 @@ class Viewer {
   bool Settled() const {
     const bool compare_settled =
         compare_model_.empty() || (compare_pending_ == nullptr && compare_sky_ != nullptr && compare_sky_->Converged());
-    return pending_ == nullptr && sky_ != nullptr && sky_->Converged() && compare_settled;
+    return pending_ == nullptr && sky_ != nullptr && sky_->Converged() && compare_settled && waiting_shots_.empty();
   }
   // The compared sky (compare mode): compare_model_ on the shown atmosphere, built as the main one.
   void UpdateCompareSky();
@@ -528,6 +528,7 @@ class Viewer {
   bool dragging_view_ = false;
   bool dragging_sun_ = false;
   bool dragging_split_ = false;
+  std::vector<std::string> waiting_shots_;  // script screenshots waiting for a sky to write
   double last_x_ = 0.0;
   double last_y_ = 0.0;
 };
@@ -1264,7 +1265,13 @@ int Viewer::Run() {
     int width = 0;
     int height = 0;
     glfwGetFramebufferSize(window, &width, &height);
-    for (const std::string& path : shots) {
+    // A screenshot asked for before any sky can be written (elek's first tables, reference's
+    // first pass) waits for the first frame that has one.
+    waiting_shots_.insert(waiting_shots_.end(), shots.begin(), shots.end());
+    const bool can_write = sky_ != nullptr && sky_->HasFrame();
+    const std::vector<std::string> ready = can_write ? std::move(waiting_shots_) : std::vector<std::string>{};
+    if (can_write) waiting_shots_.clear();
+    for (const std::string& path : ready) {
       const std::string lower = path.size() >= 4 ? path.substr(path.size() - 4) : path;
       if (lower == ".exr")
         Screenshot(path, "");
