@@ -17,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/spectrum.h"
+#include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl_test_context.h"
 #include "gl/elek_gl.h"
@@ -333,6 +334,48 @@ TEST(GlElek, SpectralImagesMatchCpu) {
   render.camera = {CameraKind::kEquirect, 64, 32};
   render.sun_elevation_deg = 15.0;
   ExpectImagesMatch(context, spectral, render);
+}
+
+// The tables built a step at a time (ElekTablesBuilder, what atmo-viewer runs between frames)
+// are those of the whole passes, bit for bit: every texel is the same kernel on the same inputs,
+// only the dispatches are cut into work-group rows. Between the steps another pass (a frame on
+// the first tables) runs on the same programs and units, as the viewer's frames do. Both option
+// paths that add stages (the phase gather's two slices, the ground) are on.
+TEST(GlElek, TablesBuiltInStepsEqualWholePasses) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  ElekSettings s = SmallSettings();
+  s.phase_gather = true;
+  const AtmosphereParameters parameters = Preset("earth");
+  const ElekModel model(parameters, s);
+  const shared::AtmosphereParameters km = ElekKmAtmosphere(model, 0);
+  const ElekTablesGl whole = ComputeElekTablesGl(context, km, s);
+  ElekTablesBuilder builder(context, km, s, /*rows_per_step=*/1);
+  const GpuTexture frame = GpuTexture::Make2D({32, 16});
+  shared::CameraParameters camera = ToSharedCamera(Camera{CameraKind::kPerspective, 32, 16});
+  double last = builder.progress();
+  EXPECT_EQ(last, 0.0);
+  int steps = 0;
+  while (!builder.done()) {
+    builder.Step();
+    ++steps;
+    EXPECT_GT(builder.progress(), last);
+    last = builder.progress();
+    RunElekFramePass(context, km, s, whole, camera, 6361.0, glm::dvec3(0.0, 0.6, 0.8), true, shared::vec3(1.0),
+                     frame);
+  }
+  EXPECT_EQ(builder.progress(), 1.0);
+  // 16 texel rows of 64 are 16 work-group rows per 3D pass: far more steps than passes.
+  EXPECT_GT(steps, 100);
+  const ElekTablesGl stepped = builder.Take();
+  ASSERT_EQ(stepped.orders.size(), whole.orders.size());
+  const auto same = [](const GpuTexture& a, const GpuTexture& b) { return a.DownloadRgba() == b.DownloadRgba(); };
+  EXPECT_TRUE(same(stepped.transmittance, whole.transmittance));
+  for (std::size_t k = 0; k < whole.orders.size(); ++k) {
+    EXPECT_TRUE(same(stepped.orders[k].rayleigh, whole.orders[k].rayleigh)) << k;
+    EXPECT_TRUE(same(stepped.orders[k].mie, whole.orders[k].mie)) << k;
+  }
+  EXPECT_TRUE(same(stepped.total.rayleigh, whole.total.rayleigh));
+  EXPECT_TRUE(same(stepped.total.mie, whole.total.mie));
 }
 
 TEST(GlElek, RejectsWhatItCannotCompute) {

@@ -3,6 +3,7 @@
 // symmetry; determinism. Statistical checks use fixed seeds, so each test is deterministic; the
 // tolerance "3 standard errors" would fail with probability ~0.3% per comparison for a random seed.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -490,6 +491,28 @@ TEST(ReferenceRender, ProgressivePassesAreTheSameForAnyThreadCount) {
   ASSERT_EQ(exr.channels, 6);
   EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("G")), one.radiance.at(5, 6, 1));
   EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("B.stderr")), one.standard_error.at(5, 6, 2));
+}
+
+// A cancelled render (a viewer restarting) stops and returns the last complete pass: here the
+// flag is set from the first pass's callback, so the result is that pass, not the total.
+TEST(ReferenceRender, CancelledProgressiveRenderKeepsTheLastCompletePass) {
+  RenderSettings s;
+  s.camera = {CameraKind::kEquirect, 8, 4};
+  auto model = MakeReference(Preset("earth"), {{"samples", "64"}});
+  std::atomic<bool> cancel{false};
+  ProgressiveSettings p;
+  p.cancel = &cancel;
+  int passes = 0;
+  p.on_pass = [&](const ProgressiveImage&) {
+    ++passes;
+    cancel = true;
+  };
+  const ProgressiveImage image = RenderProgressive(*model, s, p);
+  EXPECT_EQ(passes, 1);
+  EXPECT_EQ(image.samples_per_pixel, 4u);
+  EXPECT_EQ(image.radiance.width, 8);
+  cancel = true;  // before the first pass: nothing
+  EXPECT_EQ(RenderProgressive(*model, s, p).radiance.width, 0);
 }
 
 TEST(ReferenceRender, ProgressiveRenderingChecksItsInputs) {

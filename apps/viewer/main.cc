@@ -1,4 +1,5 @@
-// atmo-viewer: the sky of model hillaire live in a window, on the GL backend (docs/viewer.md).
+// atmo-viewer: the sky of models hillaire, elek, simple and reference live in a window, on the GL
+// backend (docs/viewer.md).
 //
 //   atmo-viewer [--preset P | --config F.json] [--option K=V] [render flags of `atmo render`:
 //               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
@@ -21,7 +22,8 @@
 
 int main(int argc, char** argv) {
   atmo::InstallInterruptHandlers("atmo-viewer");
-  CLI::App app{"atmo-viewer: the sky of model hillaire live in a window (docs/viewer.md)", "atmo-viewer"};
+  CLI::App app{"atmo-viewer: the sky of hillaire, elek, simple or reference live in a window (docs/viewer.md)",
+               "atmo-viewer"};
   app.set_version_flag("--version", std::string("atmo-viewer ") + ATMO_VERSION);
   atmo::viewer::ViewerOptions options;
   // The screenshot of the last --frames frame goes where `atmo render` writes (--exr, --png, -o);
@@ -49,6 +51,20 @@ int main(int argc, char** argv) {
   app.add_flag("--no-panels", options.no_panels, "the sky alone, without the panels");
   app.add_option("--window-screenshot", options.window_screenshot,
                  "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
+  app.add_option("--frame-log", options.frame_log,
+                 "write one line per frame: number, ms, model shown, model being built, its progress");
+  app.add_option("--reference-divisor", options.reference_divisor,
+                 "model reference renders at the window's size divided by this (default 4)")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--compare", options.compare,
+                 "compare mode: a second model (hillaire, elek, simple, reference) on the same atmosphere and view");
+  app.add_option("--compare-view", options.compare_view,
+                 "split (the first model left of the split, the second right) or difference ((B - A) / A of "
+                 "luminance in false colour)");
+  app.add_option("--split", options.split, "compare split: the fraction of the width left of the line (default 0.5)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--false-colour", options.false_colour,
+                 "luminance: log10 of the luminance in false colour instead of the tone-mapped image");
   app.add_flag("--hidden", options.hidden, "an invisible window (scripted runs; a display is still needed)");
   try {
     app.parse(argc, argv);

@@ -92,7 +92,7 @@ bool PutSunAtPixel(ViewState& state, int width, int height, double x, double y) 
 }
 
 std::vector<std::string> ViewKeyNames() {
-  std::vector<std::string> names = {"camera"};
+  std::vector<std::string> names = {"camera", "model", "spectral"};
   for (const NumberKey& k : kNumberKeys) names.emplace_back(k.name);
   return names;
 }
@@ -100,6 +100,18 @@ std::vector<std::string> ViewKeyNames() {
 void SetViewValue(ViewState& state, std::string_view key, std::string_view value) {
   if (key == "camera") {
     state.camera = ParseCameraKind(std::string(value));  // throws for an unknown camera
+    return;
+  }
+  if (key == "spectral") {
+    if (value != "on" && value != "off") throw Error("spectral takes on or off, got '" + std::string(value) + "'");
+    state.spectral = value == "on";
+    return;
+  }
+  if (key == "model") {
+    if (value != "hillaire" && value != "elek" && value != "simple" && value != "reference") {
+      throw Error("unknown model '" + std::string(value) + "' (known: hillaire, elek, simple, reference)");
+    }
+    state.model = std::string(value);
     return;
   }
   const NumberKey* k = FindNumberKey(key);
@@ -154,7 +166,8 @@ ViewerScript ParseViewerScript(std::string_view text, const std::string& name) {
       if (command.last_frame <= command.first_frame) throw Error(where + "a ramp's LAST frame must come after FIRST");
       command.key = w[3];
       if (FindNumberKey(command.key) == nullptr) {
-        throw Error(where + "'" + command.key + "' cannot ramp (a number key: " + KeyList().substr(8) + ")");
+        const std::string numbers = KeyList().substr(std::string("camera, model, spectral, ").size());
+        throw Error(where + "'" + command.key + "' cannot ramp (a number key: " + numbers + ")");
       }
       if (!ParseNumber(w[4], command.from) || !ParseNumber(w[5], command.to)) {
         throw Error(where + "a ramp's FROM and TO must be finite numbers");

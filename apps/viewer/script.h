@@ -6,7 +6,8 @@
 //   ramp FIRST LAST KEY FROM TO   moves KEY linearly from FROM (at FIRST) to TO (at LAST)
 //   screenshot FRAME PATH         writes the frame FRAME shows to PATH (.exr or .png)
 // KEY is one of ViewKeyNames() (the flags of `atmo render` without their dashes, plus the
-// atmosphere's knobs); `camera` takes perspective, fisheye or equirect, the others numbers.
+// atmosphere's knobs); `camera` takes perspective, fisheye or equirect, `model` a model's name,
+// `spectral` on or off, the others numbers.
 //
 // To use it:
 //   ViewerScript script = ParseViewerScript(ReadFileBounded(path), path.string());
@@ -25,6 +26,10 @@ namespace atmo::viewer {
 // What the viewer shows; every field can be changed by a panel, the mouse, or a script.
 struct ViewState {
   // Camera and observer (the meanings of `atmo render`'s flags, docs/cli.md#atmo-render).
+  // The model shown: hillaire, elek, simple or reference (skies.h).
+  std::string model = "hillaire";
+  // The atmosphere's spectral form (atmo::MakeSpectral of the loaded one) instead of the loaded one.
+  bool spectral = false;
   CameraKind camera = CameraKind::kPerspective;
   double yaw_deg = 180.0;
   double pitch_deg = 10.0;

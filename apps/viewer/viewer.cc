@@ -25,9 +25,12 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/parameters.h"
+#include "atmo/spectrum.h"
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "models/reference_model.h"
+#include "skies.h"
 #include "physics/shared_parameters.h"
 #include "script.h"
 
@@ -41,6 +44,25 @@ constexpr int kMaxDisplayBatches = 8;
 // The altitude slider's range, metres: the ground to 1000 km (issue's "orbit"); the command line
 // and scripts may go higher.
 constexpr float kMaxSliderAltitude_m = 1e6f;
+// The luminance false colour's scale: log10 of the luminance (cd/m^2, or the relative unit's) at
+// its ends: 0.1 to 10^5 cd/m^2, a night-lit horizon to a hazy sky beside the sun.
+constexpr float kLogLuminanceRange[2] = {-1.0f, 5.0f};
+
+// The display's colour scales on the host, for the colour bar (the shader's Diverging and
+// Sequential).
+ImU32 DivergingColour(float t) {
+  const glm::vec3 end = t < 0.0f ? glm::vec3(0.05f, 0.25f, 0.85f) : glm::vec3(0.85f, 0.05f, 0.05f);
+  const glm::vec3 c = glm::mix(glm::vec3(1.0f), end, std::abs(t));
+  return IM_COL32(static_cast<int>(255 * c.x), static_cast<int>(255 * c.y), static_cast<int>(255 * c.z), 255);
+}
+ImU32 SequentialColour(float t) {
+  const glm::vec3 stops[5] = {{0.05f, 0.0f, 0.3f}, {0.0f, 0.4f, 1.0f}, {0.0f, 0.8f, 0.3f}, {1.0f, 0.9f, 0.0f},
+                              {1.0f, 1.0f, 1.0f}};
+  const float x = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(static_cast<int>(x), 3);
+  const glm::vec3 c = glm::mix(stops[i], stops[i + 1], x - static_cast<float>(i));
+  return IM_COL32(static_cast<int>(255 * c.x), static_cast<int>(255 * c.y), static_cast<int>(255 * c.z), 255);
+}
 
 // Full-screen triangle; the fragment shader reads the frame texel of its pixel (row 0 at the top).
 constexpr const char* kDisplayVertexShader = R"glsl(#version 450 core
@@ -53,13 +75,11 @@ void main() {
 // The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
 // atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
 // luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
-// float, without the PNG's dither.
-// The model's channels to linear sRGB (one 3x3 matrix per batch of three channels: the weights of
-// atmo::ColourWeights, or the legacy channels times solar_irradiance), exposure, the tone curve on
-// luminance or per channel, and the display transfer: ToneMapPixel of src/atmo/io/display.cc in
 // float, without the PNG's dither. BATCH_COUNT, TONE_OP (atmo::ToneMapper's order: exp, aces,
-// none) and PER_CHANNEL are compiled in (DisplayPass keeps one program per choice): llvmpipe ran
-// the uniform branches on them at about twice the cost of the whole pass without them.
+// none), PER_CHANNEL, VIEW (0 one sky, 1 split, 2 difference) and FALSE_COLOUR are compiled in
+// (DisplayPass keeps one program per choice): llvmpipe ran the uniform branches on them at about
+// twice the cost of the whole pass without them. SkyA and SkyB (the compared sky) are written
+// out per batch by DisplayPass (SKY_A_SUM, SKY_B_SUM).
 constexpr const char* kDisplayFragmentShader = R"glsl(
 layout(binding = 0) uniform sampler2D frame0;
 layout(binding = 1) uniform sampler2D frame1;
@@ -69,12 +89,25 @@ layout(binding = 4) uniform sampler2D frame4;
 layout(binding = 5) uniform sampler2D frame5;
 layout(binding = 6) uniform sampler2D frame6;
 layout(binding = 7) uniform sampler2D frame7;
+layout(binding = 9) uniform sampler2D compare0;
+layout(binding = 10) uniform sampler2D compare1;
+layout(binding = 11) uniform sampler2D compare2;
+layout(binding = 12) uniform sampler2D compare3;
+layout(binding = 13) uniform sampler2D compare4;
+layout(binding = 14) uniform sampler2D compare5;
+layout(binding = 15) uniform sampler2D compare6;
+layout(binding = 16) uniform sampler2D compare7;
 // EncodeDisplay(u^2) at u = (i + 0.5) / size: the display transfer as a table, read at sqrt(v),
 // where the sRGB curve is nearly linear.
 layout(binding = 8) uniform sampler1D encode_table;
 uniform mat3 weights[8];
 uniform float exposure;
-uniform int frame_height;
+uniform ivec2 frame_size;    // the frame textures' size (reference's is smaller than the window)
+uniform ivec2 compare_size;  // the compared sky's
+uniform ivec2 window_size;
+uniform int split_column;    // split: columns left of it show the sky, the others the compared one
+uniform bool split_line;     // a white line at the split (off for --no-panels)
+uniform vec2 log_luminance_range;  // false colour: log10 of the luminance at the scale's ends
 out vec4 colour;
 
 float Curve(float v) {
@@ -88,40 +121,78 @@ float Curve(float v) {
   return clamp(t, 0.0, 1.0);
 }
 float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
-void main() {
-  ivec2 texel = ivec2(int(gl_FragCoord.x), frame_height - 1 - int(gl_FragCoord.y));
-  vec3 rgb = weights[0] * texelFetch(frame0, texel, 0).rgb;
-#if BATCH_COUNT > 1
-  rgb += weights[1] * texelFetch(frame1, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 2
-  rgb += weights[2] * texelFetch(frame2, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 3
-  rgb += weights[3] * texelFetch(frame3, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 4
-  rgb += weights[4] * texelFetch(frame4, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 5
-  rgb += weights[5] * texelFetch(frame5, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 6
-  rgb += weights[6] * texelFetch(frame6, texel, 0).rgb;
-#endif
-#if BATCH_COUNT > 7
-  rgb += weights[7] * texelFetch(frame7, texel, 0).rgb;
-#endif
+// The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
+ivec2 Texel(ivec2 size) {
+  ivec2 texel = ivec2(gl_FragCoord.xy * vec2(size) / vec2(window_size));
+  return ivec2(min(texel.x, size.x - 1), size.y - 1 - min(texel.y, size.y - 1));
+}
+vec3 SkyA(ivec2 texel) {
+  vec3 rgb = vec3(0.0);
+  SKY_A_SUM
+  return rgb;
+}
+vec3 SkyB(ivec2 texel) {
+  vec3 rgb = vec3(0.0);
+  SKY_B_SUM
+  return rgb;
+}
+float Luminance(vec3 rgb) { return dot(rgb, vec3(0.2126, 0.7152, 0.0722)); }
+vec3 ToneMap(vec3 rgb) {
   vec3 v = max(rgb, vec3(0.0)) * exposure;
 #if PER_CHANNEL
   v = vec3(Curve(v.r), Curve(v.g), Curve(v.b));
 #else
-  float y = dot(v, vec3(0.2126, 0.7152, 0.0722));
+  float y = Luminance(v);
   v = y > 0.0 ? v * (Curve(y) / y) : vec3(0.0);
   float largest = max(v.r, max(v.g, v.b));
   if (largest > 1.0) v /= largest;
 #endif
-  colour = vec4(Encode(v.r), Encode(v.g), Encode(v.b), 1.0);
+  return vec3(Encode(v.r), Encode(v.g), Encode(v.b));
+}
+)glsl"
+    // The colour scales, the same as the colour bar's (DivergingColour, SequentialColour).
+    R"glsl(
+vec3 Diverging(float t) {  // t in [-1, 1]: blue, white at 0, red
+  return t < 0.0 ? mix(vec3(1.0), vec3(0.05, 0.25, 0.85), -t) : mix(vec3(1.0), vec3(0.85, 0.05, 0.05), t);
+}
+vec3 Sequential(float t) {  // t in [0, 1]: dark blue, blue, green, yellow, white
+  const vec3 stops[5] = vec3[5](vec3(0.05, 0.0, 0.3), vec3(0.0, 0.4, 1.0), vec3(0.0, 0.8, 0.3),
+                                vec3(1.0, 0.9, 0.0), vec3(1.0, 1.0, 1.0));
+  float x = clamp(t, 0.0, 1.0) * 4.0;
+  int i = min(int(x), 3);
+  return mix(stops[i], stops[i + 1], x - float(i));
+}
+// (B - A) / A on a log-symmetric scale: 0 below 0.1 %, +-1/3 at 1 %, +-2/3 at 10 %, +-1 from 100 %.
+float DifferenceCoordinate(float a, float b) {
+  if (a <= 0.0) return b <= 0.0 ? 0.0 : 1.0;
+  float d = (b - a) / a;
+  if (abs(d) < 1e-3) return 0.0;
+  return sign(d) * clamp((log(abs(d)) / log(10.0) + 3.0) / 3.0, 0.0, 1.0);
+}
+void main() {
+  ivec2 texel = Texel(frame_size);
+#if VIEW == 2
+  colour = vec4(Diverging(DifferenceCoordinate(Luminance(SkyA(texel)), Luminance(SkyB(Texel(compare_size))))), 1.0);
+  return;
+#else
+#if VIEW == 1
+  int x = int(gl_FragCoord.x);
+  if (split_line && x == split_column) {
+    colour = vec4(1.0);
+    return;
+  }
+  vec3 rgb = x < split_column ? SkyA(texel) : SkyB(Texel(compare_size));
+#else
+  vec3 rgb = SkyA(texel);
+#endif
+#if FALSE_COLOUR
+  float y = Luminance(max(rgb, vec3(0.0)));
+  float t = (log(max(y, 1e-30)) / log(10.0) - log_luminance_range.x) / (log_luminance_range.y - log_luminance_range.x);
+  colour = vec4(Sequential(t), 1.0);
+#else
+  colour = vec4(ToneMap(rgb), 1.0);
+#endif
+#endif
 }
 )glsl";
 
@@ -158,18 +229,38 @@ class DisplayPass {
   DisplayPass(const DisplayPass&) = delete;
   DisplayPass& operator=(const DisplayPass&) = delete;
 
-  void Draw(const gl::HillaireGl& sky, const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width,
-            int height) const {
+  // What the window shows: one sky, or two (split or difference); false colour of luminance.
+  struct View {
+    int mode = 0;  // 0 one sky, 1 split, 2 difference
+    bool false_colour = false;
+    int split_column = 0;
+    bool split_line = false;
+  };
+
+  void Draw(const Sky& sky, const Sky* compared, const View& view, const std::vector<glm::mat3>& weights,
+            const ToneMapping& mapping, int width, int height) const {
     glViewport(0, 0, width, height);
     const int batches = static_cast<int>(sky.batch_count());
-    const GLuint program = Program(batches, static_cast<int>(mapping.op), mapping.per_channel);
+    const int mode = compared != nullptr ? view.mode : 0;
+    const GLuint program =
+        Program(batches, static_cast<int>(mapping.op), mapping.per_channel, mode, view.false_colour && mode != 2);
     glUseProgram(program);
     for (int b = 0; b < batches; ++b) glBindTextureUnit(b, sky.frame_texture(b).id());
+    if (mode != 0) {
+      for (int b = 0; b < batches; ++b) glBindTextureUnit(9 + b, compared->frame_texture(b).id());
+      const shared::ivec2 size = compared->frame_texture(0).size2();
+      glUniform2i(glGetUniformLocation(program, "compare_size"), size.x, size.y);
+      glUniform1i(glGetUniformLocation(program, "split_column"), view.split_column);
+      glUniform1i(glGetUniformLocation(program, "split_line"), view.split_line ? 1 : 0);
+    }
     glUniformMatrix3fv(glGetUniformLocation(program, "weights"), batches, GL_FALSE, &weights[0][0][0]);
     glUniform1f(glGetUniformLocation(program, "exposure"), static_cast<float>(mapping.exposure));
+    glUniform2f(glGetUniformLocation(program, "log_luminance_range"), kLogLuminanceRange[0], kLogLuminanceRange[1]);
     if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
     glBindTextureUnit(8, encode_table_);
-    glUniform1i(glGetUniformLocation(program, "frame_height"), height);
+    const shared::ivec2 frame_size = sky.frame_texture(0).size2();
+    glUniform2i(glGetUniformLocation(program, "frame_size"), frame_size.x, frame_size.y);
+    glUniform2i(glGetUniformLocation(program, "window_size"), width, height);
     glBindVertexArray(vao_);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
@@ -178,13 +269,23 @@ class DisplayPass {
 
  private:
   // The program for a batch count, tone curve and mode, compiled on first use.
-  GLuint Program(int batches, int tone_op, bool per_channel) const {
-    const int key = batches * 100 + tone_op * 10 + (per_channel ? 1 : 0);
+  GLuint Program(int batches, int tone_op, bool per_channel, int mode, bool false_colour) const {
+    const int key = batches * 10000 + mode * 1000 + (false_colour ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
     const auto found = programs_.find(key);
     if (found != programs_.end()) return found->second;
+    std::string sum_a;
+    std::string sum_b;
+    for (int b = 0; b < batches; ++b) {
+      const std::string index = std::to_string(b);
+      sum_a += "rgb += weights[" + index + "] * texelFetch(frame" + index + ", texel, 0).rgb; ";
+      sum_b += "rgb += weights[" + index + "] * texelFetch(compare" + index + ", texel, 0).rgb; ";
+    }
     const std::string source = "#version 450 core\n#define BATCH_COUNT " + std::to_string(batches) +
                                "\n#define TONE_OP " + std::to_string(tone_op) + "\n#define PER_CHANNEL " +
-                               std::to_string(per_channel ? 1 : 0) + "\n" + kDisplayFragmentShader;
+                               std::to_string(per_channel ? 1 : 0) + "\n#define VIEW " + std::to_string(mode) +
+                               "\n#define FALSE_COLOUR " + std::to_string(false_colour ? 1 : 0) +
+                               "\n#define SKY_A_SUM " + sum_a + "\n#define SKY_B_SUM " + sum_b + "\n" +
+                               kDisplayFragmentShader;
     const GLuint vs = CompileShader(GL_VERTEX_SHADER, kDisplayVertexShader);
     const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, source.c_str());
     const GLuint program = glCreateProgram();
@@ -295,6 +396,28 @@ void WriteConfig(const std::string& path, const AtmosphereParameters& parameters
   });
 }
 
+// Whether two states have the same atmosphere knobs.
+bool SameKnobs(const ViewState& a, const ViewState& b) {
+  return a.rayleigh_density == b.rayleigh_density && a.mie_density == b.mie_density &&
+         a.ozone_density == b.ozone_density && a.mie_g == b.mie_g && a.ground_albedo == b.ground_albedo &&
+         a.ground_radius_m == b.ground_radius_m;
+}
+
+void CopyKnobs(const ViewState& from, ViewState& to) {
+  to.rayleigh_density = from.rayleigh_density;
+  to.mie_density = from.mie_density;
+  to.ozone_density = from.ozone_density;
+  to.mie_g = from.mie_g;
+  to.ground_albedo = from.ground_albedo;
+  to.ground_radius_m = from.ground_radius_m;
+}
+
+// Elek's table steps per frame run until this much time went on them (then the frame is drawn).
+constexpr double kBuildBudgetMs = 25.0;
+// The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
+// 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
+constexpr int kTimedEvery = 4;
+
 class Viewer {
  public:
   explicit Viewer(const ViewerOptions& options);
@@ -302,8 +425,27 @@ class Viewer {
   int Run();
 
  private:
-  // A new HillaireGl for `parameters` and settings_ (tables not computed yet); throws atmo::Error.
-  std::unique_ptr<gl::HillaireGl> MakeSky(const AtmosphereParameters& parameters) const;
+  // A new sky of `model` for `parameters` and the settings (tables not computed yet); throws
+  // atmo::Error.
+  std::unique_ptr<Sky> MakeSky(const std::string& model, const AtmosphereParameters& parameters) const;
+  // Builds the sky the state asks for (a model, an atmosphere, settings) as a pending one and
+  // shows it once complete; on an error goes back to what is shown.
+  void UpdateSky();
+  // Whether what is shown is final: no sky pending, and the shown one converged (reference).
+  bool Settled() const {
+    const bool compare_settled =
+        compare_model_.empty() || (compare_pending_ == nullptr && compare_sky_ != nullptr && compare_sky_->Converged());
+    return pending_ == nullptr && sky_ != nullptr && sky_->Converged() && compare_settled && waiting_shots_.empty();
+  }
+  // The compared sky (compare mode): compare_model_ on the shown atmosphere, built as the main one.
+  void UpdateCompareSky();
+  // A loaded atmosphere (preset or config) as the base: made spectral when state_.spectral.
+  void LoadBase(const AtmosphereParameters& parameters) {
+    rgb_base_ = parameters;
+    base_spectral_ = state_.spectral;
+    base_ = base_spectral_ ? MakeSpectral(rgb_base_, spectral_count_) : rgb_base_;
+  }
+  void DrawColourBar(int mode, bool false_colour);
   void UpdateDisplayWeights();
   void HandleInput(double dt_s);
   void DrawPanels();
@@ -322,11 +464,40 @@ class Viewer {
   HillaireSettings shown_settings_;
   bool settings_changed_ = false;  // the panel's hillaire options moved
   HillaireSettings settings_;
+  ElekSettings elek_settings_;     // --option of --model elek, else elek's defaults
+  ModelOptions reference_options_;  // --option and --seed of --model reference
+  std::string shown_model_;        // the model of sky_
   ViewState state_;
   ViewState loaded_;  // the knobs of base_
-  ViewState built_;   // what the GPU tables and sky view were last made for
+  ViewState built_;   // what the sky view was last made for
+  ViewState shown_knobs_;  // the atmosphere knobs of what is shown
   std::unique_ptr<gl::Context> context_;
-  std::unique_ptr<gl::HillaireGl> sky_;
+  std::unique_ptr<Sky> sky_;      // shown
+  std::unique_ptr<Sky> pending_;  // being built (elek), shown once complete
+  std::string pending_model_;
+  AtmosphereParameters pending_parameters_;
+  HillaireSettings pending_settings_;
+  std::FILE* frame_log_ = nullptr;
+  // Compare mode: the compared model (empty: none), how it shows (1 split, 2 difference), where
+  // the split is (a fraction of the width), luminance in false colour.
+  std::string compare_model_;
+  int compare_view_ = 1;
+  double split_ = 0.5;
+  bool false_colour_ = false;
+  std::unique_ptr<Sky> compare_sky_;
+  std::unique_ptr<Sky> compare_pending_;
+  std::string compare_shown_model_;
+  std::string compare_pending_model_;
+  AtmosphereParameters compare_parameters_;          // of compare_sky_
+  AtmosphereParameters compare_pending_parameters_;  // of compare_pending_
+  bool compare_view_dirty_ = false;
+  // The spectral toggle: base_ is rgb_base_ or MakeSpectral(rgb_base_, spectral_count_)
+  // (base_spectral_); spectral_count_ is --spectral's, or 15 (earth-spectral's).
+  AtmosphereParameters rgb_base_;
+  AtmosphereParameters current_rgb_base_;
+  bool base_spectral_ = false;
+  bool shown_spectral_ = false;
+  int spectral_count_ = 15;
   std::unique_ptr<DisplayPass> display_;
   std::vector<glm::mat3> weights_;
   ViewerScript script_;
@@ -339,9 +510,14 @@ class Viewer {
   char screenshot_name_[512] = "viewer";
   int preset_index_ = -1;
   PassTimings timings_;      // this frame's passes (GPU time; display and swap on the host)
-  PassTimings run_timings_;  // every frame's but the first, for the summary of a --frames run
+  PassTimings run_timings_;  // every timed frame's but the first, for the summary of a --frames run
+  PassTimings* pass_timings_ = nullptr;  // &timings_ in a timed frame, else null (no GPU waits)
   double frame_ms_ = 0.0;
   double metered_ev100_ = 0.0;
+  bool metered_ = false;  // metered_ev100_ is of the shown sky
+  int settings_generation_ = 0;          // counts the panel's hillaire option changes
+  int pending_settings_generation_ = 0;  // of pending_
+  std::string requested_model_;          // state_.model when UpdateSky last ran
   int frame_ = 0;
   // --date: the sun follows the date plus state_.date_hours, played at play_speed_ hours per
   // second, until the sun is moved by hand (date_follows_ false).
@@ -351,27 +527,57 @@ class Viewer {
   std::optional<cli::SunAtInstant> dated_sun_;  // the instant the sun shows, when it follows the date
   bool dragging_view_ = false;
   bool dragging_sun_ = false;
+  bool dragging_split_ = false;
+  std::vector<std::string> waiting_shots_;  // script screenshots waiting for a sky to write
   double last_x_ = 0.0;
   double last_y_ = 0.0;
 };
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
-  if (options_.common.model != "hillaire") {
-    throw Error("atmo-viewer shows model hillaire in this version (got --model " + options_.common.model + ")");
+  const std::vector<std::string>& models = ViewerModelNames();
+  if (std::find(models.begin(), models.end(), options_.common.model) == models.end()) {
+    throw Error("atmo-viewer shows models hillaire, elek, simple and reference (got --model " + options_.common.model +
+                ")");
   }
   if (options_.common.backend != "cpu" && options_.common.backend != "gl") {
     throw Error("unknown backend '" + options_.common.backend + "'");
   }
   options_.common.backend = "gl";  // the viewer runs on the GL backend; the metadata says so
   if (options_.render.camera == "cubemap") throw Error("atmo-viewer has no cubemap camera (use atmo render)");
-  if (options_.render.spp) throw Error("--spp is for model reference, which atmo-viewer does not show yet");
+  if (options_.render.spp && options_.common.model != "reference") {
+    throw Error("--spp is the path count of model reference; model '" + options_.common.model +
+                "' is deterministic and takes no --spp");
+  }
   plan_ = cli::PlanRender(options_.common, options_.render);
   base_ = plan_.parameters;
+  rgb_base_ = base_;
+  if (options_.common.spectral != 0) {
+    // The RGB form of --spectral's atmosphere, for the panel's toggle.
+    cli::CommonOptions rgb = options_.common;
+    rgb.spectral = 0;
+    rgb_base_ = cli::PlanRender(rgb, options_.render).parameters;
+    spectral_count_ = options_.common.spectral;
+    state_.spectral = true;
+    base_spectral_ = true;
+  }
+  current_rgb_base_ = rgb_base_;
+  shown_spectral_ = base_spectral_;
   if (static_cast<int>(ChannelBatchCount(base_.channel_count())) > kMaxDisplayBatches) {
     throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
                 std::to_string(base_.channel_count()) + "); use fewer --spectral wavelengths");
   }
-  settings_ = cli::GlHillaireSettings(options_.common);
+  // --option configures the model of --model; the others shown from the panel use their defaults.
+  const std::string& model = options_.common.model;
+  cli::CommonOptions defaults = options_.common;
+  defaults.options.clear();
+  settings_ = cli::GlHillaireSettings(model == "hillaire" ? options_.common : defaults);
+  elek_settings_ = cli::GlElekSettings(model == "elek" ? options_.common : defaults);
+  if (model == "reference") {
+    reference_options_ = cli::ParseModelOptions(options_.common.options);
+    ReferenceSettings::FromOptions(reference_options_);  // a bad option is refused now
+  }
+  if (options_.common.seed_given) reference_options_["seed"] = std::to_string(options_.common.seed);
+  state_.model = model;
   mapping_ = plan_.mapping;
   const RenderSettings& s = plan_.settings;
   state_.camera = s.camera.kind;
@@ -401,7 +607,27 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   dated_sun_ = plan_.dated_sun;
   ResetAtmosphereKnobs(base_, state_);
   loaded_ = state_;
+  shown_knobs_ = state_;
   current_ = base_;
+  compare_model_ = options_.compare;
+  if (!compare_model_.empty() && std::find(models.begin(), models.end(), compare_model_) == models.end()) {
+    throw Error("--compare takes hillaire, elek, simple or reference (got " + compare_model_ + ")");
+  }
+  if (options_.compare_view != "split" && options_.compare_view != "difference") {
+    throw Error("--compare-view takes split or difference (got " + options_.compare_view + ")");
+  }
+  compare_view_ = options_.compare_view == "split" ? 1 : 2;
+  split_ = options_.split;
+  if (!options_.false_colour.empty() && options_.false_colour != "luminance") {
+    throw Error("--false-colour takes luminance (got " + options_.false_colour + ")");
+  }
+  false_colour_ = options_.false_colour == "luminance";
+  if (!options_.frame_log.empty()) {
+    cli::CheckOutputWritable(options_.frame_log);
+    frame_log_ = std::fopen(options_.frame_log.c_str(), "w");
+    if (frame_log_ == nullptr) throw Error("cannot write " + options_.frame_log);
+    std::fprintf(frame_log_, "frame ms shown_model pending_model progress\n");
+  }
   if (!options_.script_path.empty()) {
     script_ = ParseViewerScript(ReadFileBounded(options_.script_path, "script "), options_.script_path);
   }
@@ -429,6 +655,10 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
 }
 
 Viewer::~Viewer() {
+  if (frame_log_ != nullptr) std::fclose(frame_log_);
+  compare_pending_.reset();
+  compare_sky_.reset();
+  pending_.reset();
   sky_.reset();
   display_.reset();
   ImGui_ImplOpenGL3_Shutdown();
@@ -450,14 +680,23 @@ void Viewer::UpdateDisplayWeights() {
   for (std::size_t c = 0; c < nc; ++c) weights_[c / 3][c % 3] = per_channel[c];
 }
 
-std::unique_ptr<gl::HillaireGl> Viewer::MakeSky(const AtmosphereParameters& parameters) const {
+std::unique_ptr<Sky> Viewer::MakeSky(const std::string& model, const AtmosphereParameters& parameters) const {
   if (static_cast<int>(ChannelBatchCount(parameters.channel_count())) > kMaxDisplayBatches) {
     throw Error("atmo-viewer shows up to " + std::to_string(3 * kMaxDisplayBatches) + " channels (got " +
                 std::to_string(parameters.channel_count()) + ")");
   }
-  AtmosphereParameters model_parameters = parameters;
-  if (plan_.unit != RadianceUnit::kRelative) model_parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
-  return std::make_unique<gl::HillaireGl>(*context_, model_parameters, settings_);
+  SkyRequest request;
+  request.model = model;
+  request.parameters = parameters;
+  if (plan_.unit != RadianceUnit::kRelative) {
+    request.parameters.solar_irradiance.assign(parameters.channel_count(), 1.0);
+  }
+  request.hillaire = settings_;
+  request.elek = elek_settings_;
+  request.reference_options = reference_options_;
+  request.reference_spp = options_.render.spp.value_or(0);
+  request.reference_divisor = options_.reference_divisor;
+  return viewer::MakeSky(*context_, request);
 }
 
 cli::RenderPlan Viewer::CurrentPlan() const {
@@ -477,20 +716,19 @@ cli::RenderPlan Viewer::CurrentPlan() const {
   return plan;
 }
 
-// As `atmo render --backend gl` renders a frame (gl::RenderHillaireGl): the frame pass without the
-// disc, read back, the disc integrated over the pixels on the host, then the same writer.
+// As `atmo render --backend gl` renders a frame (Sky::Screenshot: for hillaire and elek the frame
+// pass without the disc, read back, the disc integrated over the pixels on the host; reference's
+// estimate so far with its standard error), then the same writer.
 void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path) {
+  if (sky_ == nullptr) throw Error("no sky shown yet: nothing to write");
   const auto start = std::chrono::steady_clock::now();
-  const cli::RenderPlan plan = CurrentPlan();
-  RadianceTerms terms = plan.settings.terms;
-  terms.sun_disc = false;
-  sky_->RenderFrame(ToSharedCamera(plan.settings.camera), terms);
-  Image image = sky_->ReadFrame();
-  if (plan.settings.terms.sun_disc) {
-    std::vector<shared::Texture2D> transmittance;
-    for (std::size_t b = 0; b < sky_->batch_count(); ++b) transmittance.push_back(sky_->ReadTransmittance(b));
-    gl::AddSunDiscOnHost(plan.model_parameters, transmittance, plan.settings, image);
-  }
+  cli::RenderPlan plan = CurrentPlan();
+  Image standard_error;
+  std::uint64_t samples_per_pixel = 0;
+  Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
+  // Reference's estimate has its own (smaller) size.
+  plan.settings.camera.width = image.width;
+  plan.settings.camera.height = image.height;
   const double render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   cli::RenderCommand command = options_.render;
   // The PNG's exposure is the one on screen.
@@ -498,34 +736,205 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   command.ev100.reset();
   command.auto_exposure = state_.auto_exposure;
   if (!state_.auto_exposure) command.ev100 = state_.ev100;
-  // The --option flags, with the panel's hillaire options where they differ from them: what
-  // `atmo render --option ...` needs to render this frame.
+  // The --option flags of the shown model (none for a model other than --model's), with the
+  // panel's hillaire options where they differ from them: what `atmo render --option ...` needs
+  // to render this frame.
   cli::CommonOptions common = options_.common;
-  const HillaireSettings flags = cli::GlHillaireSettings(options_.common);
-  const auto set_option = [&](const std::string& key, const std::string& value) {
-    std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
-    common.options.push_back(key + "=" + value);
-  };
-  if (settings_.sky_view_samples != flags.sky_view_samples) {
-    set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+  common.model = shown_model_;
+  if (shown_model_ != options_.common.model) common.options.clear();
+  if (shown_model_ == "reference") common.backend = "cpu";  // the CPU's path tracer
+  common.spectral = shown_spectral_ ? spectral_count_ : 0;
+  if (shown_model_ == "hillaire") {
+    const HillaireSettings flags = cli::GlHillaireSettings(common);
+    const auto set_option = [&](const std::string& key, const std::string& value) {
+      std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+      common.options.push_back(key + "=" + value);
+    };
+    if (settings_.sky_view_samples != flags.sky_view_samples) {
+      set_option("sky_view_samples", std::to_string(settings_.sky_view_samples));
+    }
+    if (settings_.ray_march_samples != flags.ray_march_samples) {
+      set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
+    }
+    if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
+      set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
+    }
+    if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
+      set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
   }
-  if (settings_.ray_march_samples != flags.ray_march_samples) {
-    set_option("ray_march_samples", std::to_string(settings_.ray_march_samples));
-  }
-  if (settings_.multiple_scattering_directions != flags.multiple_scattering_directions) {
-    set_option("multiple_scattering_directions", std::to_string(settings_.multiple_scattering_directions));
-  }
-  if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
-    set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
-  cli::RenderOutputs outputs(common, command, plan, "hillaire");
+  command.width = image.width;
+  command.height = image.height;
+  cli::RenderOutputs outputs(common, command, plan, shown_model_);
   outputs.SetMetadata("atmo:writer", "atmo-viewer");
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
-  const std::vector<std::string> written = outputs.Write(exr_path, png_path, image, nullptr, render_ms);
+  const bool monte_carlo = standard_error.width > 0;
+  if (monte_carlo) {
+    outputs.SetMetadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+    outputs.SetMetadata("atmo:samplesPerPixel", std::to_string(samples_per_pixel));
+  }
+  const std::vector<std::string> written =
+      outputs.Write(exr_path, png_path, image, monte_carlo ? &standard_error : nullptr, render_ms);
   std::string files;
   for (const std::string& path : written) files += (files.empty() ? "" : ", ") + path;
   status_ = "wrote " + files;
   std::printf("atmo-viewer: frame %d: wrote %s (%dx%d %s)\n", frame_, files.c_str(), image.width, image.height,
               std::string(ToString(plan.settings.camera.kind)).c_str());
+}
+
+void Viewer::UpdateSky() {
+  // A model chosen for a geometry it cannot show: simple needs the half-space of preset simple,
+  // the others a planet (earth).
+  if (state_.model != requested_model_ && !requested_model_.empty()) {
+    const bool half_space = base_.geometry != Geometry::kSpherical;
+    const char* preset = state_.model == "simple" && !half_space  ? "simple"
+                         : state_.model != "simple" && half_space ? "earth"
+                                                                  : nullptr;
+    if (preset != nullptr) {
+      LoadBase(Preset(preset));
+      ResetAtmosphereKnobs(base_, state_);
+      loaded_ = state_;
+      const std::vector<std::string> presets = PresetNames();
+      preset_index_ = static_cast<int>(std::find(presets.begin(), presets.end(), preset) - presets.begin());
+    }
+  }
+  requested_model_ = state_.model;
+  if (state_.spectral != base_spectral_) {
+    // The RGB preset or its spectral form, the knobs kept: a knob at the loaded value of one form
+    // is at the loaded value of the other.
+    base_spectral_ = state_.spectral;
+    base_ = base_spectral_ ? MakeSpectral(rgb_base_, spectral_count_) : rgb_base_;
+    ViewState fresh = state_;
+    ResetAtmosphereKnobs(base_, fresh);
+    if (state_.mie_g == loaded_.mie_g) state_.mie_g = fresh.mie_g;
+    if (state_.ground_albedo == loaded_.ground_albedo) state_.ground_albedo = fresh.ground_albedo;
+    if (state_.ground_radius_m == loaded_.ground_radius_m) state_.ground_radius_m = fresh.ground_radius_m;
+    loaded_ = fresh;
+  }
+  const bool wanted = sky_ == nullptr || !SameKnobs(state_, shown_knobs_) || !(base_ == current_base_) ||
+                      settings_changed_ || state_.model != shown_model_;
+  if (!wanted) {
+    pending_.reset();  // a change undone before its sky was complete
+    if (options_.recompute_every_frame) {
+      sky_->Recompute(pass_timings_);
+      view_dirty_ = true;
+    }
+    return;
+  }
+  try {
+    // All or nothing: the new sky replaces the shown one only once all of its tables are built.
+    AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
+    if (pending_ == nullptr || state_.model != pending_model_ || !(next == pending_parameters_) ||
+        settings_generation_ != pending_settings_generation_) {
+      pending_.reset();
+      pending_ = MakeSky(state_.model, next);
+      pending_model_ = state_.model;
+      pending_parameters_ = next;
+      pending_settings_generation_ = settings_generation_;
+    }
+    if (!pending_->Build(kBuildBudgetMs, pass_timings_)) return;  // shown in a later frame
+    sky_ = std::move(pending_);
+    shown_model_ = pending_model_;
+    current_ = std::move(next);
+    current_base_ = base_;
+    current_rgb_base_ = rgb_base_;
+    shown_spectral_ = base_spectral_;
+    current_loaded_ = loaded_;
+    current_preset_index_ = preset_index_;
+    shown_settings_ = settings_;
+    settings_changed_ = false;
+    shown_knobs_ = state_;
+    UpdateDisplayWeights();
+    view_dirty_ = true;
+    metered_ = false;
+  } catch (const Error& error) {
+    pending_.reset();
+    if (sky_ == nullptr) throw;  // the first sky: nothing to go back to
+    // A knob out of bounds, a preset or config the model refuses: back to what is shown.
+    status_ = error.what();
+    base_ = current_base_;
+    rgb_base_ = current_rgb_base_;
+    base_spectral_ = shown_spectral_;
+    state_.spectral = shown_spectral_;
+    loaded_ = current_loaded_;
+    preset_index_ = current_preset_index_;
+    settings_ = shown_settings_;
+    settings_changed_ = false;
+    state_.model = shown_model_;
+    requested_model_ = shown_model_;
+    CopyKnobs(shown_knobs_, state_);
+  }
+}
+
+void Viewer::UpdateCompareSky() {
+  if (compare_model_.empty() || sky_ == nullptr) {
+    compare_sky_.reset();
+    compare_pending_.reset();
+    return;
+  }
+  if (compare_sky_ != nullptr && compare_shown_model_ == compare_model_ && compare_parameters_ == current_) {
+    compare_pending_.reset();
+    return;
+  }
+  try {
+    if (compare_pending_ == nullptr || compare_pending_model_ != compare_model_ ||
+        !(compare_pending_parameters_ == current_)) {
+      compare_pending_.reset();
+      compare_pending_ = MakeSky(compare_model_, current_);
+      compare_pending_model_ = compare_model_;
+      compare_pending_parameters_ = current_;
+    }
+    if (!compare_pending_->Build(kBuildBudgetMs, pass_timings_)) return;
+    compare_sky_ = std::move(compare_pending_);
+    compare_shown_model_ = compare_pending_model_;
+    compare_parameters_ = compare_pending_parameters_;
+    compare_view_dirty_ = true;
+  } catch (const Error& error) {
+    // A model that cannot show this atmosphere (simple against a planet): compare mode off.
+    status_ = std::string("compare: ") + error.what();
+    compare_pending_.reset();
+    compare_sky_.reset();
+    compare_model_.clear();
+  }
+}
+
+// The scale of the difference view (log-symmetric, ticks at +-1 %, 10 %, 100 %) or of the
+// luminance false colour (log10 cd/m^2, a tick per decade), below the panel.
+void Viewer::DrawColourBar(int mode, bool false_colour) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(10.0f, io.DisplaySize.y - 90.0f), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(420.0f, 80.0f), ImGuiCond_FirstUseEver);
+  ImGui::Begin(mode == 2 ? "(B - A) / A" : "luminance, log10 cd/m^2");
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  const float width = std::max(ImGui::GetContentRegionAvail().x, 50.0f);
+  const float height = 18.0f;
+  constexpr int kSteps = 128;
+  for (int i = 0; i < kSteps; ++i) {
+    const float u = (i + 0.5f) / kSteps;
+    const ImU32 c = mode == 2 ? DivergingColour(2.0f * u - 1.0f) : SequentialColour(u);
+    draw->AddRectFilled(ImVec2(origin.x + width * i / kSteps, origin.y),
+                        ImVec2(origin.x + width * (i + 1) / kSteps, origin.y + height), c);
+  }
+  const auto tick = [&](float u, const char* label) {
+    const float x = origin.x + width * u;
+    draw->AddLine(ImVec2(x, origin.y + height), ImVec2(x, origin.y + height + 4.0f), IM_COL32(255, 255, 255, 255));
+    const float text = ImGui::CalcTextSize(label).x;
+    draw->AddText(ImVec2(std::clamp(x - text / 2.0f, origin.x, origin.x + width - text), origin.y + height + 5.0f),
+                  IM_COL32(255, 255, 255, 255), label);
+  };
+  if (mode == 2) {
+    // t = sign(d) (log10 |d| + 3) / 3 at u = (t + 1) / 2.
+    const char* labels[7] = {"-100%", "-10%", "-1%", "0", "+1%", "+10%", "+100%"};
+    for (int k = 0; k < 7; ++k) tick(k / 6.0f, labels[k]);
+  } else if (false_colour) {
+    for (int decade = static_cast<int>(kLogLuminanceRange[0]); decade <= static_cast<int>(kLogLuminanceRange[1]);
+         ++decade) {
+      const std::string label = std::to_string(decade);
+      tick((decade - kLogLuminanceRange[0]) / (kLogLuminanceRange[1] - kLogLuminanceRange[0]), label.c_str());
+    }
+  }
+  ImGui::Dummy(ImVec2(width, height + 22.0f));
+  ImGui::End();
 }
 
 void Viewer::FollowDate() {
@@ -559,8 +968,20 @@ void Viewer::HandleInput(double dt_s) {
   } else {
     dragging_sun_ = false;
   }
+  // Left button on the split line (compare split): the line follows the mouse.
+  int window_width = 1;
+  int window_height = 1;
+  glfwGetWindowSize(window, &window_width, &window_height);
+  const bool split_shown = compare_sky_ != nullptr && compare_view_ == 1;
+  if (left && !shift && split_shown &&
+      (dragging_split_ || (free_mouse && !dragging_view_ && std::abs(x - split_ * window_width) <= 6.0))) {
+    dragging_split_ = true;
+    split_ = std::clamp(x / std::max(window_width, 1), 0.0, 1.0);
+  } else {
+    dragging_split_ = false;
+  }
   // Left button: look around (the sky follows the mouse).
-  if (left && !shift && (dragging_view_ || free_mouse)) {
+  if (left && !shift && !dragging_split_ && (dragging_view_ || free_mouse)) {
     if (dragging_view_) {
       int width = 1;
       int height = 1;
@@ -597,6 +1018,17 @@ void Viewer::DrawPanels() {
   ImGui::Begin("atmo-viewer");
   ImGui::Text("%.2f ms/frame (%.1f fps), %s", frame_ms_, frame_ms_ > 0.0 ? 1000.0 / frame_ms_ : 0.0,
               context_->renderer().c_str());
+  {
+    // The model: a new one is built while the last one stays on screen (elek: a progress bar).
+    const std::vector<std::string>& models = ViewerModelNames();
+    int index = static_cast<int>(std::find(models.begin(), models.end(), state_.model) - models.begin());
+    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0")) state_.model = models[index];
+    if (pending_ != nullptr) {
+      const std::string label = "building " + pending_model_;
+      ImGui::ProgressBar(static_cast<float>(pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
+    }
+    if (sky_ != nullptr && !sky_->Status().empty()) ImGui::TextWrapped("%s", sky_->Status().c_str());
+  }
   if (ImGui::CollapsingHeader("GPU passes (ms)", ImGuiTreeNodeFlags_DefaultOpen)) {
     for (const PassTiming& pass : timings_.entries()) ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
   }
@@ -654,7 +1086,7 @@ void Viewer::DrawPanels() {
         if (ImGui::Selectable(presets[i].c_str(), static_cast<int>(i) == preset_index_)) {
           // Made in the next frame; a preset hillaire refuses (simple's half-space) is reported there.
           preset_index_ = static_cast<int>(i);
-          base_ = Preset(presets[i]);
+          LoadBase(Preset(presets[i]));
           ResetAtmosphereKnobs(base_, state_);
           loaded_ = state_;
         }
@@ -674,11 +1106,13 @@ void Viewer::DrawPanels() {
     if (ImGui::SliderFloat("planet radius km", &radius_km, 100.0f, 100000.0f, "%.0f", ImGuiSliderFlags_Logarithmic)) {
       state_.ground_radius_m = 1000.0 * radius_km;
     }
+    const std::string spectral_label = "spectral (" + std::to_string(spectral_count_) + " wavelengths)";
+    ImGui::Checkbox(spectral_label.c_str(), &state_.spectral);
     if (ImGui::Button("reset atmosphere")) {
       ResetAtmosphereKnobs(base_, state_);
     }
   }
-  if (ImGui::CollapsingHeader("hillaire options")) {
+  if (state_.model == "hillaire" && ImGui::CollapsingHeader("hillaire options")) {
     HillaireSettings s = settings_;
     ImGui::SliderInt("sky_view_samples", &s.sky_view_samples, 1, 128);
     ImGui::SliderInt("ray_march_samples", &s.ray_march_samples, 1, 256);
@@ -689,6 +1123,7 @@ void Viewer::DrawPanels() {
         s.use_sky_view_lut != settings_.use_sky_view_lut) {
       settings_ = s;
       settings_changed_ = true;  // every table again, with the new settings
+      ++settings_generation_;
     }
   }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -703,6 +1138,28 @@ void Viewer::DrawPanels() {
     mapping_.op = static_cast<ToneMapper>(op);
     ImGui::Checkbox("per channel", &mapping_.per_channel);
   }
+  if (ImGui::CollapsingHeader("Compare", ImGuiTreeNodeFlags_DefaultOpen)) {
+    // Model B beside or against the shown model A, on the same atmosphere and view.
+    const char* names[] = {"none", "hillaire", "elek", "simple", "reference"};
+    int index = 0;
+    for (int i = 1; i < 5; ++i) {
+      if (compare_model_ == names[i]) index = i;
+    }
+    if (ImGui::Combo("compare with", &index, names, 5)) compare_model_ = index == 0 ? "" : names[index];
+    ImGui::RadioButton("split", &compare_view_, 1);
+    ImGui::SameLine();
+    ImGui::RadioButton("difference (B - A) / A", &compare_view_, 2);
+    float split = static_cast<float>(split_);
+    if (ImGui::SliderFloat("split", &split, 0.0f, 1.0f, "%.3f")) split_ = split;
+    ImGui::Checkbox("false colour: luminance", &false_colour_);
+    if (compare_pending_ != nullptr) {
+      const std::string label = "building " + compare_pending_model_;
+      ImGui::ProgressBar(static_cast<float>(compare_pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
+    }
+    if (compare_sky_ != nullptr && !compare_sky_->Status().empty()) {
+      ImGui::TextWrapped("B: %s", compare_sky_->Status().c_str());
+    }
+  }
   if (ImGui::CollapsingHeader("Files", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::InputText("config", config_path_, sizeof config_path_);
     if (ImGui::Button("save config")) {
@@ -716,7 +1173,7 @@ void Viewer::DrawPanels() {
     ImGui::SameLine();
     if (ImGui::Button("load config")) {
       try {
-        base_ = LoadParametersFile(config_path_);
+        LoadBase(LoadParametersFile(config_path_));
         preset_index_ = -1;
         ResetAtmosphereKnobs(base_, state_);
         loaded_ = state_;
@@ -746,7 +1203,9 @@ int Viewer::Run() {
   const int frames = options_.frames;
   const std::string final_exr = options_.render.exr_path;
   const std::string final_png = options_.render.png_path;
-  for (frame_ = 0; frames == 0 || frame_ < frames; ++frame_) {
+  // With --frames N the run ends at frame N - 1, or later when the shown sky is not final yet
+  // (elek's tables still building, reference short of --spp).
+  for (frame_ = 0;; ++frame_) {
     if (glfwWindowShouldClose(window)) break;
     glfwPollEvents();
     const auto now = std::chrono::steady_clock::now();
@@ -758,65 +1217,61 @@ int Viewer::Run() {
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
     HandleInput(dt_s);
-    if (!options_.no_panels) DrawPanels();
+    if (!options_.no_panels) {
+      DrawPanels();
+      const int mode = compare_sky_ != nullptr ? compare_view_ : 0;
+      if (mode == 2 || false_colour_) DrawColourBar(mode, false_colour_);
+    }
     ImGui::Render();
     if (playing_ && date_follows_) state_.date_hours += play_speed_ * dt_s;
     FollowDate();
 
-    // The atmosphere: a knob that moved rebuilds every table (a new HillaireGl: its channels may
-    // have changed); --recompute-every-frame recomputes them anyway.
-    const bool atmosphere_changed = state_.rayleigh_density != built_.rayleigh_density ||
-                                    state_.mie_density != built_.mie_density ||
-                                    state_.ozone_density != built_.ozone_density || state_.mie_g != built_.mie_g ||
-                                    state_.ground_albedo != built_.ground_albedo ||
-                                    state_.ground_radius_m != built_.ground_radius_m || !(base_ == current_base_);
-    timings_.Clear();
-    try {
-      if (sky_ == nullptr || atmosphere_changed || settings_changed_) {
-        // All or nothing: the new atmosphere and its tables replace the shown ones only once built.
-        AtmosphereParameters next = ApplyAtmosphereKnobs(base_, loaded_, state_);
-        std::unique_ptr<gl::HillaireGl> sky = MakeSky(next);
-        sky->Precompute(&timings_);
-        sky_ = std::move(sky);
-        current_ = std::move(next);
-        current_base_ = base_;
-        current_loaded_ = loaded_;
-        current_preset_index_ = preset_index_;
-        shown_settings_ = settings_;
-        settings_changed_ = false;
-        UpdateDisplayWeights();
-        view_dirty_ = true;
-      } else if (options_.recompute_every_frame) {
-        sky_->Precompute(&timings_);
-        view_dirty_ = true;
+    // The passes are timed every kTimedEvery-th frame (a timer waits for the GPU: glFinish on
+    // llvmpipe); the panel shows the last timed frame's.
+    const bool timed = frame_ % kTimedEvery == 1 % kTimedEvery;
+    pass_timings_ = timed ? &timings_ : nullptr;
+    if (timed) timings_.Clear();
+    UpdateSky();
+    UpdateCompareSky();
+    const bool view_changed = view_dirty_ || state_.altitude_m != built_.altitude_m ||
+                              state_.sun_elevation_deg != built_.sun_elevation_deg ||
+                              state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground;
+    if (sky_ != nullptr && view_changed) {
+      try {
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                      pass_timings_);
+      } catch (const Error& error) {
+        // An altitude the model refuses (below elek's ground): back to the last one.
+        status_ = error.what();
+        state_.altitude_m = built_.altitude_m;
+        sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                      pass_timings_);
       }
-    } catch (const Error& error) {
-      if (sky_ == nullptr) throw;  // the first atmosphere: nothing to go back to
-      // A knob out of bounds, or a preset or config hillaire refuses: back to what is shown.
-      status_ = error.what();
-      base_ = current_base_;
-      loaded_ = current_loaded_;
-      preset_index_ = current_preset_index_;
-      settings_ = shown_settings_;
-      settings_changed_ = false;
-      state_.rayleigh_density = built_.rayleigh_density;
-      state_.mie_density = built_.mie_density;
-      state_.ozone_density = built_.ozone_density;
-      state_.mie_g = built_.mie_g;
-      state_.ground_albedo = built_.ground_albedo;
-      state_.ground_radius_m = built_.ground_radius_m;
-    }
-    if (view_dirty_ || state_.altitude_m != built_.altitude_m || state_.sun_elevation_deg != built_.sun_elevation_deg ||
-        state_.sun_azimuth_deg != built_.sun_azimuth_deg || state_.ground != built_.ground) {
-      sky_->SetView(state_.altitude_m, SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg), state_.ground,
-                    &timings_);
       view_dirty_ = false;
     }
+    if (compare_sky_ != nullptr && (view_changed || compare_view_dirty_)) {
+      try {
+        compare_sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground,
+                              pass_timings_);
+      } catch (const Error& error) {
+        status_ = std::string("compare: ") + error.what();
+        compare_sky_.reset();
+        compare_model_.clear();
+      }
+      compare_view_dirty_ = false;
+    }
+    const bool last_frame = frames > 0 && frame_ >= frames - 1 && Settled();
     built_ = state_;
     int width = 0;
     int height = 0;
     glfwGetFramebufferSize(window, &width, &height);
-    for (const std::string& path : shots) {
+    // A screenshot asked for before any sky can be written (elek's first tables, reference's
+    // first pass) waits for the first frame that has one.
+    waiting_shots_.insert(waiting_shots_.end(), shots.begin(), shots.end());
+    const bool can_write = sky_ != nullptr && sky_->HasFrame();
+    const std::vector<std::string> ready = can_write ? std::move(waiting_shots_) : std::vector<std::string>{};
+    if (can_write) waiting_shots_.clear();
+    for (const std::string& path : ready) {
       const std::string lower = path.size() >= 4 ? path.substr(path.size() - 4) : path;
       if (lower == ".exr")
         Screenshot(path, "");
@@ -825,18 +1280,28 @@ int Viewer::Run() {
       else
         throw Error("script screenshot '" + path + "' must end in .exr or .png");
     }
-    if (frames > 0 && frame_ == frames - 1 && (!final_exr.empty() || !final_png.empty())) {
+    if (last_frame && (!final_exr.empty() || !final_png.empty())) {
       Screenshot(final_exr, final_png);
     }
-    if (width > 0 && height > 0) {
+    if (sky_ == nullptr) {
+      // Nothing built yet (elek's first tables): a black window under the panels.
+      glViewport(0, 0, width, height);
+      glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+      glClear(GL_COLOR_BUFFER_BIT);
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    } else if (width > 0 && height > 0) {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      sky_->RenderFrame(ToSharedCamera(ViewCamera(state_, width, height)), terms, &timings_);
+      sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      if (compare_sky_ != nullptr) {
+        compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      }
       // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
       // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
-      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2)) {
+      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
         const Image frame = sky_->ReadFrame();
+        metered_ = true;
         const Image srgb =
             plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
                 ? frame
@@ -845,22 +1310,30 @@ int Viewer::Run() {
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
       {
-        ScopedPassTimer timer(timings_, "display");
-        display_->Draw(*sky_, weights_, mapping_, width, height);
-        glFinish();
+        std::optional<ScopedPassTimer> timer;
+        if (timed) timer.emplace(timings_, "display");
+        DisplayPass::View view;
+        view.mode = compare_sky_ != nullptr ? compare_view_ : 0;
+        view.false_colour = false_colour_;
+        view.split_column = static_cast<int>(std::lround(split_ * width));
+        view.split_line = !options_.no_panels;
+        display_->Draw(*sky_, compare_sky_.get(), view, weights_, mapping_, width, height);
+        if (timed) glFinish();
       }
-      ScopedPassTimer timer(timings_, "panels");
+      std::optional<ScopedPassTimer> timer;
+      if (timed) timer.emplace(timings_, "panels");
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      glFinish();
+      if (timed) glFinish();
     }
-    if (frames > 0 && frame_ == frames - 1 && !options_.window_screenshot.empty()) {
+    if (last_frame && !options_.window_screenshot.empty()) {
       WriteWindow(options_.window_screenshot, width, height);
     }
     {
-      ScopedPassTimer timer(timings_, "swap");
+      std::optional<ScopedPassTimer> timer;
+      if (timed) timer.emplace(timings_, "swap");
       context_->SwapBuffers();
     }
-    if (frame_ > 0) {
+    if (frame_ > 0 && timed) {
       for (const PassTiming& pass : timings_.entries()) run_timings_.Add(pass.name, pass.last_ms);
     }
     // The frame time: from one swap to the next (the first frame compiles the shaders: left out).
@@ -869,6 +1342,14 @@ int Viewer::Run() {
       ++timed_frames;
     }
     frame_ms_ = 1e3 * dt_s;
+    if (frame_log_ != nullptr) {
+      std::fprintf(frame_log_, "%d %.3f %s %s %.6f\n", frame_, frame_ms_, sky_ ? shown_model_.c_str() : "-",
+                   pending_ ? pending_model_.c_str() : "-", pending_ ? pending_->progress() : 1.0);
+    }
+    if (last_frame) {
+      ++frame_;
+      break;
+    }
   }
   if (!options_.save_config.empty()) {
     WriteConfig(options_.save_config, current_);
@@ -876,8 +1357,10 @@ int Viewer::Run() {
   }
   if (frames > 0) {
     const double mean_ms = timed_frames > 0 ? frame_ms_sum / timed_frames : 0.0;
-    std::printf("atmo-viewer: %d frames at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames 1..%d, on %s\n",
-                frame_, options_.render.width, options_.render.height, std::string(ToString(state_.camera)).c_str(),
+    std::printf("atmo-viewer: %d frames of %s at %dx%d (%s%s), mean frame time %.2f ms (%.1f fps) over frames "
+                "1..%d, on %s\n",
+                frame_, shown_model_.c_str(), options_.render.width, options_.render.height,
+                std::string(ToString(state_.camera)).c_str(),
                 options_.recompute_every_frame ? ", every table every frame" : "", mean_ms,
                 mean_ms > 0.0 ? 1000.0 / mean_ms : 0.0, frame_ - 1, context_->renderer().c_str());
     std::string passes;
@@ -885,6 +1368,7 @@ int Viewer::Run() {
       passes += cli::Format("%s%s %.2f", passes.empty() ? "" : ", ", pass.name.c_str(), pass.total_ms / pass.calls);
     }
     std::printf("atmo-viewer: mean ms per frame that ran it: %s\n", passes.c_str());
+    if (sky_ != nullptr && !sky_->Status().empty()) std::printf("atmo-viewer: %s\n", sky_->Status().c_str());
   }
   return 0;
 }

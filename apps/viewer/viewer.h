@@ -1,9 +1,11 @@
-// atmo-viewer: model hillaire live in a window on the GL backend (docs/viewer.md).
+// atmo-viewer: models hillaire, elek, simple and reference live in a window on the GL backend
+// (docs/viewer.md).
 //
-// Every frame runs the GL passes of gl::HillaireGl into a GPU texture (the tables again when the
-// atmosphere changed, the sky-view table when the observer or the sun moved, the frame always)
-// and a small fragment shader converts it to linear sRGB, exposes and tone-maps it (the curves of
-// include/atmo/image.h) into the window; Dear ImGui draws the panels over it.
+// Every frame runs the GL passes of the model shown (skies.h: hillaire's tables again when the
+// atmosphere changed, elek's a few steps per frame, reference's CPU passes in the background; the
+// frame always) into GPU textures, and a small fragment shader converts them to linear sRGB,
+// exposes and tone-maps them (the curves of include/atmo/image.h) into the window; Dear ImGui
+// draws the panels over it.
 //
 // To use it (apps/viewer/main.cc): fill ViewerOptions from the command line, then
 //   return atmo::viewer::RunViewer(options);
@@ -30,6 +32,16 @@ struct ViewerOptions {
   // The last --frames frame as the window shows it (8-bit sRGB PNG read from the back buffer:
   // the display shader's tone mapping, and the panels unless no_panels); empty: none.
   std::string window_screenshot;
+  // One line per frame: its number, its time (ms), the model shown, the model being built and
+  // its progress (0..1); empty: none.
+  std::string frame_log;
+  int reference_divisor = 4;  // model reference renders at the window's size / this
+  // Compare mode: a second model (empty: none) shown split or as the relative difference of its
+  // luminance; split: the fraction of the width that shows the first model.
+  std::string compare;
+  std::string compare_view = "split";  // split | difference
+  double split = 0.5;
+  std::string false_colour;  // empty, or luminance
 };
 
 int RunViewer(const ViewerOptions& options);

@@ -7,6 +7,7 @@
 //   atmo::Image img = atmo::Render(*model, s);   // linear; radiance x solar_irradiance per channel
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -102,6 +103,10 @@ struct ProgressiveSettings {
   // Now and then during a pass: paths done and paths in all (pixels x samples_per_pixel); calls
   // never overlap, but may come from any thread.
   std::function<void(double done, double total)> on_progress;
+  // When given and set (from any thread), the render stops within a row of each thread and
+  // returns the estimate of the last complete pass (an empty image before the first): a viewer
+  // restarting after a change.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // Whether `model` estimates radiance by Monte Carlo, so that RenderProgressive applies to it.

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <glm/glm.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -378,6 +379,209 @@ TEST_F(Viewer, SunFollowsTheDate) {
   EXPECT_LT(MaxRelativeDifference(nine, render, 1.0), 1e-5);
 }
 
+// The frame log's lines after its header: frame, ms, shown model, model being built, progress.
+struct LoggedFrame {
+  int frame = 0;
+  double ms = 0.0;
+  std::string shown;
+  std::string pending;
+  double progress = 0.0;
+};
+std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
+  std::vector<LoggedFrame> frames;
+  std::istringstream lines(ReadFile(path));
+  std::string line;
+  std::getline(lines, line);  // header
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    LoggedFrame f;
+    words >> f.frame >> f.ms >> f.shown >> f.pending >> f.progress;
+    frames.push_back(f);
+  }
+  return frames;
+}
+
+// Switching to elek: its tables are built a few steps per frame while hillaire stays on screen;
+// frames keep coming at a bounded time, the progress rises to 1, and the finished elek frame is
+// `atmo render --backend gl --model elek`'s.
+TEST_F(Viewer, ElekBuildsWithoutFreezingTheWindow) {
+  WriteFile(dir_ / "switch.txt",
+            "at 0 model hillaire\n"
+            "at 3 model elek\n");
+  const std::string elek = "--option size=16x128x16 --option gather_rows=32";
+  const RunResult v = RunViewer(std::string(kSameFlags) + " --model elek " + elek +
+                                " --frames 5 --script switch.txt --frame-log frames.txt --screenshot viewer.exr");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const std::vector<LoggedFrame> log = ReadFrameLog(dir_ / "frames.txt");
+  ASSERT_GE(log.size(), 5u);
+  double sum = 0.0;
+  double worst = 0.0;
+  double last_progress = 0.0;
+  int building = 0;
+  for (const LoggedFrame& f : log) {
+    if (f.frame < 3) {
+      EXPECT_EQ(f.shown, "hillaire") << f.frame;
+      continue;
+    }
+    if (f.pending != "elek") continue;
+    EXPECT_EQ(f.shown, "hillaire") << f.frame;  // the last finished sky stays while elek builds
+    EXPECT_GE(f.progress, last_progress) << f.frame;
+    last_progress = f.progress;
+    if (f.frame > 3) {  // frame 3 compiles elek's programs
+      sum += f.ms;
+      worst = std::max(worst, f.ms);
+      ++building;
+    }
+  }
+  EXPECT_EQ(log.back().shown, "elek");
+  EXPECT_EQ(log.back().progress, 1.0);
+  ASSERT_GT(building, 4) << "the tables were built in too few frames to be steps";
+  const double mean = sum / building;
+  std::printf("[ figures ] elek built over %d frames: mean frame %.1f ms, longest %.1f ms, last progress %.3f\n",
+              building, mean, worst, last_progress);
+  // Each frame runs table steps for 25 ms, then at most one more step (the longest, the gather
+  // matrix, ~12 ms here) and the frame: a frame that ran a whole pass (~100 ms and more) would
+  // stand out. Generous against a loaded machine: 5x the mean.
+  EXPECT_LT(worst, 5.0 * mean);
+  const RunResult r = Run("render --backend gl --model elek " + elek + " " + kSameFlags + " --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata vm;
+  ImageMetadata rm;
+  const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
+  const Image render_image = ReadExr(dir_ / "render.exr", &rm);
+  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());
+  // The same kernels on the same inputs in steps or whole (GlElek.TablesBuiltInStepsEqualWholePasses):
+  // measured 0.
+  const double difference = MaxRelativeDifference(viewer_image, render_image, 1.0);
+  std::printf("[ figures ] elek: max relative difference viewer vs atmo render --backend gl: %.3g\n", difference);
+  EXPECT_LT(difference, 1e-5);
+  EXPECT_EQ(Metadata(vm, "atmo:model"), "elek");
+  EXPECT_EQ(Metadata(vm, "atmo:modelOptions"), Metadata(rm, "atmo:modelOptions"));
+}
+
+// Model simple on the GPU (simple.glsl in float, the disc on the host) against the CPU's double.
+TEST_F(Viewer, SimpleOnTheGpuEqualsTheCpu) {
+  const std::string flags = "--preset simple --width 160 --height 90 --sun-elevation 12 --sun-azimuth 200 --yaw 185";
+  const RunResult v = RunViewer(flags + " --model simple --frames 2 --screenshot viewer.exr");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const RunResult r = Run("render --model simple " + flags + " --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image viewer_image = ReadExr(dir_ / "viewer.exr");
+  const Image render_image = ReadExr(dir_ / "render.exr");
+  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());
+  const double difference = MaxRelativeDifference(viewer_image, render_image, 1.0);
+  std::printf("[ figures ] simple: max relative difference viewer (GL, float) vs atmo render (CPU): %.3g\n",
+              difference);
+  // Float against double in a closed form of a few exponentials: measured 7.5e-6 relative.
+  EXPECT_LT(difference, 1e-4);
+}
+
+// Model reference: the path tracer's passes accumulate on a background thread at a quarter of
+// the window's size; a --frames run waits for --spp, and the estimate is `atmo render`'s with
+// the same paths (the passes 4, 8, 16, 32 are prefixes of it).
+TEST_F(Viewer, ReferenceAccumulatesToAtmoRendersEstimate) {
+  const std::string view = "--sun-elevation 6 --sun-azimuth 200 --yaw 185 --pitch 4 --spp 32";
+  const RunResult v = RunViewer(view + " --model reference --width 160 --height 88 --frames 2 --screenshot viewer.exr");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("32 of 32 paths per pixel"), std::string::npos) << v.out;
+  const RunResult r = Run("render --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata vm;
+  const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
+  const Image render_image = ReadExr(dir_ / "render.exr");
+  EXPECT_EQ(viewer_image.width, 40);
+  EXPECT_EQ(Metadata(vm, "atmo:samplesPerPixel"), "32");
+  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());  // with the .stderr channels
+  EXPECT_LT(MaxRelativeDifference(viewer_image, render_image, 1.0), 1e-6);
+}
+
+// Compare mode, difference view: a model against itself is (B - A) / A = 0 everywhere, the scale's
+// neutral white; against another model (elek has no lit ground, hillaire has) it is not.
+TEST_F(Viewer, DifferenceOfAModelWithItselfIsNeutral) {
+  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3 --compare-view difference";
+  RunResult v = RunViewer(flags + " --compare hillaire --window-screenshot same.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  int width = 0, height = 0;
+  const std::vector<unsigned char> same = ReadPngRgb(dir_ / "same.png", width, height);
+  int off = 0;
+  for (const unsigned char code : same) off += code != 255 ? 1 : 0;
+  EXPECT_EQ(off, 0) << "of " << same.size() << " samples";
+  v = RunViewer(flags + " --model elek --option size=16x64x16 --compare hillaire --window-screenshot other.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const std::vector<unsigned char> other = ReadPngRgb(dir_ / "other.png", width, height);
+  // The ground (the bottom row): hillaire's lit ground against elek's black is +100 %, red.
+  const std::size_t bottom = (static_cast<std::size_t>(height - 1) * width + width / 2) * 3;
+  EXPECT_GT(other[bottom], 200);
+  EXPECT_LT(other[bottom + 2], 50);
+}
+
+// Compare mode, split view: left of the split the first model's window, right of it the second's,
+// pixel for pixel (the same display pass on each one's frame).
+TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
+  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3";
+  const std::string elek = " --model elek --option size=16x64x16";
+  RunResult v = RunViewer(flags + elek + " --compare hillaire --split 0.4 --window-screenshot split.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  v = RunViewer(flags + elek + " --window-screenshot a.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  v = RunViewer(flags + " --window-screenshot b.png");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  int width = 0, height = 0;
+  const std::vector<unsigned char> split = ReadPngRgb(dir_ / "split.png", width, height);
+  const std::vector<unsigned char> a = ReadPngRgb(dir_ / "a.png", width, height);
+  const std::vector<unsigned char> b = ReadPngRgb(dir_ / "b.png", width, height);
+  const int column = static_cast<int>(std::lround(0.4 * width));  // 64 of 160
+  int differ_a = 0;
+  int differ_b = 0;
+  int differ_ab = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3 + c;
+        if (x < column) differ_a += split[i] != a[i] ? 1 : 0;
+        if (x >= column) differ_b += split[i] != b[i] ? 1 : 0;
+        differ_ab += a[i] != b[i] ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(differ_a, 0);
+  EXPECT_EQ(differ_b, 0);
+  EXPECT_GT(differ_ab, 1000);  // the two models do differ, so the halves say something
+}
+
+// The spectral toggle (the panel's checkbox, the script key `spectral`): the RGB preset, then its
+// 15-wavelength form in the same run, each frame what `atmo render` renders without and with
+// --spectral 15; and back.
+TEST_F(Viewer, SpectralToggleSwitchesWithoutRestarting) {
+  WriteFile(dir_ / "toggle.txt",
+            "screenshot 0 rgb.exr\n"
+            "at 1 spectral on\n"
+            "screenshot 1 spectral.exr\n"
+            "at 2 spectral off\n"
+            "screenshot 2 back.exr\n");
+  const RunResult v = RunViewer(std::string(kSameFlags) + " --frames 3 --script toggle.txt");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  RunResult r = Run("render --backend gl " + std::string(kSameFlags) + " --exr render_rgb.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Run("render --backend gl --spectral 15 " + std::string(kSameFlags) + " --exr render_spectral.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata sm;
+  ImageMetadata rm;
+  const Image rgb = ReadExr(dir_ / "rgb.exr");
+  const Image spectral = ReadExr(dir_ / "spectral.exr", &sm);
+  const Image back = ReadExr(dir_ / "back.exr");
+  const Image render_rgb = ReadExr(dir_ / "render_rgb.exr");
+  const Image render_spectral = ReadExr(dir_ / "render_spectral.exr", &rm);
+  EXPECT_LT(MaxRelativeDifference(rgb, render_rgb, 1.0), 1e-5);
+  EXPECT_LT(MaxRelativeDifference(spectral, render_spectral, 1.0), 1e-5);
+  EXPECT_LT(MaxRelativeDifference(back, render_rgb, 1.0), 1e-5);
+  EXPECT_EQ(Metadata(sm, "atmo:parameterHash"), Metadata(rm, "atmo:parameterHash"));
+  // The spectral form is another sky (its own quadrature of the spectrum): a visible change.
+  const double change = MaxRelativeDifference(spectral, rgb, 1.0);
+  std::printf("[ figures ] spectral toggle: max relative change RGB -> 15 wavelengths %.3g\n", change);
+  EXPECT_GT(change, 1e-3);
+}
+
 TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   WriteFile(dir_ / "bad.txt", "at 0 yaw 10\nat 1 sun-height 3\n");
   RunResult r = RunViewer("--frames 2 --script bad.txt");
@@ -387,9 +591,18 @@ TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   r = RunViewer("--screenshot x.exr");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("needs --frames N"), std::string::npos) << r.err;
-  r = RunViewer("--frames 1 --model elek");
+  r = RunViewer("--frames 1 --model bruneton");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("model hillaire"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("models hillaire, elek, simple and reference"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --model elek --spp 4");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("takes no --spp"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --compare bruneton");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--compare takes"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --compare elek --compare-view blend");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--compare-view takes split or difference"), std::string::npos) << r.err;
   r = RunViewer("--frames 1 --width 0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_FALSE(fs::exists(dir_ / "x.exr"));

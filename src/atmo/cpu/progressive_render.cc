@@ -102,6 +102,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
     const auto trace_rows = [&](const oneapi::tbb::blocked_range<int>& rows) {
       cpu::PathTally tally(nc);
       for (int y = rows.begin(); y < rows.end(); ++y) {
+        if (progressive.cancel != nullptr && progressive.cancel->load(std::memory_order_relaxed)) return;
         for (int x = 0; x < width; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * width + x;
           if (IsZero(views[i])) continue;
@@ -122,6 +123,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
       }
     };
     oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, height), trace_rows);
+    if (progressive.cancel != nullptr && progressive.cancel->load()) return result;  // the last complete pass
     done = next;
     next = std::min(total, 2 * next);
 

@@ -1,6 +1,8 @@
 #include "gl/elek_gl.h"
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <string>
 #include <string_view>
@@ -43,6 +45,11 @@ const ComputeProgram& ElekProgram(const Context& context, const std::string& mai
 constexpr const char* kTable3DHeader = R"glsl(
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 uniform AtmosphereParameters atmosphere;
+// A dispatch may cover only some work-group rows (y) of its table, from this one on
+// (ElekTablesBuilder's steps); 0 for a whole pass.
+uniform int group_row_offset;
+
+ivec3 GetElekTexel() { return ivec3(gl_GlobalInvocationID) + ivec3(0, 4 * group_row_offset, 0); }
 
 vec4 ElekStoredTexel(vec3 value) {
   return vec4(mix(value, vec3(0.0), lessThan(abs(value), vec3(1e-30))), 1.0);
@@ -60,7 +67,7 @@ uniform int sample_count;
 
 void main() {
   ivec3 size = imageSize(rayleigh_table);
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   vec3 rayleigh;
   vec3 mie;
@@ -86,7 +93,7 @@ uniform int sample_count;
 
 void main() {
   ivec3 size = imageSize(rayleigh_table);
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   vec3 rayleigh;
   vec3 mie;
@@ -130,7 +137,7 @@ uniform bool coupled;
 
 void main() {
   ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   int rows = imageSize(order_rayleigh).y;
   vec2 row_sum = vec2(0.0);
@@ -161,7 +168,7 @@ uniform int azimuth_count;
 
 void main() {
   ivec3 size = imageSize(weights);  // (table rows, gather rows, D)
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   float h;
   float mu;
@@ -184,7 +191,7 @@ uniform bool coupled;
 
 void main() {
   ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   int rows = imageSize(order_rayleigh).y;
   vec3 rayleigh_sum = vec3(0.0);
@@ -244,7 +251,7 @@ uniform int mapping;
 
 void main() {
   ivec3 size = imageSize(ground_radiance);
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   imageStore(ground_radiance, texel, ElekStoredTexel(ComputeElekGroundRadianceTexel(atmosphere,
       transmittance_texture, ground_irradiance, mapping, size, texel)));
@@ -260,7 +267,7 @@ layout(rgba32f, binding = 3) uniform readonly image3D ground_radiance;
 
 void main() {
   ivec3 size = imageSize(gather_rayleigh);  // (W, gather rows, D)
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   int rows = imageSize(ground_radiance).y;
   vec2 row_sum = vec2(0.0);
@@ -289,7 +296,7 @@ uniform bool first_order;
 
 void main() {
   ivec3 size = imageSize(total_rayleigh);
-  ivec3 texel = ivec3(gl_GlobalInvocationID);
+  ivec3 texel = GetElekTexel();
   if (any(greaterThanEqual(texel, size))) return;
   vec3 rayleigh = texelFetch(order_rayleigh, texel, 0).rgb;
   vec3 mie = texelFetch(order_mie, texel, 0).rgb;
@@ -416,135 +423,270 @@ shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_
   return km;
 }
 
-// The passes of ElekModel::ComputeTables, in its order.
-ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::AtmosphereParameters& km,
-                                 const ElekSettings& settings, PassTimings* timings) {
+// The passes of ElekModel::ComputeTables, in its order, as a list of stages (a pass, or one
+// dispatch of a pass with several); a 3D stage runs in steps of some work-group rows.
+struct ElekTablesBuilder::State {
+  State(const Context& c, const shared::AtmosphereParameters& k, const ElekSettings& s)
+      : context(c), km(k), settings(s) {}
+  const Context& context;
+  shared::AtmosphereParameters km;
+  ElekSettings settings;
+  ElekPrograms p;
+  ElekTablesGl tables;
+  GpuTexture matrix;
+  // The temporaries of the order being computed.
+  ElekScatteringGl gather_0;
+  ElekScatteringGl gather_pi;
+  GpuTexture weights[2];
+  GpuTexture irradiance;
+  GpuTexture radiance;
+  struct Stage {
+    std::string name;  // the pass it belongs to (timings)
+    int rows;          // work-group rows (y) of its dispatch; 1 for a stage that runs whole
+    std::function<void(int first_row, int row_count)> run;
+  };
+  std::vector<Stage> stages;
+  std::size_t stage = 0;
+  int next_row = 0;
+  int rows_per_step = 0;
+  std::size_t steps_done = 0;
+  std::size_t steps_total = 0;
+};
+
+namespace {
+
+int GroupRows(int size_y) { return (size_y + kGroupSize3D - 1) / kGroupSize3D; }
+
+// Rows [first_row, first_row + row_count) of work groups of a 3D pass over `size`.
+void DispatchRows3D(const ComputeProgram& program, shared::ivec3 size, int first_row, int row_count) {
+  program.SetInt("group_row_offset", first_row);
+  DispatchWorkGroups(program, {(size.x + kGroupSize3D - 1) / kGroupSize3D, row_count,
+                               (size.z + kGroupSize3D - 1) / kGroupSize3D});
+}
+
+}  // namespace
+
+ElekTablesBuilder::ElekTablesBuilder(const Context& context, const shared::AtmosphereParameters& km,
+                                     const ElekSettings& settings, int rows_per_step, PassTimings* timings)
+    : state_(std::make_unique<State>(context, km, settings)) {
   CheckSettings(settings);
   context.MakeCurrent();
+  State& s = *state_;
+  s.rows_per_step = rows_per_step;
   double compile_ms = 0.0;
   // The ground term where this batch's albedo is above 0 (ElekSettings::UsesGround; a batch of
   // albedo 0 would add 0).
   const bool ground = settings.ground != "off" && settings.orders >= 2 &&
                       (km.ground_albedo.x > 0.0 || km.ground_albedo.y > 0.0 || km.ground_albedo.z > 0.0);
-  const ElekPrograms p = GetElekPrograms(context, settings, ground, compile_ms);
+  s.p = GetElekPrograms(context, settings, ground, compile_ms);
   if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
-  for (const ComputeProgram* program : {p.single, p.sum, p.scatter, p.gather_matrix, p.gather, p.phase_weights,
-                                        p.phase_gather, p.ground_irradiance, p.ground_radiance, p.ground_gather}) {
-    if (program != nullptr) SetAtmosphereUniforms(*program, "atmosphere", km);
-  }
   const shared::ivec3 size = settings.size;
-  ElekTablesGl tables;
-  GpuPassTimer timer(timings);
+  const shared::ivec3 gather_size(size.x, settings.gather_rows, size.z);
+  const auto set_ray = [&s](const ComputeProgram& program) {
+    SetAtmosphereUniforms(program, "atmosphere", s.km);
+    program.SetInt("mapping", s.settings.mapping);
+    program.SetInt("steps", s.settings.steps);
+    program.SetInt("sample_count", s.settings.samples);
+  };
+  // Every step sets all the uniforms and bindings it uses: between steps other passes (a viewer's
+  // frames) use the same programs and units.
+  const auto add = [&s](std::string name, int rows, std::function<void(int, int)> run) {
+    s.stages.push_back({std::move(name), rows, std::move(run)});
+  };
 
   // The transmittance table of the sun rays: hillaire's pass (the CPU's cpu::ComputeTransmittanceTable).
-  tables.transmittance = GpuTexture::Make2D(settings.transmittance_lut);
-  RunTransmittancePass(context, km, settings.transmittance_samples, tables.transmittance);
-  timer.Stop("elek_transmittance_lut");
-
-  const auto set_ray = [&](const ComputeProgram& program) {
-    program.SetInt("mapping", settings.mapping);
-    program.SetInt("steps", settings.steps);
-    program.SetInt("sample_count", settings.samples);
-  };
-  tables.orders.push_back(MakeScattering(size));
-  set_ray(*p.single);
-  BindSamplers(*p.single, {{"transmittance_texture", &tables.transmittance}});
-  BindOutputs(tables.orders[0]);
-  DispatchCompute3D(*p.single, size);
-  timer.Stop("elek_single_lut");
-
-  GpuTexture matrix;
+  add("elek_transmittance_lut", 1, [&s](int, int) {
+    s.tables.transmittance = GpuTexture::Make2D(s.settings.transmittance_lut);
+    RunTransmittancePass(s.context, s.km, s.settings.transmittance_samples, s.tables.transmittance);
+  });
+  add("elek_single_lut", GroupRows(size.y), [&s, set_ray, size](int first, int count) {
+    if (first == 0) s.tables.orders.push_back(MakeScattering(size));
+    set_ray(*s.p.single);
+    BindSamplers(*s.p.single, {{"transmittance_texture", &s.tables.transmittance}});
+    BindOutputs(s.tables.orders[0]);
+    DispatchRows3D(*s.p.single, size, first, count);
+  });
   if (settings.orders >= 2) {
-    matrix = GpuTexture::Make2D({size.y, settings.gather_rows});
-    p.gather_matrix->SetInt("mapping", settings.mapping);
-    p.gather_matrix->SetInt("point_count", settings.gather_points);
-    p.gather_matrix->SetInt("azimuth_count", settings.gather_azimuths);
-    matrix.BindImage(0);
-    DispatchCompute2D(*p.gather_matrix, matrix.size2());
-    timer.Stop("elek_gather_matrix_lut");
-    set_ray(*p.scatter);
-    p.gather->SetInt("coupled", settings.coupled ? 1 : 0);
+    add("elek_gather_matrix_lut", 1, [&s, size](int, int) {
+      s.matrix = GpuTexture::Make2D({size.y, s.settings.gather_rows});
+      const ComputeProgram& program = *s.p.gather_matrix;
+      SetAtmosphereUniforms(program, "atmosphere", s.km);
+      program.SetInt("mapping", s.settings.mapping);
+      program.SetInt("point_count", s.settings.gather_points);
+      program.SetInt("azimuth_count", s.settings.gather_azimuths);
+      s.matrix.BindImage(0);
+      DispatchCompute2D(program, s.matrix.size2());
+    });
   }
-  const shared::ivec3 gather_size(size.x, settings.gather_rows, size.z);
   for (int k = 2; k <= settings.orders; ++k) {
-    const ElekScatteringGl& previous = tables.orders[k - 2];
     const bool phase = settings.phase_gather && k == 2;
-    ElekScatteringGl gather_0 = MakeScattering(gather_size);
-    ElekScatteringGl gather_pi;
+    const std::string gather_name = "elek_gather_" + std::to_string(k) + "_lut";
     if (phase) {
       // The CPU's point count for the phase gather (ElekModel::ComputeTables): 4 points become 2.
       const int point_count = settings.gather_points == 4 ? 2 : settings.gather_points;
-      gather_pi = MakeScattering(gather_size);
-      // One weight table per slice, so that no pass overwrites a table an earlier pass reads.
-      const GpuTexture weights[2] = {GpuTexture::Make3D({size.y, settings.gather_rows, size.z}),
-                                     GpuTexture::Make3D({size.y, settings.gather_rows, size.z})};
-      p.phase_weights->SetInt("mapping", settings.mapping);
-      p.phase_weights->SetInt("point_count", point_count);
-      p.phase_weights->SetInt("azimuth_count", settings.gather_azimuths);
-      p.phase_gather->SetInt("coupled", settings.coupled ? 1 : 0);
+      const shared::ivec3 weights_size(size.y, settings.gather_rows, size.z);
       for (int slice = 0; slice < 2; ++slice) {
-        p.phase_weights->SetInt("opposite_side", slice);
-        weights[slice].BindImage(0);
-        DispatchCompute3D(*p.phase_weights, weights[slice].size());
-        BindInputImages({&weights[slice], &previous.rayleigh, &previous.mie});
-        BindOutputs(slice == 0 ? gather_0 : gather_pi);
-        DispatchCompute3D(*p.phase_gather, gather_size);
+        // One weight table per slice, so that no pass overwrites a table an earlier pass reads.
+        add(gather_name, GroupRows(weights_size.y), [&s, slice, point_count, weights_size, gather_size](int first,
+                                                                                                       int count) {
+          if (first == 0) {
+            if (slice == 0) {
+              s.gather_0 = MakeScattering(gather_size);
+              s.gather_pi = MakeScattering(gather_size);
+            }
+            s.weights[slice] = GpuTexture::Make3D(weights_size);
+          }
+          const ComputeProgram& program = *s.p.phase_weights;
+          SetAtmosphereUniforms(program, "atmosphere", s.km);
+          program.SetInt("mapping", s.settings.mapping);
+          program.SetInt("point_count", point_count);
+          program.SetInt("azimuth_count", s.settings.gather_azimuths);
+          program.SetInt("opposite_side", slice);
+          s.weights[slice].BindImage(0);
+          DispatchRows3D(program, weights_size, first, count);
+        });
+        add(gather_name, GroupRows(gather_size.y), [&s, slice, k, gather_size](int first, int count) {
+          const ElekScatteringGl& previous = s.tables.orders[k - 2];
+          const ComputeProgram& program = *s.p.phase_gather;
+          SetAtmosphereUniforms(program, "atmosphere", s.km);
+          program.SetInt("coupled", s.settings.coupled ? 1 : 0);
+          BindInputImages({&s.weights[slice], &previous.rayleigh, &previous.mie});
+          BindOutputs(slice == 0 ? s.gather_0 : s.gather_pi);
+          DispatchRows3D(program, gather_size, first, count);
+        });
       }
     } else {
-      BindInputImages({&matrix, &previous.rayleigh, &previous.mie});
-      BindOutputs(gather_0);
-      DispatchCompute3D(*p.gather, gather_size);
+      add(gather_name, GroupRows(gather_size.y), [&s, k, gather_size](int first, int count) {
+        if (first == 0) {
+          s.gather_0 = MakeScattering(gather_size);
+          s.gather_pi = ElekScatteringGl{};
+        }
+        const ElekScatteringGl& previous = s.tables.orders[k - 2];
+        const ComputeProgram& program = *s.p.gather;
+        SetAtmosphereUniforms(program, "atmosphere", s.km);
+        program.SetInt("coupled", s.settings.coupled ? 1 : 0);
+        BindInputImages({&s.matrix, &previous.rayleigh, &previous.mie});
+        BindOutputs(s.gather_0);
+        DispatchRows3D(program, gather_size, first, count);
+      });
     }
-    timer.Stop("elek_gather_" + std::to_string(k) + "_lut");
     if (ground) {
       // The ground's light of k - 1 events: the reflection of E^(k-2) (the sun itself for k = 2).
-      const GpuTexture irradiance = GpuTexture::Make2D({size.z, 1});
-      p.ground_irradiance->SetInt("direct", k == 2 ? 1 : 0);
-      p.ground_irradiance->SetInt("mapping", settings.mapping);
-      p.ground_irradiance->SetInt("azimuth_count", settings.gather_azimuths);
-      const ElekScatteringGl& source = tables.orders[k == 2 ? 0 : k - 3];
-      BindSamplers(*p.ground_irradiance, {{"transmittance_texture", &tables.transmittance},
-                                          {"rayleigh_table", &source.rayleigh},
-                                          {"mie_table", &source.mie}});
-      irradiance.BindImage(0);
-      DispatchCompute2D(*p.ground_irradiance, irradiance.size2());
-      const GpuTexture radiance = GpuTexture::Make3D(size);
-      p.ground_radiance->SetInt("mapping", settings.mapping);
-      BindSamplers(*p.ground_radiance,
-                   {{"transmittance_texture", &tables.transmittance}, {"ground_irradiance", &irradiance}});
-      radiance.BindImage(0);
-      DispatchCompute3D(*p.ground_radiance, size);
-      for (const ElekScatteringGl* gather : {&gather_0, phase ? &gather_pi : nullptr}) {
-        if (gather == nullptr) continue;
-        glBindImageTexture(0, gather->rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
-        glBindImageTexture(1, gather->mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
-        BindInputImages({&matrix, &radiance});
-        DispatchCompute3D(*p.ground_gather, gather_size);
+      const std::string ground_name = "elek_ground_" + std::to_string(k) + "_lut";
+      add(ground_name, 1, [&s, k, size](int, int) {
+        s.irradiance = GpuTexture::Make2D({size.z, 1});
+        const ComputeProgram& program = *s.p.ground_irradiance;
+        SetAtmosphereUniforms(program, "atmosphere", s.km);
+        program.SetInt("direct", k == 2 ? 1 : 0);
+        program.SetInt("mapping", s.settings.mapping);
+        program.SetInt("azimuth_count", s.settings.gather_azimuths);
+        const ElekScatteringGl& source = s.tables.orders[k == 2 ? 0 : k - 3];
+        BindSamplers(program, {{"transmittance_texture", &s.tables.transmittance},
+                               {"rayleigh_table", &source.rayleigh},
+                               {"mie_table", &source.mie}});
+        s.irradiance.BindImage(0);
+        DispatchCompute2D(program, s.irradiance.size2());
+      });
+      add(ground_name, GroupRows(size.y), [&s, size](int first, int count) {
+        if (first == 0) s.radiance = GpuTexture::Make3D(size);
+        const ComputeProgram& program = *s.p.ground_radiance;
+        SetAtmosphereUniforms(program, "atmosphere", s.km);
+        program.SetInt("mapping", s.settings.mapping);
+        BindSamplers(program,
+                     {{"transmittance_texture", &s.tables.transmittance}, {"ground_irradiance", &s.irradiance}});
+        s.radiance.BindImage(0);
+        DispatchRows3D(program, size, first, count);
+      });
+      for (int slice = 0; slice < (phase ? 2 : 1); ++slice) {
+        add(ground_name, GroupRows(gather_size.y), [&s, slice, gather_size](int first, int count) {
+          const ElekScatteringGl& gather = slice == 0 ? s.gather_0 : s.gather_pi;
+          const ComputeProgram& program = *s.p.ground_gather;
+          SetAtmosphereUniforms(program, "atmosphere", s.km);
+          glBindImageTexture(0, gather.rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+          glBindImageTexture(1, gather.mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+          BindInputImages({&s.matrix, &s.radiance});
+          DispatchRows3D(program, gather_size, first, count);
+        });
       }
-      timer.Stop("elek_ground_" + std::to_string(k) + "_lut");
     }
-    const ElekScatteringGl& slice_pi = phase ? gather_pi : gather_0;
-    tables.orders.push_back(MakeScattering(size));
-    BindSamplers(*p.scatter, {{"gather_rayleigh_0", &gather_0.rayleigh},
-                              {"gather_mie_0", &gather_0.mie},
-                              {"gather_rayleigh_pi", &slice_pi.rayleigh},
-                              {"gather_mie_pi", &slice_pi.mie}});
-    BindOutputs(tables.orders.back());
-    DispatchCompute3D(*p.scatter, size);
-    timer.Stop("elek_scatter_" + std::to_string(k) + "_lut");
+    add("elek_scatter_" + std::to_string(k) + "_lut", GroupRows(size.y),
+        [&s, set_ray, phase, size](int first, int count) {
+          if (first == 0) s.tables.orders.push_back(MakeScattering(size));
+          const ElekScatteringGl& slice_pi = phase ? s.gather_pi : s.gather_0;
+          set_ray(*s.p.scatter);
+          BindSamplers(*s.p.scatter, {{"gather_rayleigh_0", &s.gather_0.rayleigh},
+                                      {"gather_mie_0", &s.gather_0.mie},
+                                      {"gather_rayleigh_pi", &slice_pi.rayleigh},
+                                      {"gather_mie_pi", &slice_pi.mie}});
+          BindOutputs(s.tables.orders.back());
+          DispatchRows3D(*s.p.scatter, size, first, count);
+        });
   }
+  for (int k = 0; k < settings.orders; ++k) {
+    add("elek_sum_lut", GroupRows(size.y), [&s, k, size](int first, int count) {
+      if (k == 0 && first == 0) s.tables.total = MakeScattering(size);
+      const ComputeProgram& program = *s.p.sum;
+      SetAtmosphereUniforms(program, "atmosphere", s.km);
+      glBindImageTexture(0, s.tables.total.rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+      glBindImageTexture(1, s.tables.total.mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+      program.SetInt("first_order", k == 0 ? 1 : 0);
+      BindSamplers(program, {{"order_rayleigh", &s.tables.orders[k].rayleigh}, {"order_mie", &s.tables.orders[k].mie}});
+      DispatchRows3D(program, size, first, count);
+    });
+  }
+  for (const State::Stage& stage : s.stages) {
+    const int per_step = rows_per_step <= 0 ? stage.rows : std::min(rows_per_step, stage.rows);
+    s.steps_total += static_cast<std::size_t>((stage.rows + per_step - 1) / per_step);
+  }
+}
 
-  tables.total = MakeScattering(size);
-  glBindImageTexture(0, tables.total.rayleigh.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
-  glBindImageTexture(1, tables.total.mie.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
-  for (std::size_t k = 0; k < tables.orders.size(); ++k) {
-    p.sum->SetInt("first_order", k == 0 ? 1 : 0);
-    BindSamplers(*p.sum, {{"order_rayleigh", &tables.orders[k].rayleigh}, {"order_mie", &tables.orders[k].mie}});
-    DispatchCompute3D(*p.sum, size);
+ElekTablesBuilder::~ElekTablesBuilder() = default;
+
+bool ElekTablesBuilder::done() const { return state_->stage >= state_->stages.size(); }
+
+double ElekTablesBuilder::progress() const {
+  return static_cast<double>(state_->steps_done) / static_cast<double>(state_->steps_total);
+}
+
+void ElekTablesBuilder::Step(PassTimings* timings) {
+  State& s = *state_;
+  if (done()) return;
+  s.context.MakeCurrent();
+  const State::Stage& stage = s.stages[s.stage];
+  const int per_step = s.rows_per_step <= 0 ? stage.rows : std::min(s.rows_per_step, stage.rows);
+  const int count = std::min(per_step, stage.rows - s.next_row);
+  GpuPassTimer timer(timings);
+  stage.run(s.next_row, count);
+  timer.Stop(stage.name);
+  s.next_row += count;
+  ++s.steps_done;
+  if (s.next_row >= stage.rows) {
+    ++s.stage;
+    s.next_row = 0;
   }
-  timer.Stop("elek_sum_lut");
-  CheckGlError("elek tables");
-  return tables;
+  if (done()) {
+    // The temporaries of the last order are no longer read.
+    s.gather_0 = {};
+    s.gather_pi = {};
+    s.weights[0] = {};
+    s.weights[1] = {};
+    s.irradiance = {};
+    s.radiance = {};
+    s.matrix = {};
+    CheckGlError("elek tables");
+  }
+}
+
+ElekTablesGl ElekTablesBuilder::Take() {
+  if (!done()) throw Error("GL elek: the tables are not complete");
+  return std::move(state_->tables);
+}
+
+ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::AtmosphereParameters& km,
+                                 const ElekSettings& settings, PassTimings* timings) {
+  ElekTablesBuilder builder(context, km, settings, /*rows_per_step=*/0, timings);
+  while (!builder.done()) builder.Step(timings);
+  return builder.Take();
 }
 
 void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* timings) {
@@ -565,6 +707,28 @@ void PrecomputeElekGl(const Context& context, ElekModel& model, PassTimings* tim
   }
 }
 
+void RunElekFramePass(const Context& context, const shared::AtmosphereParameters& km, const ElekSettings& settings,
+                      const ElekTablesGl& tables, const shared::CameraParameters& camera, double r_km,
+                      const glm::dvec3& sun_direction, bool sun_disc, const shared::vec3& solar_irradiance,
+                      const GpuTexture& out) {
+  context.MakeCurrent();
+  double compile_ms = 0.0;
+  const ComputeProgram& program = ElekProgram(context, kFrameMain, "elek frame", compile_ms);
+  SetAtmosphereUniforms(program, "atmosphere", km);
+  SetCameraUniforms(program, "camera", camera);
+  program.SetInt("mapping", settings.mapping);
+  program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
+  program.SetFloat("r", r_km);
+  program.SetVec3("sun_direction", sun_direction);
+  program.SetInt("sun_disc", sun_disc ? 1 : 0);
+  program.SetVec3("solar_irradiance", solar_irradiance);
+  BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
+                         {"rayleigh_table", &tables.total.rayleigh},
+                         {"mie_table", &tables.total.mie}});
+  out.BindImage(0);
+  DispatchCompute2D(program, out.size2());
+}
+
 Image RenderElekGl(const Context& context, const AtmosphereParameters& parameters, const ElekSettings& settings,
                    const RenderSettings& render, PassTimings* timings) {
   ValidateCamera(render.camera);
@@ -576,7 +740,7 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   if (render.altitude_m < 0.0) throw Error("altitude_m must be >= 0 for model elek");
 
   double compile_ms = 0.0;
-  const ComputeProgram& program = ElekProgram(context, kFrameMain, "elek frame", compile_ms);
+  ElekProgram(context, kFrameMain, "elek frame", compile_ms);  // compiled before any pass is timed
   if (timings != nullptr) timings->Add("elek_gl_compile", compile_ms);
   const glm::dvec3 sun = glm::normalize(SunDirection(render.sun_elevation_deg, render.sun_azimuth_deg));
   const shared::CameraParameters camera = ToSharedCamera(render.camera);
@@ -593,21 +757,10 @@ Image RenderElekGl(const Context& context, const AtmosphereParameters& parameter
   for (std::size_t b = 0; b < model.batches().size(); ++b) {
     const shared::AtmosphereParameters km = ElekKmAtmosphere(model, b);
     const ElekTablesGl tables = ComputeElekTablesGl(context, km, settings, timings);
-    SetAtmosphereUniforms(program, "atmosphere", km);
-    SetCameraUniforms(program, "camera", camera);
-    program.SetInt("mapping", settings.mapping);
-    program.SetInt("mie_per_channel", settings.mie_per_channel ? 1 : 0);
-    program.SetFloat("r", (parameters.ground_radius_m + render.altitude_m) / 1000.0);
-    program.SetVec3("sun_direction", sun);
-    program.SetInt("sun_disc", 0);  // added on the host, integrated over the pixels (AddSunDiscOnHost)
-    program.SetVec3("solar_irradiance", BatchValues(parameters.solar_irradiance, b));
-    BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
-                           {"rayleigh_table", &tables.total.rayleigh},
-                           {"mie_table", &tables.total.mie}});
-    frame.BindImage(0);
     {
       GpuPassTimer timer(timings);
-      DispatchCompute2D(program, {camera.width, camera.height});
+      RunElekFramePass(context, km, settings, tables, camera, (parameters.ground_radius_m + render.altitude_m) / 1000.0,
+                       sun, /*sun_disc=*/false, BatchValues(parameters.solar_irradiance, b), frame);
       timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
     }
     const std::vector<float> rgba = frame.DownloadRgba();

@@ -30,7 +30,10 @@
 // elek rejects, and for RenderElekGl what atmo::Render rejects.
 #pragma once
 
+#include <memory>
 #include <vector>
+
+#include <glm/glm.hpp>
 
 #include "atmo/gl/elek_gl.h"  // the public entry points (options by name)
 #include "atmo/image.h"
@@ -60,6 +63,39 @@ struct ElekTablesGl {
 // settings' rayleigh_phase (ElekKmAtmosphere). `settings.table` must be empty.
 ElekTablesGl ComputeElekTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                                  const ElekSettings& settings, PassTimings* timings = nullptr);
+
+// The same tables built a step at a time, for a program that must keep drawing while they are
+// computed (atmo-viewer): every pass above, in the same order and with the same results, but a
+// 3D pass in steps of `rows_per_step` work-group rows (4 texel rows each; 0: whole passes, what
+// ComputeElekTablesGl does). Each Step() runs one step (GPU time under the pass's name into
+// `timings`); after the last, done() and Take() gives the tables. Between steps the caller may run
+// other passes on the context: every step binds what it uses. Throws as ComputeElekTablesGl.
+class ElekTablesBuilder {
+ public:
+  ElekTablesBuilder(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                    const ElekSettings& settings, int rows_per_step, PassTimings* timings = nullptr);
+  ~ElekTablesBuilder();
+  ElekTablesBuilder(const ElekTablesBuilder&) = delete;
+  ElekTablesBuilder& operator=(const ElekTablesBuilder&) = delete;
+
+  bool done() const;
+  double progress() const;  // steps done / steps in all: 0 .. 1, rising
+  void Step(PassTimings* timings = nullptr);
+  ElekTablesGl Take();  // once done()
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// The frame pass of RenderElekGl into `out` (rgba32f, the camera's size): per pixel
+// GetElekRadiance of batch `km_atmosphere`'s tables for an observer at `r_km` (km from the
+// planet's centre) and the unit `sun_direction`, plus the per-pixel sun disc where `sun_disc`,
+// times `solar_irradiance`; alpha 0 outside a fisheye's circle.
+void RunElekFramePass(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                      const ElekSettings& settings, const ElekTablesGl& tables,
+                      const shared::CameraParameters& camera, double r_km, const glm::dvec3& sun_direction,
+                      bool sun_disc, const shared::vec3& solar_irradiance, const GpuTexture& out);
 
 // The km parameters of batch `batch` of `model` (its rayleigh_phase option applied).
 shared::AtmosphereParameters ElekKmAtmosphere(const ElekModel& model, std::size_t batch);

@@ -125,6 +125,36 @@ void main() {
 void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereParameters& km,
                                const GpuTexture& transmittance, int direction_count, int sample_count,
                                bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out) {
+  // On llvmpipe (the CPU), a texel per invocation with the CPU's own kernel: its work-group
+  // barriers cost more than the lanes win there (1280x720 viewer benchmark: 28.7 ms for the
+  // work-group form, see docs/performance.md); a GPU gets the 64 lanes per texel.
+  if (context.renderer().find("llvmpipe") != std::string::npos) {
+    const ComputeProgram& program = context.Program(kMultipleScatteringFiles, TablePass(R"glsl(
+uniform sampler2D transmittance_texture;
+uniform int direction_count;
+uniform int sample_count;
+uniform bool media_phase;
+uniform vec3 ground_transfer;
+
+void main() {
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  vec3 psi = ComputeMultiScatteringTexel(atmosphere, transmittance_texture, size, vec2(texel) + vec2(0.5),
+      direction_count, sample_count, media_phase, ground_transfer);
+  imageStore(output_table, texel, vec4(psi, 1.0));
+}
+)glsl"), "multiple-scattering table, a texel per invocation");
+    SetAtmosphereUniforms(program, "atmosphere", km);
+    program.SetInt("direction_count", direction_count);
+    program.SetInt("sample_count", sample_count);
+    program.SetInt("media_phase", media_phase ? 1 : 0);
+    program.SetVec3("ground_transfer", ground_transfer);
+    BindSamplers(program, {{"transmittance_texture", &transmittance}});
+    out.BindImage(0);
+    DispatchCompute2D(program, out.size2());
+    return;
+  }
   // One work group per texel (kWorkGroupSumSource), then the texel kernel's last step.
   const ComputeProgram& program = context.Program(kMultipleScatteringFiles, std::string(kWorkGroupSumSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;

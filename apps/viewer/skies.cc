@@ -1,0 +1,431 @@
+// The models of atmo-viewer on the GL backend (skies.h).
+#include "skies.h"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+#include <utility>
+
+#include "atmo/error.h"
+#include "cpu/camera.h"
+#include "cpu/sun_disc.h"
+#include "gl/elek_gl.h"
+#include "gl/hillaire_gl.h"
+#include "gl/simple_gl.h"
+#include "models/reference_model.h"
+#include "models/simple_model.h"
+#include "physics/shared_parameters.h"
+
+namespace atmo::viewer {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string FrameName(const shared::CameraParameters& camera) {
+  return "frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height);
+}
+
+// One frame texture per batch at the camera's size (made again when the size changed).
+void SizeFrames(std::vector<gl::GpuTexture>& frames, std::size_t batches, const shared::CameraParameters& camera) {
+  frames.resize(batches);
+  for (gl::GpuTexture& frame : frames) {
+    if (frame.empty() || frame.size2() != shared::ivec2(camera.width, camera.height)) {
+      frame = gl::GpuTexture::Make2D({camera.width, camera.height});
+    }
+  }
+}
+
+// The batches' frames read back into one image, one channel per wavelength (as
+// gl::HillaireGl::ReadFrame), with alpha for a fisheye.
+Image ReadFrames(const std::vector<gl::GpuTexture>& frames, std::size_t channels, bool has_alpha) {
+  if (frames.empty() || frames.front().empty()) throw Error("atmo-viewer: no frame rendered yet");
+  const shared::ivec2 size = frames.front().size2();
+  const std::size_t n = static_cast<std::size_t>(size.x) * size.y;
+  Image image(size.x, size.y, static_cast<int>(channels));
+  if (has_alpha) image.alpha.assign(n, 0.0f);
+  for (std::size_t b = 0; b < frames.size(); ++b) {
+    const std::vector<float> rgba = frames[b].DownloadRgba();
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t c = 0; c < 3 && 3 * b + c < channels; ++c)
+        image.pixels[channels * i + 3 * b + c] = rgba[4 * i + c];
+      if (has_alpha && b == 0) image.alpha[i] = rgba[4 * i + 3];
+    }
+  }
+  return image;
+}
+
+class HillaireSky final : public Sky {
+ public:
+  HillaireSky(const gl::Context& context, const SkyRequest& request)
+      : parameters_(request.parameters), sky_(context, request.parameters, request.hillaire) {}
+  std::size_t batch_count() const override { return sky_.batch_count(); }
+  bool Build(double, PassTimings* timings) override {
+    if (!built_) sky_.Precompute(timings);
+    built_ = true;
+    return true;
+  }
+  void Recompute(PassTimings* timings) override { sky_.Precompute(timings); }
+  void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool ground,
+               PassTimings* timings) override {
+    sky_.SetView(altitude_m, SunDirection(elevation_deg, azimuth_deg), ground, timings);
+  }
+  void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) override {
+    sky_.RenderFrame(ToSharedCamera(camera), terms, timings);
+  }
+  const gl::GpuTexture& frame_texture(std::size_t batch) const override { return sky_.frame_texture(batch); }
+  Image ReadFrame() const override { return sky_.ReadFrame(); }
+  // As `atmo render --backend gl` (gl::RenderHillaireGl): the frame pass without the disc, read
+  // back, the disc integrated over the pixels on the host.
+  Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
+    RadianceTerms terms = render.terms;
+    terms.sun_disc = false;
+    sky_.RenderFrame(ToSharedCamera(render.camera), terms);
+    Image image = sky_.ReadFrame();
+    if (render.terms.sun_disc) {
+      std::vector<shared::Texture2D> transmittance;
+      for (std::size_t b = 0; b < sky_.batch_count(); ++b) transmittance.push_back(sky_.ReadTransmittance(b));
+      gl::AddSunDiscOnHost(parameters_, transmittance, render, image);
+    }
+    return image;
+  }
+
+ private:
+  AtmosphereParameters parameters_;
+  gl::HillaireGl sky_;
+  bool built_ = false;
+};
+
+// Rows of work groups per builder step: 4 texel rows of a 3D table (1/64 of the default 256),
+// ~30 ms of the default scattering pass on llvmpipe with 2 threads.
+constexpr int kElekRowsPerStep = 1;
+
+class ElekSky final : public Sky {
+ public:
+  ElekSky(const gl::Context& context, const SkyRequest& request)
+      : context_(context), parameters_(request.parameters), settings_(request.elek), model_(parameters_, settings_) {
+    if (!settings_.table.empty()) throw Error("atmo-viewer computes elek's table; option table= is for atmo render");
+    for (std::size_t b = 0; b < model_.batches().size(); ++b) km_.push_back(gl::ElekKmAtmosphere(model_, b));
+    // The settings are checked now, not in the first frame.
+    builder_ = std::make_unique<gl::ElekTablesBuilder>(context_, km_[0], settings_, kElekRowsPerStep);
+  }
+  std::size_t batch_count() const override { return km_.size(); }
+  bool Build(double budget_ms, PassTimings* timings) override {
+    const auto start = Clock::now();
+    while (tables_.size() < km_.size()) {
+      if (builder_ == nullptr) {
+        builder_ = std::make_unique<gl::ElekTablesBuilder>(context_, km_[tables_.size()], settings_, kElekRowsPerStep);
+      }
+      builder_->Step(timings);
+      if (builder_->done()) {
+        tables_.push_back(builder_->Take());
+        builder_.reset();
+      }
+      if (MillisecondsSince(start) >= budget_ms) break;
+    }
+    return tables_.size() == km_.size();
+  }
+  double progress() const override {
+    const double partial = builder_ != nullptr ? builder_->progress() : 0.0;
+    return (static_cast<double>(tables_.size()) + partial) / static_cast<double>(km_.size());
+  }
+  void Recompute(PassTimings* timings) override {
+    builder_.reset();
+    tables_.clear();
+    for (const shared::AtmosphereParameters& km : km_)
+      tables_.push_back(gl::ComputeElekTablesGl(context_, km, settings_, timings));
+  }
+  void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool, PassTimings*) override {
+    if (!std::isfinite(altitude_m) || altitude_m < 0.0) throw Error("altitude_m must be >= 0 for model elek");
+    r_km_ = (parameters_.ground_radius_m + altitude_m) / 1000.0;
+    sun_ = glm::normalize(SunDirection(elevation_deg, azimuth_deg));
+  }
+  void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) override {
+    const shared::CameraParameters shared_camera = ToSharedCamera(camera);
+    SizeFrames(frames_, km_.size(), shared_camera);
+    has_alpha_ = camera.kind == CameraKind::kFisheye;
+    gl::GpuPassTimer timer(timings);
+    for (std::size_t b = 0; b < km_.size(); ++b) {
+      gl::RunElekFramePass(context_, km_[b], settings_, tables_.at(b), shared_camera, r_km_, sun_, terms.sun_disc,
+                           BatchValues(parameters_.solar_irradiance, b), frames_[b]);
+    }
+    timer.Stop(FrameName(shared_camera));
+  }
+  const gl::GpuTexture& frame_texture(std::size_t batch) const override { return frames_.at(batch); }
+  Image ReadFrame() const override { return ReadFrames(frames_, parameters_.channel_count(), has_alpha_); }
+  // As `atmo render --backend gl --model elek` (gl::RenderElekGl).
+  Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
+    RadianceTerms terms = render.terms;
+    terms.sun_disc = false;
+    RenderFrame(render.camera, terms, nullptr);
+    Image image = ReadFrame();
+    if (render.terms.sun_disc) {
+      std::vector<shared::Texture2D> transmittance;
+      for (const gl::ElekTablesGl& t : tables_) transmittance.push_back(t.transmittance.Download2D());
+      gl::AddSunDiscOnHost(parameters_, transmittance, render, image);
+    }
+    return image;
+  }
+
+ private:
+  const gl::Context& context_;
+  AtmosphereParameters parameters_;
+  ElekSettings settings_;
+  ElekModel model_;  // checks the parameters; its batches' km atmospheres
+  std::vector<shared::AtmosphereParameters> km_;
+  std::unique_ptr<gl::ElekTablesBuilder> builder_;  // of batch tables_.size()
+  std::vector<gl::ElekTablesGl> tables_;
+  std::vector<gl::GpuTexture> frames_;
+  double r_km_ = 6360.0;
+  glm::dvec3 sun_{0.0, 0.0, 1.0};
+  bool has_alpha_ = false;
+};
+
+class SimpleSky final : public Sky {
+ public:
+  SimpleSky(const gl::Context& context, const SkyRequest& request)
+      : context_(context), parameters_(request.parameters), model_(parameters_, {}) {}
+  std::size_t batch_count() const override { return model_.batches().size(); }
+  bool Build(double, PassTimings*) override { return true; }
+  void Recompute(PassTimings*) override {}
+  void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool, PassTimings*) override {
+    if (!std::isfinite(altitude_m)) throw Error("altitude_m must be finite for model simple");
+    altitude_m_ = altitude_m;
+    sun_ = glm::normalize(SunDirection(elevation_deg, azimuth_deg));
+  }
+  void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) override {
+    const shared::CameraParameters shared_camera = ToSharedCamera(camera);
+    SizeFrames(frames_, batch_count(), shared_camera);
+    has_alpha_ = camera.kind == CameraKind::kFisheye;
+    gl::GpuPassTimer timer(timings);
+    for (std::size_t b = 0; b < batch_count(); ++b) {
+      gl::RunSimpleFramePass(context_, model_.batches()[b], altitude_m_, sun_, shared_camera, terms.sun_disc,
+                             BatchValues(parameters_.solar_irradiance, b), frames_[b]);
+    }
+    timer.Stop(FrameName(shared_camera));
+  }
+  const gl::GpuTexture& frame_texture(std::size_t batch) const override { return frames_.at(batch); }
+  Image ReadFrame() const override { return ReadFrames(frames_, parameters_.channel_count(), has_alpha_); }
+  // The GL frame without the disc, and the disc of the CPU's SkyView integrated over the pixels
+  // (cpu/sun_disc.h), as atmo::RenderView adds it.
+  Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
+    RadianceTerms terms = render.terms;
+    terms.sun_disc = false;
+    RenderFrame(render.camera, terms, nullptr);
+    Image image = ReadFrame();
+    if (render.terms.sun_disc) {
+      const std::unique_ptr<SkyView> view = model_.View(altitude_m_, sun_);
+      AddSunDisc(*view, render.camera, parameters_.solar_irradiance, image);
+    }
+    return image;
+  }
+
+ private:
+  const gl::Context& context_;
+  AtmosphereParameters parameters_;
+  SimpleModel model_;
+  std::vector<gl::GpuTexture> frames_;
+  double altitude_m_ = 0.0;
+  glm::dvec3 sun_{0.0, 0.0, 1.0};
+  bool has_alpha_ = false;
+};
+
+// The progressive render on a background thread; each finished pass replaces the shown estimate.
+class ReferenceSky final : public Sky {
+ public:
+  ReferenceSky(const gl::Context&, const SkyRequest& request)
+      : parameters_(request.parameters),
+        model_(CreateModel("reference", request.parameters, request.reference_options)),
+        spp_(request.reference_spp),
+        divisor_(std::max(1, request.reference_divisor)) {
+    if (spp_ == 0) spp_ = static_cast<const ReferenceModel&>(*model_).settings().samples;
+    if (spp_ < 2) throw Error("model reference needs at least 2 paths per pixel (--spp)");
+  }
+  ~ReferenceSky() override { Stop(); }
+  std::size_t batch_count() const override { return ChannelBatchCount(parameters_.channel_count()); }
+  bool Build(double, PassTimings*) override { return true; }
+  void Recompute(PassTimings*) override {}
+  void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool, PassTimings*) override {
+    if (!std::isfinite(altitude_m) || altitude_m < 0.0) throw Error("altitude_m must be >= 0 for model reference");
+    altitude_m_ = altitude_m;
+    elevation_deg_ = elevation_deg;
+    azimuth_deg_ = azimuth_deg;
+  }
+  void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) override {
+    const auto start = Clock::now();
+    RenderSettings wanted;
+    wanted.camera = camera;
+    wanted.camera.width = std::max(1, camera.width / divisor_);
+    wanted.camera.height = std::max(1, camera.height / divisor_);
+    wanted.terms = terms;
+    wanted.altitude_m = altitude_m_;
+    wanted.sun_elevation_deg = elevation_deg_;
+    wanted.sun_azimuth_deg = azimuth_deg_;
+    if (!running_ || !SameRender(wanted, running_settings_)) Restart(wanted);
+    Upload();
+    if (timings != nullptr) timings->Add("reference_upload", MillisecondsSince(start));
+  }
+  const gl::GpuTexture& frame_texture(std::size_t batch) const override { return textures_.at(batch); }
+  bool HasFrame() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return shown_.radiance.width > 0;
+  }
+  Image ReadFrame() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shown_.radiance.width == 0) throw Error("atmo-viewer: no reference pass finished yet");
+    return shown_.radiance;
+  }
+  // The estimate shown (the last finished pass), at its own size, with its standard error.
+  Image Screenshot(const RenderSettings&, Image* standard_error, std::uint64_t* samples_per_pixel) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shown_.radiance.width == 0) throw Error("no reference pass finished yet: nothing to write");
+    if (standard_error != nullptr) *standard_error = shown_.standard_error;
+    if (samples_per_pixel != nullptr) *samples_per_pixel = shown_.samples_per_pixel;
+    return shown_.radiance;
+  }
+  std::string Status() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_.empty()) return "reference: " + error_;
+    if (shown_.radiance.width == 0) return "reference: first pass running";
+    char line[200];
+    std::snprintf(line, sizeof line, "reference %dx%d: %llu of %llu paths per pixel, median relative SE %.3g %%",
+                  shown_.radiance.width, shown_.radiance.height,
+                  static_cast<unsigned long long>(shown_.samples_per_pixel), static_cast<unsigned long long>(spp_),
+                  100.0 * median_se_);
+    return line;
+  }
+  bool Converged() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return shown_.samples_per_pixel >= spp_ || !error_.empty();
+  }
+
+ private:
+  static bool SameRender(const RenderSettings& a, const RenderSettings& b) {
+    const Camera& p = a.camera;
+    const Camera& q = b.camera;
+    return p.kind == q.kind && p.width == q.width && p.height == q.height && p.fov_deg == q.fov_deg &&
+           p.yaw_deg == q.yaw_deg && p.pitch_deg == q.pitch_deg && a.terms.sun_disc == b.terms.sun_disc &&
+           a.terms.ground == b.terms.ground && a.altitude_m == b.altitude_m &&
+           a.sun_elevation_deg == b.sun_elevation_deg && a.sun_azimuth_deg == b.sun_azimuth_deg;
+  }
+  void Stop() {
+    cancel_ = true;
+    if (thread_.joinable()) thread_.join();
+    cancel_ = false;
+  }
+  void Restart(const RenderSettings& settings) {
+    Stop();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      shown_ = ProgressiveImage{};
+      fresh_ = false;
+      error_.clear();
+    }
+    // Black until the first pass is done.
+    textures_.clear();
+    for (std::size_t b = 0; b < batch_count(); ++b) {
+      textures_.push_back(gl::GpuTexture::Make2D({settings.camera.width, settings.camera.height}));
+      const std::vector<float> black(4 * static_cast<std::size_t>(settings.camera.width) * settings.camera.height,
+                                     0.0f);
+      glTextureSubImage2D(textures_.back().id(), 0, 0, 0, settings.camera.width, settings.camera.height, GL_RGBA,
+                          GL_FLOAT, black.data());
+    }
+    running_settings_ = settings;
+    running_ = true;
+    thread_ = std::thread([this, settings] {
+      ProgressiveSettings progressive;
+      progressive.samples_per_pixel = spp_;
+      progressive.cancel = &cancel_;
+      progressive.on_pass = [this](const ProgressiveImage& pass) {
+        if (cancel_) return;
+        const double se = MedianRelativeStandardError(pass.radiance, pass.standard_error);
+        std::lock_guard<std::mutex> lock(mutex_);
+        shown_ = pass;
+        median_se_ = se;
+        fresh_ = true;
+      };
+      try {
+        RenderProgressive(*model_, settings, progressive);
+      } catch (const std::exception& error) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = error.what();
+      }
+    });
+  }
+  // The newest pass into the frame textures (rgba per batch of three channels).
+  void Upload() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!fresh_) return;
+    fresh_ = false;
+    const Image& image = shown_.radiance;
+    const std::size_t nc = static_cast<std::size_t>(image.channels);
+    const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
+    std::vector<float> rgba(4 * n);
+    for (std::size_t b = 0; b < textures_.size(); ++b) {
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t c = 0; c < 3; ++c) {
+          rgba[4 * i + c] = 3 * b + c < nc ? image.pixels[nc * i + 3 * b + c] : 0.0f;
+        }
+        rgba[4 * i + 3] = image.alpha.empty() ? 1.0f : image.alpha[i];
+      }
+      glTextureSubImage2D(textures_[b].id(), 0, 0, 0, image.width, image.height, GL_RGBA, GL_FLOAT, rgba.data());
+    }
+  }
+
+  AtmosphereParameters parameters_;
+  std::unique_ptr<Model> model_;
+  std::uint64_t spp_ = 0;
+  int divisor_ = 4;
+  double altitude_m_ = 0.0;
+  double elevation_deg_ = 90.0;
+  double azimuth_deg_ = 0.0;
+  std::vector<gl::GpuTexture> textures_;
+  RenderSettings running_settings_;
+  bool running_ = false;
+  std::thread thread_;
+  std::atomic<bool> cancel_{false};
+  mutable std::mutex mutex_;  // guards what follows (the worker's results)
+  ProgressiveImage shown_;
+  double median_se_ = 0.0;
+  bool fresh_ = false;
+  std::string error_;
+};
+
+}  // namespace
+
+const std::vector<std::string>& ViewerModelNames() {
+  static const std::vector<std::string> names = {"hillaire", "elek", "simple", "reference"};
+  return names;
+}
+
+std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& request) {
+  if (request.model == "hillaire") return std::make_unique<HillaireSky>(context, request);
+  if (request.model == "elek") return std::make_unique<ElekSky>(context, request);
+  if (request.model == "simple") return std::make_unique<SimpleSky>(context, request);
+  if (request.model == "reference") return std::make_unique<ReferenceSky>(context, request);
+  throw Error("unknown model '" + request.model + "' (atmo-viewer shows hillaire, elek, simple, reference)");
+}
+
+double MedianRelativeStandardError(const Image& radiance, const Image& standard_error) {
+  std::vector<double> ratios;
+  ratios.reserve(radiance.pixels.size());
+  for (std::size_t i = 0; i < radiance.pixels.size() && i < standard_error.pixels.size(); ++i) {
+    if (radiance.pixels[i] > 0.0f) ratios.push_back(standard_error.pixels[i] / radiance.pixels[i]);
+  }
+  if (ratios.empty()) return 0.0;
+  const auto middle = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
+  std::nth_element(ratios.begin(), middle, ratios.end());
+  return *middle;
+}
+
+}  // namespace atmo::viewer

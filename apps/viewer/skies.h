@@ -1,0 +1,89 @@
+// The models atmo-viewer shows (docs/viewer.md), behind one interface: what a frame needs of a
+// model on the GL backend.
+//
+//   hillaire   gl::HillaireGl: every table in the frame that asks for it.
+//   elek       gl::ElekTablesBuilder: the tables a few steps per frame (Build's time budget), so
+//              that the window keeps drawing (the last finished sky) while they are computed.
+//   simple     gl::RunSimpleFramePass: no tables, the closed form per pixel.
+//   reference  the CPU path tracer's progressive render (RenderProgressive) on a background
+//              thread at a fraction of the window's size, each finished pass uploaded; restarted
+//              when the view, the camera or the terms change.
+//
+// To use it (the window's gl::Context current on this thread):
+//   std::unique_ptr<Sky> sky = MakeSky(context, request);   // throws atmo::Error for bad parameters
+//   while (!sky->Build(25.0, &timings)) { draw the previous sky }
+//   sky->SetView(altitude_m, sun_elevation_deg, sun_azimuth_deg, ground, &timings);
+//   sky->RenderFrame(camera, terms, &timings);             // into frame_texture(b), b < batch_count()
+// Everything is called on the context's thread; only reference runs work of its own elsewhere.
+#pragma once
+
+#include <cstddef>
+#include <glm/glm.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "atmo/hillaire_tables.h"
+#include "atmo/image.h"
+#include "atmo/model.h"
+#include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/timing.h"
+#include "gl/context.h"
+#include "gl/resources.h"
+#include "models/elek_model.h"
+#include "models/hillaire_model.h"
+
+namespace atmo::viewer {
+
+// The model names of the viewer, in the panel's order.
+const std::vector<std::string>& ViewerModelNames();
+
+struct SkyRequest {
+  std::string model;                // one of ViewerModelNames()
+  AtmosphereParameters parameters;  // the model's (solar_irradiance 1 in physical units)
+  HillaireSettings hillaire;        // model hillaire
+  ElekSettings elek;                // model elek
+  ModelOptions reference_options;   // model reference (CreateModel's options; seed included)
+  std::uint64_t reference_spp = 0;  // reference: paths per pixel to stop at (0: the model's samples)
+  int reference_divisor = 4;        // reference: the frame is the window's size / this (at least 1 pixel)
+};
+
+class Sky {
+ public:
+  virtual ~Sky() = default;
+  virtual std::size_t batch_count() const = 0;
+  // The table work of this frame, for about `budget_ms` (at least one step); true once every
+  // table is built and the sky can be drawn.
+  virtual bool Build(double budget_ms, PassTimings* timings) = 0;
+  virtual double progress() const { return 1.0; }  // of Build, 0 .. 1
+  // Every table again, at once (--recompute-every-frame).
+  virtual void Recompute(PassTimings* timings) = 0;
+  // The observer (metres) and the sun (degrees, as RenderSettings); `ground`: the lit ground is wanted.
+  virtual void SetView(double altitude_m, double sun_elevation_deg, double sun_azimuth_deg, bool ground,
+                       PassTimings* timings) = 0;
+  // The frame of `camera` (the window's size) into the frame textures.
+  virtual void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) = 0;
+  // Batch b's frame (rgba32f; the window's size, or smaller for reference: the display scales).
+  virtual const gl::GpuTexture& frame_texture(std::size_t batch) const = 0;
+  // Whether a frame is there to read (reference: after its first pass).
+  virtual bool HasFrame() const { return true; }
+  // The last frame read back, one channel per wavelength (auto-exposure meters it).
+  virtual Image ReadFrame() const = 0;
+  // The frame of `render` as `atmo render` computes it for this model (the sun disc integrated
+  // over the pixels on the host); a Monte Carlo model also fills `standard_error` and may return
+  // a smaller image (its own size). `samples_per_pixel`: its paths per pixel, else 0.
+  virtual Image Screenshot(const RenderSettings& render, Image* standard_error, std::uint64_t* samples_per_pixel) = 0;
+  // A line for the panel (reference: its paths per pixel and standard error), or empty.
+  virtual std::string Status() const { return ""; }
+  // Whether the shown estimate is final (reference: reference_spp reached); true for the others.
+  virtual bool Converged() const { return true; }
+};
+
+std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& request);
+
+// The median over pixels and channels of standard error / radiance (pixels of radiance 0 left
+// out): the panel's measure of a progressive estimate's noise.
+double MedianRelativeStandardError(const Image& radiance, const Image& standard_error);
+
+}  // namespace atmo::viewer
