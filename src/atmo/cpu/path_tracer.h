@@ -75,9 +75,18 @@ struct PathTally {
   Estimate Get(std::size_t channel, int slot) const;
 };
 
+// Where the next-event estimate to the sun is taken (see the file comment).
+enum class NextEventEstimation {
+  kVertex,   // at each real collision vertex
+  kSegment,  // on every segment, as the integral over the lit part of the segment
+  kAuto,     // kSegment on the segments that meet the planet's shadow, kVertex on the others
+};
+
 struct PathTracerSettings {
   bool forced_collisions = true;  // see the file comment
   int roulette_start_order = 3;   // Russian roulette after this many scattering events
+  NextEventEstimation next_event = NextEventEstimation::kAuto;
+  int segment_samples = 2;  // stratified points per segment integral, >= 1
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -174,6 +183,21 @@ class PathTracer {
   double SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, const Channel& c, Rng& rng) const;
   // Ratio-tracking estimate of the transmittance of the segment [p, p + length d] (finite length).
   double RatioTracking(const glm::dvec3& p, const glm::dvec3& d, double length, const Channel& c, Rng& rng) const;
+  // The part [shadow_begin, shadow_end] of the segment [p, p + length d] inside the planet's
+  // shadow (the cylinder of radius R_ground about the sun axis, behind the planet: a convex set,
+  // so one interval); empty (shadow_begin >= shadow_end) when the segment stays lit.
+  void ShadowInterval(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                      double& shadow_begin, double& shadow_end) const;
+  // The segment estimate of next-event estimation (spherical geometry, finite length): an
+  // unbiased estimate of integral_0^length T(p, x_t) sum_media sigma_s(x_t) p(nu) T_sun(x_t) dt,
+  // x_t = p + t d, nu = dot(d, sun), i.e. the expected vertex estimate at the next collision.
+  double SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                         const Channel& c, Rng& rng) const;
+  // Density integrals along the sun ray from x to the top, from a small table (importance
+  // sampling of SegmentSunlight only: its errors change the variance, never the mean).
+  glm::dvec3 SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const;
+  // The same by the trapezoidal rule along (r, mu) (the table's entries).
+  glm::dvec3 DensityIntegralToTop(double r, double mu) const;
   // One path of one channel; adds its contributions per order bin to `orders`.
   void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].
@@ -194,6 +218,7 @@ class PathTracer {
   std::vector<double> kink_altitudes_;
   glm::dvec3 max_extinction_;  // per medium, over channels: weights of the quadrature error
   PathTracerSettings settings_;
+  std::vector<glm::dvec3> sun_proxy_;  // [r index * kSunProxyMu + mu index], see SunDensityProxy
 };
 
 // Depressed cubic x^3 + p x + q = 0 with p > 0 (one real root), by Cardano's formula in a form
