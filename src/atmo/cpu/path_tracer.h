@@ -87,6 +87,9 @@ struct PathTracerSettings {
   int roulette_start_order = 3;   // Russian roulette after this many scattering events
   NextEventEstimation next_event = NextEventEstimation::kAuto;
   int segment_samples = 2;  // stratified points per segment integral, >= 1
+  // At a scattering vertex in the planet's shadow, the probability of drawing the new direction
+  // from a lobe about the sun instead of the phase function (one-sample MIS); 0: off.
+  double shadow_guiding = 0.5;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -186,6 +189,11 @@ class PathTracer {
   // The part [shadow_begin, shadow_end] of the segment [p, p + length d] inside the planet's
   // shadow (the cylinder of radius R_ground about the sun axis, behind the planet: a convex set,
   // so one interval); empty (shadow_begin >= shadow_end) when the segment stays lit.
+  // An unbiased estimate of the transmittance from x to the sun (0 in the planet's shadow) by
+  // residual ratio tracking against a piecewise-linear control (spherical geometry).
+  double ResidualSunTransmittance(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c, Rng& rng) const;
+  // Whether the sun ray from x meets the ground (x above it).
+  bool InShadow(const glm::dvec3& x, const glm::dvec3& sun) const;
   void ShadowInterval(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                       double& shadow_begin, double& shadow_end) const;
   // The segment estimate of next-event estimation (spherical geometry, finite length): an

@@ -14,6 +14,8 @@
 //                           (the integral over each segment's lit part), auto (segment on the
 //                           segments that meet the planet's shadow, vertex elsewhere)
 //   nee_samples=2           stratified points per segment integral
+//   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
+//                           new direction from a lobe about the sun (MIS with the phase function)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -45,6 +47,7 @@ struct ReferenceSettings {
   bool forced_collisions = true;
   cpu::NextEventEstimation next_event = cpu::NextEventEstimation::kAuto;
   int nee_samples = 2;
+  double shadow_guiding = 0.5;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
