@@ -110,20 +110,6 @@ TEST(ReferenceSegmentEstimator, AgreesWithTheVertexEstimatorOrderByOrder) {
   }
 }
 
-TEST(ReferenceSegmentEstimator, SunUpFromTheGroundIsUnchangedByAuto) {
-  // nee=auto uses the segment estimate only on segments that meet the planet's shadow; with the
-  // sun 45 deg high no path of an observer on the ground reaches it, so auto traces exactly the
-  // vertex estimator's paths (same random numbers: bit-identical results).
-  const AtmosphereParameters p = Preset("earth");
-  auto vertex = MakeReference(p, {{"seed", "5"}, {"nee", "vertex"}});
-  auto automatic = MakeReference(p, {{"seed", "5"}, {"nee", "auto"}});
-  const glm::dvec3 sun = Direction(45.0, 0.0);
-  const glm::dvec3 view = Direction(60.0, 90.0);
-  const OrderEstimate a = AsReference(*vertex->View(0.0, sun)).EstimateByOrder(view, 2048);
-  const OrderEstimate b = AsReference(*automatic->View(0.0, sun)).EstimateByOrder(view, 2048);
-  for (int c = 0; c < 3; ++c) EXPECT_EQ(a.total[c].mean, b.total[c].mean) << c;
-}
-
 TEST(ReferenceSegmentEstimator, HigherStratificationAndGuidingKeepTheMean) {
   // nee_samples and shadow_guiding change the variance only: 1 vs 8 points per segment, guiding
   // 0 vs 0.8, at sun 100 deg from 10 km, all orders within 4 combined standard errors.

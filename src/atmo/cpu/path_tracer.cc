@@ -616,12 +616,8 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     bool segment_nee = false;
     if (!half_space_ && !cross_to_ground && length < kInfinity &&
         settings_.next_event != NextEventEstimation::kVertex) {
-      segment_nee = settings_.next_event == NextEventEstimation::kSegment;
-      if (!segment_nee) {
-        double shadow_begin, shadow_end;
-        ShadowInterval(p, d, length, query.sun, shadow_begin, shadow_end);
-        segment_nee = shadow_begin < shadow_end;
-      }
+      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
+      if (!segment_nee) segment_nee = InShadow(p, query.sun);
       if (segment_nee) {
         orders[std::min(order + 1, kOrderBins) - 1] += weight * SegmentSunlight(p, d, length, query.sun, c, rng);
       }
