@@ -47,9 +47,10 @@ constexpr int kSegmentIntervals = 16;
 // The proposal is never below this fraction of its largest node value on the lit part, so a
 // proxy that is wrong by a large factor somewhere still has a bounded weight there.
 constexpr double kProposalFloor = 1e-4;
-// Asymmetry of the lobe about the sun that shadow guiding mixes into the phase sampling: 90 % of
-// its directions lie within 37 deg of the sun, where a shadowed vertex finds lit air in twilight
-// (the sun 5-20 deg below its horizon).
+// Asymmetry of the lobe about the sun that shadow guiding mixes into the phase sampling: by the
+// Henyey-Greenstein CDF 75 % of its directions lie within 37 deg of the sun and 90 % within
+// 66 deg, which covers where a shadowed vertex finds lit air in twilight (towards the sun,
+// 5-20 deg above its direction).
 constexpr double kGuideG = 0.8;
 // Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
 // collisions per walk): see ResidualSunTransmittance.
