@@ -34,6 +34,27 @@ constexpr double kQuadratureRelativeFloor = 1e-14;
 constexpr std::uint64_t kMaxTrackingSteps = std::uint64_t{1} << 24;
 // Ratio tracking's running transmittance below which Russian roulette decides (RatioTracking).
 constexpr double kRouletteTransmittance = 1e-3;
+// The proxy table of SunDensityProxy: 32 radii x 64 zenith cosines in Bruneton's mapping
+// (shared/transmittance.glsl), each entry by the trapezoidal rule with 40 intervals about the
+// ray's lowest point (the shared quadrature's substitution, which errs by <= 2.5e-3 in
+// transmittance there). It steers importance sampling only, so its error costs variance, not bias.
+constexpr int kSunProxyR = 32;
+constexpr int kSunProxyMu = 64;
+constexpr int kSunProxyIntervals = 40;
+// Nodes of the piecewise-exponential proposal of SegmentSunlight: 16 intervals about the
+// segment's lowest point (t = t_low + x |x|, x uniform), plus the shadow's edges.
+constexpr int kSegmentIntervals = 16;
+// The proposal is never below this fraction of its largest node value on the lit part, so a
+// proxy that is wrong by a large factor somewhere still has a bounded weight there.
+constexpr double kProposalFloor = 1e-4;
+// Asymmetry of the lobe about the sun that shadow guiding mixes into the phase sampling: by the
+// Henyey-Greenstein CDF 75 % of its directions lie within 37 deg of the sun and 90 % within
+// 66 deg, which covers where a shadowed vertex finds lit air in twilight (towards the sun,
+// 5-20 deg above its direction).
+constexpr double kGuideG = 0.8;
+// Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
+// collisions per walk): see ResidualSunTransmittance.
+constexpr double kResidualRate = 0.25;
 
 // splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
 std::uint64_t Mix64(std::uint64_t z) {
@@ -161,6 +182,28 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     }
   }
   std::erase_if(kink_altitudes_, [&](double h) { return !(h > 0.0 && h < thickness); });
+  if (settings_.segment_samples < 1) throw Error("the segment estimate needs at least 1 sample per segment");
+  if (!(settings_.shadow_guiding >= 0.0 && settings_.shadow_guiding < 1.0)) {
+    throw Error("the shadow guiding probability must be in [0, 1)");
+  }
+  if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
+    // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
+    const double rg = atmosphere_.bottom_radius;
+    const double h_top = std::sqrt((atmosphere_.top_radius - rg) * (atmosphere_.top_radius + rg));
+    sun_proxy_.resize(static_cast<std::size_t>(kSunProxyR) * kSunProxyMu);
+    for (int i = 0; i < kSunProxyR; ++i) {
+      const double rho = h_top * i / (kSunProxyR - 1);
+      const double r = std::sqrt(rho * rho + rg * rg);
+      const double d_min = atmosphere_.top_radius - r;
+      const double d_max = rho + h_top;
+      for (int j = 0; j < kSunProxyMu; ++j) {
+        const double d = d_min + (d_max - d_min) * j / (kSunProxyMu - 1);
+        // Law of cosines on (centre, point, exit point): top^2 = r^2 + d^2 + 2 r mu d.
+        const double mu = d == 0.0 ? 1.0 : shared::ClampCosine((h_top * h_top - rho * rho - d * d) / (2.0 * r * d));
+        sun_proxy_[static_cast<std::size_t>(i) * kSunProxyMu + j] = DensityIntegralToTop(r, mu);
+      }
+    }
+  }
 }
 
 glm::dvec3 PathTracer::ObserverPosition(double altitude_m) const {
@@ -269,6 +312,289 @@ double PathTracer::RatioTracking(const glm::dvec3& p, const glm::dvec3& d, doubl
   return transmittance;  // an optical depth above ~1.7e7: the rest of the product is negligible
 }
 
+// Residual ratio tracking (Novak et al. 2014) against a control extinction sigma_c that is
+// piecewise linear between 17 nodes along the sun ray (placed about its lowest point, as in
+// DensityIntegralToTop): T = exp(-tau_c) E[prod (1 - (sigma - sigma_c)(t_i) / rate)] over a Poisson
+// process of constant rate, unbiased for any rate > 0 (the factors may leave [0, 1]). tau_c is the
+// trapezoidal rule on the nodes, exactly; the residual is a few per cent of sigma, so the product
+// stays near 1 where plain ratio tracking of a grazing ray (optical depth 10 and more in deep
+// twilight) multiplies tens of factors near 0 and is right only on average over rare walks.
+// rate = (2 + kResidualRate * max sigma_node * length) / length: 2 tentative collisions plus a
+// quarter of the majorant's, with factors 1 -+ 4 |sigma_r| / sigma_max (a rate of the full
+// majorant gave the same twilight standard errors at more cost, sun 104-108 deg, 262144 paths).
+double PathTracer::ResidualSunTransmittance(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c,
+                                            Rng& rng) const {
+  double length;
+  bool ground;
+  Segment(x, sun, length, ground);
+  if (ground || !(length < kInfinity)) return 0.0;
+  if (!(length > 0.0)) return 1.0;
+  constexpr int kIntervals = 16;
+  std::array<double, kIntervals + 1> ts, sigma;
+  const double t_low = std::clamp(-glm::dot(x, sun), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  double tau_c = 0.0, sigma_max = 0.0;
+  for (int i = 0; i <= kIntervals; ++i) {
+    const double u = x_0 + (x_1 - x_0) * i / kIntervals;
+    ts[i] = i == 0 ? 0.0 : i == kIntervals ? length : std::clamp(t_low + u * std::abs(u), ts[i - 1], length);
+    sigma[i] = OpticalDepth(c, Densities(x + ts[i] * sun));
+    sigma_max = std::max(sigma_max, sigma[i]);
+    if (i > 0) tau_c += 0.5 * (sigma[i - 1] + sigma[i]) * (ts[i] - ts[i - 1]);
+  }
+  const double rate = (2.0 + kResidualRate * sigma_max * length) / length;
+  double product = 1.0;
+  double t = 0.0;
+  int piece = 0;
+  for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
+    t -= std::log1p(-rng.Uniform()) / rate;
+    if (!(t < length)) break;
+    while (piece + 1 < kIntervals && ts[piece + 1] <= t) ++piece;
+    const double width = ts[piece + 1] - ts[piece];
+    const double f = width > 0.0 ? (t - ts[piece]) / width : 0.0;
+    const double control = sigma[piece] + f * (sigma[piece + 1] - sigma[piece]);
+    product *= 1.0 - (OpticalDepth(c, Densities(x + t * sun)) - control) / rate;
+  }
+  return std::exp(-tau_c) * product;
+}
+
+bool PathTracer::InShadow(const glm::dvec3& x, const glm::dvec3& sun) const {
+  const double along = glm::dot(x, sun);
+  const glm::dvec3 x_perp = x - along * sun;
+  return along < 0.0 && glm::dot(x_perp, x_perp) < atmosphere_.bottom_radius * atmosphere_.bottom_radius;
+}
+
+void PathTracer::ShadowInterval(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                                double& shadow_begin, double& shadow_end) const {
+  shadow_begin = 0.0;
+  shadow_end = length;
+  // Inside the cylinder: |p_perp + t d_perp|^2 < R^2, i.e. a t^2 + 2 b t + c < 0.
+  const glm::dvec3 p_perp = p - glm::dot(p, sun) * sun;
+  const glm::dvec3 d_perp = d - glm::dot(d, sun) * sun;
+  const double a = glm::dot(d_perp, d_perp);
+  const double b = glm::dot(p_perp, d_perp);
+  const double c = glm::dot(p_perp, p_perp) - atmosphere_.bottom_radius * atmosphere_.bottom_radius;
+  if (a > 0.0) {
+    const double discriminant = b * b - a * c;
+    if (!(discriminant > 0.0)) {
+      shadow_end = -1.0;
+      return;
+    }
+    // Roots without cancellation: q = -(b + sign(b) sqrt(D)); q / a and c / q.
+    const double q = -(b + std::copysign(std::sqrt(discriminant), b));
+    const double t1 = q / a;
+    const double t2 = q != 0.0 ? c / q : -t1;
+    shadow_begin = std::max(shadow_begin, std::min(t1, t2));
+    shadow_end = std::min(shadow_end, std::max(t1, t2));
+  } else if (!(c < 0.0)) {
+    shadow_end = -1.0;
+    return;
+  }
+  // Behind the planet: dot(p + t d, sun) < 0.
+  const double ps = glm::dot(p, sun);
+  const double ds = glm::dot(d, sun);
+  if (ds > 0.0) {
+    shadow_end = std::min(shadow_end, -ps / ds);
+  } else if (ds < 0.0) {
+    shadow_begin = std::max(shadow_begin, -ps / ds);
+  } else if (!(ps < 0.0)) {
+    shadow_end = -1.0;
+  }
+}
+
+glm::dvec3 PathTracer::DensityIntegralToTop(double r, double mu) const {
+  const double d = shared::DistanceToTopAtmosphereBoundary(atmosphere_, r, mu);
+  const double t_low = std::clamp(-r * mu, 0.0, d);
+  const double x_0 = -std::sqrt(t_low);
+  const double dx = (std::sqrt(d - t_low) - x_0) / kSunProxyIntervals;
+  glm::dvec3 sum(0.0);
+  for (int i = 0; i <= kSunProxyIntervals; ++i) {
+    const double x = x_0 + i * dx;
+    const double t = t_low + x * std::abs(x);
+    const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+    const double w = (i == 0 || i == kSunProxyIntervals) ? 0.5 : 1.0;
+    sum += shared::GetDensities(atmosphere_, r_i) * (w * 2.0 * std::abs(x));
+  }
+  return sum * dx;
+}
+
+glm::dvec3 PathTracer::SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const {
+  const double rg = atmosphere_.bottom_radius;
+  const double rt = atmosphere_.top_radius;
+  const double r = std::clamp(glm::length(x), rg, rt);
+  const double mu = shared::ClampCosine(glm::dot(x, sun) / r);
+  const double h_top = std::sqrt((rt - rg) * (rt + rg));
+  const double rho = std::sqrt(std::max((r - rg) * (r + rg), 0.0));
+  const double d = shared::DistanceToTopAtmosphereBoundary(atmosphere_, r, mu);
+  const double d_min = rt - r;
+  const double d_max = rho + h_top;
+  const double u_mu = std::clamp(d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0, 0.0, 1.0) * (kSunProxyMu - 1);
+  const double u_r = std::clamp(rho / h_top, 0.0, 1.0) * (kSunProxyR - 1);
+  const int i = std::min(static_cast<int>(u_r), kSunProxyR - 2);
+  const int j = std::min(static_cast<int>(u_mu), kSunProxyMu - 2);
+  const double fr = u_r - i;
+  const double fm = u_mu - j;
+  const auto at = [&](int a, int b) { return sun_proxy_[static_cast<std::size_t>(a) * kSunProxyMu + b]; };
+  return (1.0 - fr) * ((1.0 - fm) * at(i, j) + fm * at(i, j + 1)) + fr * ((1.0 - fm) * at(i + 1, j) + fm * at(i + 1, j + 1));
+}
+
+// The segment estimate (docs/models/reference.md, "Next-event estimation on segments"). The
+// integrand f(t) = T(p, x_t) s(x_t) T_sun(x_t), s = sum_media sigma_s p(nu), is 0 in the planet's
+// shadow. Proposal: node values g_i = s(x_i) exp(-tau_view(t_i) - tau_sun(x_i)) with tau_view by
+// the trapezoidal rule over the nodes and tau_sun from the proxy table, interpolated
+// exponentially between nodes (a density that falls exponentially along the segment is then
+// followed exactly) on the lit pieces only, floored at kProposalFloor of the largest. K points
+// are drawn stratified in the proposal's CDF (one per 1/K of its mass); each scores
+// T(p, x_j) s(x_j) T_sun(x_j) / (K pdf(t_j)) with both transmittances by ratio tracking (the view
+// one by a single walk along the segment, read at every t_j), so the estimate is unbiased
+// wherever the proposal is positive, i.e. on the whole lit part.
+double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                                   const Channel& c, Rng& rng) const {
+  if (!(length > 0.0)) return 0.0;
+  const double nu = glm::dot(d, sun);
+  const double rayleigh = c.rayleigh_scattering * shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
+  const double mie = c.mie_scattering * shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  if (!(rayleigh + mie > 0.0)) return 0.0;
+  double shadow_begin, shadow_end;
+  ShadowInterval(p, d, length, sun, shadow_begin, shadow_end);
+  const bool shadow = shadow_begin < shadow_end;
+  if (shadow && shadow_begin <= 0.0 && shadow_end >= length) return 0.0;
+
+  // Nodes.
+  std::array<double, kSegmentIntervals + 3> ts;
+  int n = 0;
+  const double t_low = std::clamp(-glm::dot(p, d), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double x = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    ts[n++] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + x * std::abs(x), 0.0, length);
+  }
+  if (shadow) {
+    for (double t : {shadow_begin, shadow_end}) {
+      if (t > 0.0 && t < length) ts[n++] = t;
+    }
+  }
+  std::sort(ts.begin(), ts.begin() + n);
+
+  // Node values and the proposal's pieces.
+  std::array<double, kSegmentIntervals + 3> g;
+  std::array<double, kSegmentIntervals + 3> scattering, sigma_node, tau_node;
+  double tau_view = 0.0;
+  double sigma_previous = 0.0;
+  double g_max = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const glm::dvec3 x = p + ts[i] * d;
+    const glm::dvec3 densities = Densities(x);
+    const double sigma = OpticalDepth(c, densities);
+    if (i > 0) tau_view += 0.5 * (sigma_previous + sigma) * (ts[i] - ts[i - 1]);
+    sigma_previous = sigma;
+    sigma_node[i] = sigma;
+    tau_node[i] = tau_view;
+    scattering[i] = rayleigh * densities.x + mie * densities.y;
+    g[i] = scattering[i] * std::exp(-tau_view - OpticalDepth(c, SunDensityProxy(x, sun)));
+  }
+  const auto lit_piece = [&](int i) {
+    const double mid = 0.5 * (ts[i] + ts[i + 1]);
+    return ts[i + 1] > ts[i] && !(shadow && mid > shadow_begin && mid < shadow_end);
+  };
+  for (int i = 0; i + 1 < n; ++i) {
+    if (lit_piece(i)) g_max = std::max({g_max, g[i], g[i + 1]});
+  }
+  // g_max = 0: no scattering on the lit part, or exp(-tau) below the smallest double there.
+  if (!(g_max > 0.0)) return 0.0;
+  std::array<double, kSegmentIntervals + 3> mass{};  // of piece i, [i, i + 1]
+  std::array<double, kSegmentIntervals + 3> rate{};  // ln(g_b / g_a) / width
+  std::array<double, kSegmentIntervals + 3> below{};  // mass of the pieces before piece i
+  double total = 0.0;
+  int first_lit = -1, last_lit = -1;
+  for (int i = 0; i + 1 < n; ++i) {
+    below[i] = total;
+    if (!lit_piece(i)) continue;
+    g[i] = std::max(g[i], kProposalFloor * g_max);
+    const double gb = std::max(g[i + 1], kProposalFloor * g_max);
+    const double width = ts[i + 1] - ts[i];
+    const double log_ratio = std::log(gb / g[i]);
+    rate[i] = log_ratio / width;
+    mass[i] = std::abs(log_ratio) < 1e-9 ? g[i] * width : g[i] * width * std::expm1(log_ratio) / log_ratio;
+    total += mass[i];
+    if (mass[i] > 0.0) {
+      if (first_lit < 0) first_lit = i;
+      last_lit = i;
+    }
+  }
+  if (!(total > 0.0) || first_lit < 0) return 0.0;
+
+  // Stratified points in the proposal's CDF; their order along the segment is that of u.
+  const int k = settings_.segment_samples;
+  std::array<double, 64> t_sample, weight_sample;
+  std::vector<double> heap_t, heap_w;
+  double* tj = t_sample.data();
+  double* wj = weight_sample.data();
+  if (k > 64) {
+    heap_t.resize(k);
+    heap_w.resize(k);
+    tj = heap_t.data();
+    wj = heap_w.data();
+  }
+  int piece = first_lit;
+  for (int j = 0; j < k; ++j) {
+    const double u = (j + rng.Uniform()) / k * total;
+    // The first piece with mass whose end is above u (the last one if rounding put u at the end).
+    while (piece < last_lit && (mass[piece] == 0.0 || below[piece] + mass[piece] <= u)) ++piece;
+    const double width = ts[piece + 1] - ts[piece];
+    const double v = std::clamp((u - below[piece]) / mass[piece], 0.0, 1.0);
+    double s;
+    if (std::abs(rate[piece] * width) < 1e-9) {
+      s = v * width;
+    } else {
+      s = std::log1p(v * std::expm1(rate[piece] * width)) / rate[piece];
+    }
+    s = std::clamp(s, 0.0, width);
+    tj[j] = ts[piece] + s;
+    const double pdf = g[piece] * std::exp(rate[piece] * s) / total;
+    wj[j] = 1.0 / (k * pdf);
+  }
+
+  // One residual-ratio-tracking walk along [0, t_k] against the control that is linear between
+  // the nodes (as in ResidualSunTransmittance): T(p, x_j) = exp(-tau_c(t_j)) times the running
+  // product at t_j, unbiased for every j.
+  const double t_last = tj[k - 1];
+  double sigma_max = 0.0;
+  for (int i = 0; i < n; ++i) sigma_max = std::max(sigma_max, sigma_node[i]);
+  const double walk_rate = t_last > 0.0 ? (2.0 + kResidualRate * sigma_max * t_last) / t_last : 1.0;
+  // The control at t and its integral from 0 to t, with `node` the piece that holds t.
+  int node = 0;
+  const auto control = [&](double t, double& tau_c) {
+    while (node + 2 < n && ts[node + 1] <= t) ++node;
+    const double width = ts[node + 1] - ts[node];
+    const double f = width > 0.0 ? std::clamp((t - ts[node]) / width, 0.0, 1.0) : 0.0;
+    const double sigma_c = sigma_node[node] + f * (sigma_node[node + 1] - sigma_node[node]);
+    tau_c = tau_node[node] + 0.5 * (sigma_node[node] + sigma_c) * (t - ts[node]);
+    return sigma_c;
+  };
+  double product = 1.0;
+  double t_next = -std::log1p(-rng.Uniform()) / walk_rate;
+  std::uint64_t steps = 0;
+  double estimate = 0.0;
+  for (int j = 0; j < k; ++j) {
+    double tau_c;
+    while (t_next < tj[j] && steps < kMaxTrackingSteps) {
+      ++steps;
+      const double sigma_c = control(t_next, tau_c);
+      product *= 1.0 - (OpticalDepth(c, Densities(p + t_next * d)) - sigma_c) / walk_rate;
+      t_next -= std::log1p(-rng.Uniform()) / walk_rate;
+    }
+    node = 0;
+    control(tj[j], tau_c);
+    const glm::dvec3 x = p + tj[j] * d;
+    const glm::dvec3 densities = Densities(x);
+    const double s = rayleigh * densities.x + mie * densities.y;
+    if (s > 0.0) estimate += wj[j] * std::exp(-tau_c) * product * s * ResidualSunTransmittance(x, sun, c, rng);
+  }
+  return estimate;
+}
+
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
   glm::dvec3 p = query.origin;
@@ -288,6 +614,18 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     if (cross_to_ground) {
       if (!end_scores) return;
       weight *= RatioTracking(p, d, length, c, rng);
+    }
+
+    // Next-event estimation on the segment: the expected vertex estimate of the next collision,
+    // scored in that collision's order bin; the vertex itself then takes none.
+    bool segment_nee = false;
+    if (!half_space_ && !cross_to_ground && length < kInfinity &&
+        settings_.next_event != NextEventEstimation::kVertex) {
+      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
+      if (!segment_nee) segment_nee = InShadow(p, query.sun);
+      if (segment_nee) {
+        orders[std::min(order + 1, kOrderBins) - 1] += weight * SegmentSunlight(p, d, length, query.sun, c, rng);
+      }
     }
 
     // Delta tracking against the segment's majorant, the first tentative collision forced into
@@ -328,12 +666,30 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
       const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
       const double g = is_mie ? mie_g_ : rayleigh_g_;
-      const double sun_transmittance = SunTransmittance(p, query.sun, c, rng);
+      const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
       if (sun_transmittance != 0.0) {
         add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
       }
-      const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-      d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+      const double guide = settings_.shadow_guiding;
+      if (guide > 0.0 && !half_space_ && InShadow(p, query.sun)) {
+        // One-sample MIS of the phase function and a lobe about the sun (the lit air of a
+        // shadowed vertex lies towards the sun): weight p_phase / q, q their mixture, <= 1 / (1 - guide).
+        glm::dvec3 next;
+        if (rng.Uniform() < guide) {
+          const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
+          next = DirectionAbout(query.sun, mu, 2.0 * kPi * rng.Uniform());
+        } else {
+          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        }
+        const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
+        const double lobe = shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(query.sun, next));
+        weight *= phase / ((1.0 - guide) * phase + guide * lobe);
+        d = next;
+      } else {
+        const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+        d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+      }
     } else if (end_scores) {
       const glm::dvec3 n = glm::normalize(p + length * d);
       p = n * atmosphere_.bottom_radius;

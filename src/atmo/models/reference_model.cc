@@ -44,13 +44,22 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
     } else if (key == "forced_collisions") {
       if (value != "on" && value != "off") throw Error("option forced_collisions=" + value + ": expected on or off");
       s.forced_collisions = value == "on";
+    } else if (key == "nee") {
+      if (value == "auto") s.next_event = cpu::NextEventEstimation::kAuto;
+      else if (value == "segment") s.next_event = cpu::NextEventEstimation::kSegment;
+      else if (value == "vertex") s.next_event = cpu::NextEventEstimation::kVertex;
+      else throw Error("option nee=" + value + ": expected auto, segment or vertex");
+    } else if (key == "nee_samples") {
+      s.nee_samples = static_cast<int>(ParseCount(key, value, 1, 64));
+    } else if (key == "shadow_guiding") {
+      s.shadow_guiding = ParseDoubleOption(key, value, 0.0, 0.95);
     } else if (key == "quadrature_tolerance") {
       s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
     } else if (key == "seed") {
       s.seed = ParseCount(key, value, 0, ~std::uint64_t{0});
     } else {
       throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
-                  "max_samples, estimator, forced_collisions, quadrature_tolerance, seed)");
+                  "max_samples, estimator, forced_collisions, nee, nee_samples, shadow_guiding, quadrature_tolerance, seed)");
     }
   }
   if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
@@ -64,7 +73,8 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
 ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const ReferenceSettings& settings)
     : Model(parameters),
       settings_(settings),
-      tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3}) {}
+      tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3, settings.next_event, settings.nee_samples,
+                                      settings.shadow_guiding}) {}
 
 std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {

@@ -10,6 +10,13 @@
 //   estimator=path          path: all orders by path tracing; single_quadrature: single scattering
 //                           only, by deterministic quadrature (standard error 0)
 //   forced_collisions=on    force the first tentative collision of segments whose end scores 0
+//   nee=auto                next-event estimation to the sun: vertex (at each collision), segment
+//                           (the integral over each segment's lit part), auto (segment on the
+//                           view ray and on segments that start in the planet's shadow, vertex
+//                           elsewhere)
+//   nee_samples=2           stratified points per segment integral
+//   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
+//                           new direction from a lobe about the sun (MIS with the phase function)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -39,6 +46,9 @@ struct ReferenceSettings {
   std::uint64_t max_samples = std::uint64_t{1} << 24;
   Estimator estimator = Estimator::kPath;
   bool forced_collisions = true;
+  cpu::NextEventEstimation next_event = cpu::NextEventEstimation::kAuto;
+  int nee_samples = 2;
+  double shadow_guiding = 0.5;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
