@@ -466,6 +466,8 @@ void AtomicFileSet::Commit() {
   if (committed_) return;
   committed_ = true;
   std::error_code ec;
+  // A signal waits until every file is renamed (then removes nothing of the set and ends).
+  const DeferInterrupts defer;
   for (Staged& staged : staged_) {
     fs::rename(staged.temporary, staged.target, ec);
     if (ec) {
