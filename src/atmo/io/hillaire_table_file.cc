@@ -11,6 +11,7 @@
 #include "cpu/camera.h"
 #include "io/table_files.h"
 #include "physics/shared_parameters.h"
+#include "printable.h"
 #include "shared/shared.h"
 
 namespace atmo {
@@ -375,7 +376,7 @@ HillaireTables ReadHillaireTables(const std::filesystem::path& name) {
     tables.parameters = FromJson(j.at("parameters").dump());
     const std::string hash = j.at("parameter_hash").get<std::string>();
     if (hash != ParameterHashHex(tables.parameters)) {
-      throw Error(where + "parameter hash " + hash + " does not match its parameters' " +
+      throw Error(where + "parameter hash " + Printable(hash) + " does not match its parameters' " +
                   ParameterHashHex(tables.parameters));
     }
     tables.parameters.name = j.at("preset").get<std::string>();
@@ -388,7 +389,7 @@ HillaireTables ReadHillaireTables(const std::filesystem::path& name) {
     const Json& camera = j.at("aerial_camera");
     // The export's camera is perspective (ValidateHillaireExportView); another kind was read as perspective.
     const std::string kind = camera.at("kind").get<std::string>();
-    if (kind != "perspective") throw Error(where + "aerial_camera.kind must be \"perspective\" (got \"" + kind + "\")");
+    if (kind != "perspective") throw Error(where + "aerial_camera.kind must be \"perspective\" (got \"" + Printable(kind) + "\")");
     tables.view.camera.kind = CameraKind::kPerspective;
     tables.view.camera.width = static_cast<int>(io::ManifestInteger(camera, "width", 1, kMaxImageSide, where));
     tables.view.camera.height = static_cast<int>(io::ManifestInteger(camera, "height", 1, kMaxImageSide, where));
