@@ -150,6 +150,28 @@ TEST(PhysicalBounds, TheBoundsThemselvesAreAccepted) {
 
 // Grazing rays over the audit's 52 796 km planet, every one close to the tangent of the ground
 // and of the top: each optical depth is one adaptive quadrature, which must stay bounded.
+// Input text quoted in a message keeps the message one line: control characters are escaped
+// (a key with "\n" gave a two-line atmo::Error, found by fuzz_json_parameters).
+TEST(OneLineErrors, InputTextIsQuotedWithItsControlCharactersEscaped) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"sun_lim\nb": 1})", "unknown key 'sun_lim\\nb'"},
+      {R"({"rayleigh": {"a\r\tb": 1}})", "unknown key 'rayleigh.a\\r\\tb'"},
+      {R"({"preset": "ea\u0001rth"})", "unknown preset 'ea\\x01rth'"},
+      {R"({"mie": {"phase_function": "x\ny"}})", "unknown phase function 'x\\ny'"},
+      {R"({"geometry": "\n"})", "unknown geometry '\\n'"},
+  };
+  for (const auto& [json, part] : cases) {
+    try {
+      atmo::FromJson(json);
+      ADD_FAILURE() << json << " was accepted";
+    } catch (const atmo::Error& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.find_first_of("\n\r\t\x01"), std::string::npos) << message;
+      EXPECT_NE(message.find(part), std::string::npos) << message << " lacks " << part;
+    }
+  }
+}
+
 TEST(BoundedLoops, GrazingTransmittancesOnALargePlanetFinishQuickly) {
   atmo::AtmosphereParameters p = atmo::Preset("earth");
   p.ground_radius_m = 52796e3;
@@ -798,7 +820,8 @@ TEST(BadInputCount, AtLeast250AreTried) {
   const std::size_t others = 5    // ElekManifestIntegersMustBeIntegers
                              + 10   // ReadExrRefusesBadFilesInOneLine
                              + 17   // PhysicalBounds.OutOfRangeValuesNameKeyValueAndRange
-                             + 8;   // WriteFileAtomicallyRefusesSpecialFiles, ReadFileBoundedRefuses...
+                             + 8    // WriteFileAtomicallyRefusesSpecialFiles, ReadFileBoundedRefuses...
+                             + 5;   // OneLineErrors.InputTextIsQuotedWithItsControlCharactersEscaped
   std::printf("bad inputs: %zu audit, %zu configs, %zu flags and grids, %zu tables, %zu others: %zu\n",
               std::size(kBadInputs), BadConfigs().size(), BadFlags().size(), std::size(kBadTables), others,
               tables + others);
