@@ -11,13 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "atmo/aerial_perspective.h"
 #include "atmo/error.h"
+#include "atmo/hillaire_tables.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
 #include "grid.h"
 #include "io/elek_table_file.h"
+#include "io/hillaire_table_file.h"
 #include "models/elek_model.h"
+#include "physics/shared_parameters.h"
 
 namespace atmo::fuzz {
 namespace {
@@ -127,6 +131,51 @@ int FuzzExrReader(const std::uint8_t* data, std::size_t size) {
     Require(image.pixels.size() == pixels * static_cast<std::size_t>(image.channels), "pixels of the wrong size");
     Require(image.channel_names.size() == static_cast<std::size_t>(image.channels), "channel names of the wrong count");
     Require(image.alpha.empty() || image.alpha.size() == pixels, "alpha of the wrong size");
+  });
+}
+
+int FuzzHillaireTable(const std::uint8_t* data, std::size_t size) {
+  std::string_view rest = Text(data, size);
+  const fs::path name = ScratchFolder() / "sky";
+  const HillaireTableFiles files = HillaireTableFilesFor(name);
+  std::size_t separator = rest.find(kRawSeparator);
+  WriteBytes(files.json, rest.substr(0, separator));
+  rest = separator == std::string_view::npos ? std::string_view() : rest.substr(separator + kRawSeparator.size());
+  bool more = separator != std::string_view::npos;
+  for (const fs::path& raw : files.raw) {
+    // Each table's bytes up to the next separator; the tables after the last one: empty files.
+    separator = rest.find(kRawSeparator);
+    WriteBytes(raw, more ? rest.substr(0, separator) : std::string_view());
+    more = more && separator != std::string_view::npos;
+    rest = more ? rest.substr(separator + kRawSeparator.size()) : std::string_view();
+  }
+  return Refusable([&] {
+    const HillaireTables tables = ReadHillaireTables(name);
+    Require(tables.tables.size() == std::size(kHillaireTableNames), "a loaded set without its six tables");
+    const std::size_t batches = ChannelBatchCount(tables.parameters.channel_count());
+    for (std::size_t i = 0; i < tables.tables.size(); ++i) {
+      const ExportedTable& t = tables.tables[i];
+      Require(t.name == kHillaireTableNames[i], "table " + std::to_string(i) + " is '" + t.name + "'");
+      Require(t.width >= 1 && t.height >= 1 && t.depth >= 1, "table " + t.name + " without texels");
+      Require(t.batches == batches, "table " + t.name + " with batches other than its parameters'");
+      Require(t.rgb.size() == 3 * t.texel_count() * t.batches, "table " + t.name + " of the wrong size");
+      Require(i >= 4 || t.depth == 1, "2D table " + t.name + " with a depth");
+    }
+    const auto same_sides = [](const ExportedTable& a, const ExportedTable& b) {
+      return a.width == b.width && a.height == b.height && a.depth == b.depth;
+    };
+    Require(same_sides(tables.table("sky_view"), tables.table("sky_view_ground")), "sky views of two sizes");
+    const ExportedTable& aerial = tables.table("aerial_radiance");
+    Require(same_sides(aerial, tables.table("aerial_transmittance")), "aerial tables of two sizes");
+    Require(aerial.width == tables.view.aerial.width && aerial.height == tables.view.aerial.height &&
+                aerial.depth == tables.view.aerial.depth,
+            "aerial tables of a size other than the view's volume");
+    try {
+      Validate(tables.parameters);
+      ValidateHillaireExportView(tables.parameters, tables.view);
+    } catch (const Error& e) {
+      throw FuzzInvariantError(std::string("a loaded set with an invalid atmosphere or view: ") + e.what());
+    }
   });
 }
 

@@ -48,17 +48,28 @@ int FuzzGridCsv(const std::uint8_t* data, std::size_t size);
 // private temporary folder; an accepted image has the layout Image promises.
 int FuzzExrReader(const std::uint8_t* data, std::size_t size);
 
+// atmo::ReadHillaireTables (the export of `atmo precompute --model hillaire --out sky`): the input
+// is sky.json, then for each table of kHillaireTableNames in order the line kRawSeparator and the
+// bytes of sky_<table>.raw (a table without its separator: an empty file). Written to a private
+// temporary folder and read; an accepted set has its six tables in order, each of the size its
+// sides and batches give, the batches of its parameters, the two sky views of one size and the
+// two aerial tables of one size, which is the view's aerial-perspective volume; its parameters and
+// view are valid.
+int FuzzHillaireTable(const std::uint8_t* data, std::size_t size);
+inline constexpr std::string_view kRawSeparator = kElekRawSeparator;
+
 struct FuzzTarget {
   std::string_view name;  // the folder names under fuzz/corpus and fuzz/regressions
   int (*run)(const std::uint8_t* data, std::size_t size);
 };
 
-// Every target, by name. (The table export of model hillaire gets its loader's target here.)
+// Every target, by name.
 inline constexpr FuzzTarget kFuzzTargets[] = {
     {"json_parameters", &FuzzJsonParameters},
     {"elek_table", &FuzzElekTable},
     {"grid_csv", &FuzzGridCsv},
     {"exr_reader", &FuzzExrReader},
+    {"hillaire_table", &FuzzHillaireTable},
 };
 
 }  // namespace atmo::fuzz

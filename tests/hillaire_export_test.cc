@@ -303,6 +303,71 @@ TEST_F(HillaireExport, AnotherAtmoVersionWarnsAnotherFormatIsRefused) {
   EXPECT_NE(corrupt.find("data hash"), std::string::npos) << corrupt;
 }
 
+// A manifest whose tables do not make one set, or whose view the export would refuse, is refused
+// in one line although every raw file matches its sizes and hash (the fuzz target's invariants,
+// fuzz/fuzz_targets.h): each case keeps a table's texel count, so its bytes and hash stay valid.
+TEST_F(HillaireExport, ATableSetOfMismatchedSizesOrAnInvalidViewIsRefused) {
+  const auto model = CreateModel("hillaire", Preset("earth"), kSmall);
+  const fs::path name = dir_ / "sky";
+  ExportHillaireTables(ComputeHillaireTables(*model, SmallView()), name);
+  const fs::path json_path = name.string() + ".json";
+  const Json original = Json::parse(Bytes(json_path));
+  struct Case {
+    const char* what;
+    std::function<void(Json&)> edit;
+    const char* message_part;
+  };
+  const Case cases[] = {
+      {"sky views of two sizes",
+       [](Json& j) {
+         j["tables"]["sky_view_ground"]["width"] = 24;
+         j["tables"]["sky_view_ground"]["height"] = 48;
+       },
+       "they must be of one size"},
+      {"aerial tables of two sizes",
+       [](Json& j) {
+         j["tables"]["aerial_transmittance"]["width"] = 4;
+         j["tables"]["aerial_transmittance"]["height"] = 6;
+       },
+       "they must be of one size"},
+      {"a 2D table with a depth",
+       [](Json& j) {
+         j["tables"]["transmittance"]["height"] = 8;
+         j["tables"]["transmittance"]["depth"] = 2;
+       },
+       "a 2D table has depth 1"},
+      {"a table one texel wide",
+       [](Json& j) {
+         j["tables"]["multiple_scattering"]["width"] = 1;
+         j["tables"]["multiple_scattering"]["height"] = 64;
+       },
+       "at least 2 texels a side"},
+      {"an odd sky-view height",
+       [](Json& j) {
+         for (const char* t : {"sky_view", "sky_view_ground"}) {
+           j["tables"][t]["width"] = 128;
+           j["tables"][t]["height"] = 9;
+         }
+       },
+       "even and >= 4"},
+      {"an observer below the ground", [](Json& j) { j["view"]["altitude_m"] = -1.0; }, "view: "},
+      {"an observer above the top", [](Json& j) { j["view"]["altitude_m"] = 2e5; }, "view: "},
+      {"a fisheye camera", [](Json& j) { j["aerial_camera"]["kind"] = "fisheye"; }, "aerial_camera.kind"},
+      {"a field of view of 180 degrees", [](Json& j) { j["aerial_camera"]["fov_deg"] = 180.0; }, "view: fov"},
+      {"an infinite aerial distance", [](Json& j) { j["aerial_camera"]["max_distance_km"] = 1e306; }, "view: "},
+  };
+  for (const Case& c : cases) {
+    Json j = original;
+    c.edit(j);
+    std::ofstream(json_path, std::ios::binary | std::ios::trunc) << j.dump(2);
+    const std::string message = ErrorOf([&] { ReadHillaireTables(name); });
+    EXPECT_NE(message.find(c.message_part), std::string::npos) << c.what << ": " << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << c.what << ": " << message;
+  }
+  std::ofstream(json_path, std::ios::binary | std::ios::trunc) << original.dump(2);
+  EXPECT_NO_THROW(ReadHillaireTables(name));
+}
+
 // The manifest is staged last: when its write fails, none of the twelve table files published
 // before it in the same set changes, and no temporary file is left.
 TEST_F(HillaireExport, AFailedManifestWriteChangesNoTable) {

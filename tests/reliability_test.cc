@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <png.h>
 
 #include "atmo/error.h"
 #include "atmo/image.h"
@@ -148,6 +150,28 @@ TEST(PhysicalBounds, TheBoundsThemselvesAreAccepted) {
 
 // Grazing rays over the audit's 52 796 km planet, every one close to the tangent of the ground
 // and of the top: each optical depth is one adaptive quadrature, which must stay bounded.
+// Input text quoted in a message keeps the message one line: control characters are escaped
+// (a key with "\n" gave a two-line atmo::Error, found by fuzz_json_parameters).
+TEST(OneLineErrors, InputTextIsQuotedWithItsControlCharactersEscaped) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"sun_lim\nb": 1})", "unknown key 'sun_lim\\nb'"},
+      {R"({"rayleigh": {"a\r\tb": 1}})", "unknown key 'rayleigh.a\\r\\tb'"},
+      {R"({"preset": "ea\u0001rth"})", "unknown preset 'ea\\x01rth'"},
+      {R"({"mie": {"phase_function": "x\ny"}})", "unknown phase function 'x\\ny'"},
+      {R"({"geometry": "\n"})", "unknown geometry '\\n'"},
+  };
+  for (const auto& [json, part] : cases) {
+    try {
+      atmo::FromJson(json);
+      ADD_FAILURE() << json << " was accepted";
+    } catch (const atmo::Error& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.find_first_of("\n\r\t\x01"), std::string::npos) << message;
+      EXPECT_NE(message.find(part), std::string::npos) << message << " lacks " << part;
+    }
+  }
+}
+
 TEST(BoundedLoops, GrazingTransmittancesOnALargePlanetFinishQuickly) {
   atmo::AtmosphereParameters p = atmo::Preset("earth");
   p.ground_radius_m = 52796e3;
@@ -263,6 +287,22 @@ const BadInput kBadInputs[] = {
     {"OutToFifo", "sample" ATMO_ONE " --out fifo", "it is not a regular file"},
     {"OutToDirectory", "sample" ATMO_ONE " --out folder", "it is a folder"},
     {"PngToDanglingLink", "render --png dangling.png" ATMO_TINY, "symbolic link to a missing file"},
+    // Flags that were not bounded (found by the generated tables below).
+    {"ExposureBeyondTheBounds", "render --exposure 1e300" ATMO_TINY, "--exposure: 1e300 is outside [1e-10, 1e+10]"},
+    {"EvBeyondTheBounds", "render --ev 1e9" ATMO_TINY, "--ev: 1e9 is outside [-32, 32]"},
+    {"LongitudeBeyond180", "render --date 2024-06-21T12:00:00Z --latitude 45 --longitude 181" ATMO_TINY,
+     "--longitude: 181 is outside [-180, 180]"},
+    {"LatitudeBelowMinus90", "render --date 2024-06-21T12:00:00Z --latitude -90.5 --longitude 0" ATMO_TINY,
+     "--latitude: -90.5 is outside [-90, 90]"},
+    {"PrecomputeEmptyName", "precompute --model hillaire --out ''", "--out must be the tables' NAME"},
+    {"PrecomputeNameEndingInASlash", "precompute --out tables/", "--out 'tables/' is a folder"},
+    {"PrecomputeNameAFolder", "precompute --model hillaire --out folder", "--out 'folder' is a folder"},
+    {"PrecomputeNameDot", "precompute --out .", "--out '.' is a folder"},
+    {"NegativeSamplesShownAsGiven", "sample --model reference --samples -4" ATMO_ONE " --out out.csv",
+     "--samples: Value -4 not in range 2 to 1099511627776"},
+    {"NegativeSppShownAsGiven", "render --model reference --spp -4" ATMO_TINY, "--spp: Value -4 not in range"},
+    {"AerialDistanceBeyondTheBounds", "precompute --model hillaire --aerial-distance 1e300 --out sky",
+     "--aerial-distance: 1e300 is outside [1, 1e+11]"},
 };
 
 class BadInputTest : public ReliabilityCliTest, public ::testing::WithParamInterface<BadInput> {};
@@ -302,6 +342,10 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   EXPECT_TRUE(fs::is_directory(dir_ / "folder"));
   EXPECT_TRUE(fs::is_empty(dir_ / "folder"));
   EXPECT_TRUE(fs::is_symlink(dir_ / "dangling.png"));
+  // No export without a name (precompute --out "" wrote .json, .exr and .raw).
+  for (const char* name : {".json", ".exr", ".raw", "_transmittance.raw", "sky_transmittance.raw", "folder.json"}) {
+    EXPECT_FALSE(fs::exists(dir_ / name)) << name;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Reliability, BadInputTest, ::testing::ValuesIn(kBadInputs),
@@ -514,9 +558,9 @@ std::vector<GeneratedBadInput> BadFlags() {
   for (const char* value : {"0", "360", "nan", "-10", "inf"}) add(render, "--fov", value);
   for (const char* value : {"nan", "inf"}) add(render, "--yaw", value);
   for (const char* value : {"91", "-91", "nan"}) add(render, "--pitch", value);
-  for (const char* value : {"0", "-1", "nan"}) add(render, "--exposure", value);
-  add(render, "--ev", "nan");
-  for (const char* value : {"0", "-1", "1e12"}) add(render, "--spp", value);
+  for (const char* value : {"0", "-1", "nan", "1e-11", "1.1e10"}) add(render, "--exposure", value);
+  for (const char* value : {"nan", "-32.5", "33", "inf"}) add(render, "--ev", value);
+  for (const char* value : {"0", "-1", "1e12", "-4", "99999999999999999999"}) add(render + " --model reference", "--spp", value);
   for (const char* value : {"0", "-5", "100000000"}) add(render, "--threads", value);
   for (const char* value : {"0", "5000", "-3"}) add(render, "--spectral", value);
   add(render, "--camera", "fish");
@@ -533,8 +577,10 @@ std::vector<GeneratedBadInput> BadFlags() {
   for (const char* value : {"0", "nan", "-1"}) add(render, "--gamma", value);
   add(render, "--date", "yesterday");
   add(render, "--date", "2024-13-45T25:61:00Z");
-  for (const char* value : {"91", "nan"}) add(render + " --date 2024-06-21T12:00:00Z", "--latitude", value);
-  add(render + " --date 2024-06-21T12:00:00Z --latitude 45", "--longitude", "inf");
+  for (const char* value : {"91", "-91", "nan"}) add(render + " --date 2024-06-21T12:00:00Z", "--latitude", value);
+  for (const char* value : {"inf", "-180.5", "180.5", "360"}) {
+    add(render + " --date 2024-06-21T12:00:00Z --latitude 45", "--longitude", value);
+  }
   add(render, "--option", "junk", "junk");
   add(render, "--option", "transmittance_lut=0x0", "transmittance_lut");
   add(render, "--option", "nonsense=1", "nonsense");
@@ -559,6 +605,10 @@ std::vector<GeneratedBadInput> BadFlags() {
   add(sample, "--unit", "candela", "--unit");
   add(sample + " --model reference", "--samples", "0", "samples");
   add(sample + " --model reference", "--samples", "x", "--samples");
+  // Shown as given: CLI11 wrapped a negative count into the unsigned type (samples=18446744073709551612).
+  for (const char* value : {"-1", "1", "1099511627777"}) {
+    add(sample + " --model reference", "--samples", value, std::string("--samples: Value ") + value + " not in range");
+  }
   add("sample" ATMO_ONE, "--out", "out.txt", "out.txt");
   add("sample" ATMO_ONE, "--out", "/nonexistent-folder/out.csv", "/nonexistent-folder/out.csv");
   add(sample, "--config", "missing.json", "missing.json");
@@ -577,6 +627,10 @@ std::vector<GeneratedBadInput> BadFlags() {
   add("compare --json out.json", "--grid", "missing.csv", "missing.csv");
   add("precompute --model nosuchmodel", "--out", "table", "nosuchmodel");
   add("precompute --model elek --option size=4x8x4", "--out", "/nonexistent-folder/t", "/nonexistent-folder/t");
+  add("precompute --model elek", "--out", "''", "--out must be the tables' NAME");
+  add("precompute --model hillaire", "--out", "..", "--out '..' is a folder");
+  add("precompute --model hillaire", "--out", "/tmp/", "--out '/tmp/' is a folder");
+  for (const char* value : {"0", "0.5", "1.1e11", "nan"}) add("precompute --model hillaire --out sky", "--aerial-distance", value);
   for (const char* value : {"91", "-91", "nan"}) add("illuminance", "--sun-elevation", value);
   add("presets", "--dump", "venus", "venus");
   add("frobnicate", "", "", "frobnicate");
@@ -766,7 +820,8 @@ TEST(BadInputCount, AtLeast250AreTried) {
   const std::size_t others = 5    // ElekManifestIntegersMustBeIntegers
                              + 10   // ReadExrRefusesBadFilesInOneLine
                              + 17   // PhysicalBounds.OutOfRangeValuesNameKeyValueAndRange
-                             + 8;   // WriteFileAtomicallyRefusesSpecialFiles, ReadFileBoundedRefuses...
+                             + 8    // WriteFileAtomicallyRefusesSpecialFiles, ReadFileBoundedRefuses...
+                             + 5;   // OneLineErrors.InputTextIsQuotedWithItsControlCharactersEscaped
   std::printf("bad inputs: %zu audit, %zu configs, %zu flags and grids, %zu tables, %zu others: %zu\n",
               std::size(kBadInputs), BadConfigs().size(), BadFlags().size(), std::size(kBadTables), others,
               tables + others);
@@ -798,6 +853,52 @@ void ExpectFiniteSamples(const RunResult& r, const std::string& what) {
 
 // The extremes that the bounds allow give finite radiance and transmittance with every model
 // (the audit's NaN with exit 0 came from just outside them, or from the lookups).
+// The 8-bit RGB samples of a PNG (libpng's simplified API), empty when it cannot be read.
+std::vector<unsigned char> PngSamples(const fs::path& path) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.c_str())) return {};
+  image.format = PNG_FORMAT_RGB;
+  std::vector<unsigned char> samples(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, samples.data(), 0, nullptr)) return {};
+  return samples;
+}
+
+// The exposure flags at their bounds give a finite exposure and a PNG that is saturated (every
+// pixel's brightest channel 255: nothing overflowed to a black pixel) or dark, for every tone
+// curve; --exposure 1e300 had been accepted (a sun pixel times 1e300 is inf, shown black).
+TEST_F(ReliabilityCliTest, ExposureBoundsGiveFiniteImages) {
+  struct Bound {
+    const char* flags;
+    bool bright;
+  };
+  const Bound bounds[] = {{"--exposure 1e10", true},          {"--exposure 1e-10", false},
+                          {"--ev -32", true},                 {"--ev 32", false},
+                          {"--exposure 1e10 --tonemap aces", true}, {"--exposure 1e10 --tonemap none --per-channel", true}};
+  for (const Bound& bound : bounds) {
+    const RunResult r = Run(std::string("render --width 16 --height 8 --exr sky.exr --png sky.png ") + bound.flags);
+    ASSERT_EQ(r.exit_code, 0) << bound.flags << ": " << r.err;
+    atmo::ImageMetadata metadata;
+    const atmo::Image exr = atmo::ReadExr(dir_ / "sky.exr", &metadata);
+    for (const float v : exr.pixels) ASSERT_TRUE(std::isfinite(v)) << bound.flags;
+    double exposure = kNan;
+    for (const auto& [key, value] : metadata) {
+      if (key == "atmo:pngExposure") exposure = std::strtod(value.c_str(), nullptr);
+    }
+    EXPECT_TRUE(exposure >= 1e-10 * 0.99 && exposure <= 1e10 * 1.01) << bound.flags << ": " << exposure;
+    const std::vector<unsigned char> png = PngSamples(dir_ / "sky.png");
+    ASSERT_EQ(png.size(), 16u * 8u * 3u) << bound.flags;
+    for (std::size_t i = 0; i < png.size(); i += 3) {
+      const int brightest = std::max({png[i], png[i + 1], png[i + 2]});
+      if (bound.bright) {
+        EXPECT_EQ(brightest, 255) << bound.flags << " pixel " << i / 3;
+      } else {
+        EXPECT_LE(brightest, 1) << bound.flags << " pixel " << i / 3;  // 1: the dither
+      }
+    }
+  }
+}
+
 TEST_F(ReliabilityCliTest, InRangeExtremesGiveFiniteSamples) {
   struct Extreme {
     const char* name;

@@ -92,6 +92,16 @@ CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::opti
       ->check(kFinite);
 }
 
+// Read as a signed integer: CLI11 converts "-4" to an unsigned type by wrapping it (the error
+// then showed 18446744073709551612); a negative count now reaches the range check as given.
+CLI::Option* AddPathCount(CLI::App* app, const std::string& name, std::optional<std::uint64_t>& value,
+                          const std::string& help) {
+  return app
+      ->add_option_function<std::int64_t>(
+          name, [&value](const std::int64_t& n) { value = static_cast<std::uint64_t>(n); }, help)
+      ->check(kInteger);
+}
+
 void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option("--model", common.model, "sky model: " + JoinNames(atmo::ModelNames()))->capture_default_str();
   CLI::Option* preset =
@@ -146,7 +156,7 @@ CLI::Option* AddSunOptions(CLI::App* app, SunOptions& sun) {
                               ->check(RangeOf(-90.0, 90.0));
   CLI::Option* longitude = AddOptionalNumber(app, "--longitude", sun.longitude_deg,
                                              "observer longitude in degrees, east positive (with --date)")
-                               ->check(RangeOf(-180.0, 360.0));
+                               ->check(RangeOf(-180.0, 180.0));
   CLI::Option* refraction = app->add_flag(
       "--refraction", sun.refraction,
       "the apparent (refracted, 1010 mbar, 10 C) sun elevation instead of the geometric one (with --date)");
@@ -184,10 +194,12 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   CLI::Option* exposure = AddOptionalNumber(app, "--exposure", render.exposure,
                                             "linear exposure multiplier of the PNG (docs/display.md) [default: "
                                             "auto-exposure; a relative 3-channel render: the preset's]")
-                              ->check(kPositive);
+                              ->check(RangeOf(kMinExposure, kMaxExposure));
+  // EV100 within [-32, 32]: exposures 1/(1.2 2^EV) in [1.9e-10, 3.6e9], inside the exposure bounds.
   CLI::Option* ev = AddOptionalNumber(app, "--ev", render.ev100,
-                                      "exposure as EV100 (photographic; 1/(1.2 2^EV) on cd/m^2), e.g. 15 for "
-                                      "sunny noon, 9 for sunset, 4 for civil twilight")
+                                      "exposure as EV100 in [-32, 32] (photographic; 1/(1.2 2^EV) on cd/m^2), "
+                                      "e.g. 15 for sunny noon, 9 for sunset, 4 for civil twilight")
+                        ->check(RangeOf(-kMaxEv100, kMaxEv100))
                         ->excludes(exposure);
   app->add_flag("--auto-exposure", render.auto_exposure,
                        "EV100 from the image's log-average luminance (the default for physical units)")
@@ -229,12 +241,10 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
       ->check(CLI::IsMember({"luminance", "radiance", "relative"}))
       ->capture_default_str();
   app->add_flag("--xyz", render.xyz, "with --unit luminance: CIE 1931 XYZ channels instead of linear sRGB");
-  app
-      ->add_option_function<std::uint64_t>(
-          "--spp,--samples", [&render](const std::uint64_t& n) { render.spp = n; },
-          "Monte Carlo paths per pixel, rendered progressively in passes of 4, 8, 16, ... "
-          "(model reference only; --samples is the same flag, as in `atmo sample`) [default: its samples option]")
-      ->check(CLI::Range(std::uint64_t{2}, std::uint64_t{1} << 40));
+  AddPathCount(app, "--spp,--samples", render.spp,
+               "Monte Carlo paths per pixel, rendered progressively in passes of 4, 8, 16, ... "
+               "(model reference only; --samples is the same flag, as in `atmo sample`) [default: its samples option]")
+      ->check(CLI::Range(std::int64_t{2}, std::int64_t{1} << 40));
 
   // The sun from a date (sun_options.h) instead of --sun-elevation and --sun-azimuth, and the time-lapse.
   // --camera cubemap and its environment outputs (docs/environment.md).

@@ -13,6 +13,7 @@
 //   atmo::cli::FinishRenderFlags(&app, render, flags);   // -o NAME, --no-exr, warnings
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,15 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, double& value, co
 // An option whose default depends on other values: set only when given.
 CLI::Option* AddOptionalNumber(CLI::App* app, const std::string& name, std::optional<double>& value,
                                const std::string& help);
+// A count of Monte Carlo paths (--spp, --samples): an integer, read as signed so that a negative
+// one is shown as given; the caller adds its range (which must exclude the negatives).
+CLI::Option* AddPathCount(CLI::App* app, const std::string& name, std::optional<std::uint64_t>& value,
+                          const std::string& help);
+// The PNG's --exposure range (the config's `exposure`: [1e-10, 1e10]) and --ev's, [-32, 32] (its
+// exposures 1/(1.2 2^EV) stay inside the first).
+inline constexpr double kMinExposure = 1e-10;
+inline constexpr double kMaxExposure = 1e10;
+inline constexpr double kMaxEv100 = 32.0;
 // --model, --preset, --config, --backend, --threads, --seed, --option, --spectral.
 void AddCommonOptions(CLI::App* app, CommonOptions& common);
 // --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.

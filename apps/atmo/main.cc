@@ -41,6 +41,7 @@ namespace {
 using atmo::cli::AddCommonOptions;
 using atmo::cli::AddNumber;
 using atmo::cli::AddOptionalNumber;
+using atmo::cli::AddPathCount;
 using atmo::cli::AddSunOptions;
 using atmo::cli::CommonOptions;
 using atmo::cli::JoinNames;
@@ -147,9 +148,9 @@ int main(int argc, char** argv) {
   // that take no such option reject them).
   std::optional<std::uint64_t> sample_paths;
   std::optional<double> target_rel_error;
-  sample_app->add_option_function<std::uint64_t>(
-      "--samples,--spp", [&sample_paths](const std::uint64_t& n) { sample_paths = n; },
-      "Monte Carlo paths per query (model reference; --spp is the same flag, as in `atmo render`)");
+  AddPathCount(sample_app, "--samples,--spp", sample_paths,
+               "Monte Carlo paths per query (model reference; --spp is the same flag, as in `atmo render`)")
+      ->check(CLI::Range(std::int64_t{2}, std::int64_t{1} << 40));
   AddOptionalNumber(sample_app, "--target-rel-error", target_rel_error,
                     "keep adding paths until standard error / radiance <= this (model reference)")
       ->check(RangeOf(0.0, 1.0));
@@ -243,9 +244,11 @@ int main(int argc, char** argv) {
       precompute_app->add_option("--aerial-size", precompute.aerial_size,
                                  "hillaire: aerial-perspective froxels WxHxD, each in [1, 512]")
           ->capture_default_str(),
+      // At most the altitude bound, at least 1 m: the manifest's max_distance_km stays a normal
+      // float for an engine (1e300 m was accepted, which a float reads as inf).
       AddNumber(precompute_app, "--aerial-distance", precompute.aerial_distance_m,
-                "hillaire: distance of the last aerial-perspective slice in metres")
-          ->check(kPositive),
+                "hillaire: distance of the last aerial-perspective slice in metres, in [1, 1e11]")
+          ->check(RangeOf(1.0, atmo::kMaxAltitude_m)),
       AddSunOptions(precompute_app, precompute.sun)};
   hillaire_flags.back()
       ->excludes(precompute_app->get_option("--sun-elevation"))

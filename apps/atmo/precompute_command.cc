@@ -8,6 +8,8 @@
 // on the GPU and read back for export.
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <string>
 
 #include "atmo/elek.h"
 #include "atmo/error.h"
@@ -38,6 +40,21 @@ AerialPerspectiveSettings ParseAerialSize(const std::string& text, double max_di
   }
   ValidateAerialPerspectiveSettings(s);
   return s;
+}
+
+// The export's NAME: the prefix of every file it writes (NAME.json, NAME.exr, NAME_<table>.raw, ...),
+// so it must end in a file name. "" wrote .json, .exr and .raw, hidden, into the current folder; a
+// folder ("out/", "out", ".") wrote hidden files into it, or beside it.
+void CheckExportName(const std::string& name) {
+  if (name.empty()) throw Error("--out must be the tables' NAME (NAME.json, ...), got an empty name");
+  const std::filesystem::path path(name);
+  const std::string last = path.filename().string();
+  std::error_code ec;
+  if (name.back() == '/' || last.empty() || last == "." || last == ".." ||
+      std::filesystem::is_directory(path, ec)) {
+    throw Error("--out '" + name + "' is a folder; give the tables' NAME (NAME.json, ...), e.g. '" +
+                (path / "sky").string() + "'");
+  }
 }
 
 HillaireExportView ExportView(const PrecomputeCommand& command, const AtmosphereParameters& parameters) {
@@ -94,6 +111,7 @@ int PrecomputeHillaire(const CommonOptions& common, const PrecomputeCommand& com
 
 int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command) {
   CheckBackend(common, /*command_has_gl=*/true);
+  CheckExportName(command.out);
   if (common.model == "hillaire") return PrecomputeHillaire(common, command);
   if (common.model != "elek") {
     throw Error("precompute exports the tables of models elek and hillaire; model " + common.model +

@@ -97,7 +97,9 @@ HillaireTableFiles HillaireTableFilesFor(const std::filesystem::path& name);
 HillaireTableFiles ExportHillaireTables(const HillaireTables& tables, const std::filesystem::path& name);
 
 // Reads an export back from its manifest and raw files, checking the format, the sizes and each
-// raw file's hash. A manifest of another format version is refused in one line; one written by
+// raw file's hash, that the tables make one set (the 2D tables of depth 1 and >= 2 texels a side,
+// the sky views' heights even and >= 4, the two sky views and the two aerial tables each of one
+// size) and that the view is one ComputeHillaireTables takes (ValidateHillaireExportView). A manifest of another format version is refused in one line; one written by
 // another atmo version with this format version loads, with a one-line warning on stderr.
 // Throws atmo::Error naming the file and the mismatch.
 HillaireTables ReadHillaireTables(const std::filesystem::path& name);

@@ -25,4 +25,16 @@ inline constexpr std::size_t kMaxTemporaryPathBytes = 4096;
 int RegisterTemporaryFile(const char* path);
 void ReleaseTemporaryFile(int slot);
 
+// While one lives (in any thread), SIGINT and SIGTERM wait: the handler records the signal, and
+// the last DeferInterrupts to end acts on it (removes the temporaries, prints the line, ends the
+// process with the signal). AtomicFileSet::Commit holds one over its renames, so that a signal
+// never leaves a set half published (the new tables beside the old manifest).
+class DeferInterrupts {
+ public:
+  DeferInterrupts();
+  ~DeferInterrupts();
+  DeferInterrupts(const DeferInterrupts&) = delete;
+  DeferInterrupts& operator=(const DeferInterrupts&) = delete;
+};
+
 }  // namespace atmo

@@ -9,6 +9,7 @@
 
 #include "atmo/elek.h"
 #include "atmo/error.h"
+#include "printable.h"
 #include "atmo/image.h"
 #include "io/table_files.h"
 #include "models/elek_model.h"
@@ -176,7 +177,7 @@ void LoadElekTable(const std::string& name, ElekModel& model) {
     io::CheckTableVersions(j, kElekTableFormatVersion, where);
     const std::string hash = j.at("parameter_hash").get<std::string>();
     if (hash != ParameterHashHex(model.parameters())) {
-      throw Error(where + "parameter hash " + hash + " does not match the parameters' " +
+      throw Error(where + "parameter hash " + Printable(hash) + " does not match the parameters' " +
                   ParameterHashHex(model.parameters()) + " (preset '" + model.parameters().name + "')");
     }
     const Json& options = j.at("options");
@@ -207,7 +208,7 @@ void LoadElekTable(const std::string& name, ElekModel& model) {
     const std::string data_hash = Hex64(Fnv1a64({bytes, raw.size()}));
     if (data_hash != j.at("raw_hash_fnv1a64").get<std::string>()) {
       throw Error("elek table '" + files.raw.string() + "': data hash " + data_hash + " does not match the manifest's " +
-                  j.at("raw_hash_fnv1a64").get<std::string>() + " (corrupt or modified)");
+                  Printable(j.at("raw_hash_fnv1a64").get<std::string>()) + " (corrupt or modified)");
     }
     for (std::size_t b = 0; b < model.batches().size(); ++b) {
       std::vector<float> rgba(4 * texels);

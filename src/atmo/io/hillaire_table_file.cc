@@ -11,6 +11,7 @@
 #include "cpu/camera.h"
 #include "io/table_files.h"
 #include "physics/shared_parameters.h"
+#include "printable.h"
 #include "shared/shared.h"
 
 namespace atmo {
@@ -226,6 +227,9 @@ void ValidateHillaireExportView(const AtmosphereParameters& p, const HillaireExp
   if (!std::isfinite(view.sun_elevation_deg) || !std::isfinite(view.sun_azimuth_deg)) {
     throw Error("the sun's elevation and azimuth must be finite");
   }
+  if (view.camera.kind != CameraKind::kPerspective) {
+    throw Error("the exported aerial-perspective volume needs a perspective camera");
+  }
   ValidateCamera(view.camera);
   ValidateAerialPerspectiveSettings(view.aerial);
 }
@@ -372,7 +376,7 @@ HillaireTables ReadHillaireTables(const std::filesystem::path& name) {
     tables.parameters = FromJson(j.at("parameters").dump());
     const std::string hash = j.at("parameter_hash").get<std::string>();
     if (hash != ParameterHashHex(tables.parameters)) {
-      throw Error(where + "parameter hash " + hash + " does not match its parameters' " +
+      throw Error(where + "parameter hash " + Printable(hash) + " does not match its parameters' " +
                   ParameterHashHex(tables.parameters));
     }
     tables.parameters.name = j.at("preset").get<std::string>();
@@ -383,10 +387,10 @@ HillaireTables ReadHillaireTables(const std::filesystem::path& name) {
     tables.view.sun_elevation_deg = view.at("sun_elevation_deg").get<double>();
     tables.view.sun_azimuth_deg = view.at("sun_azimuth_deg").get<double>();
     const Json& camera = j.at("aerial_camera");
+    // The export's camera is perspective (ValidateHillaireExportView); another kind was read as perspective.
     const std::string kind = camera.at("kind").get<std::string>();
-    tables.view.camera.kind = kind == "fisheye" ? CameraKind::kFisheye
-                              : kind == "equirect" ? CameraKind::kEquirect
-                                                   : CameraKind::kPerspective;
+    if (kind != "perspective") throw Error(where + "aerial_camera.kind must be \"perspective\" (got \"" + Printable(kind) + "\")");
+    tables.view.camera.kind = CameraKind::kPerspective;
     tables.view.camera.width = static_cast<int>(io::ManifestInteger(camera, "width", 1, kMaxImageSide, where));
     tables.view.camera.height = static_cast<int>(io::ManifestInteger(camera, "height", 1, kMaxImageSide, where));
     tables.view.camera.fov_deg = camera.at("fov_deg").get<double>();
@@ -403,10 +407,42 @@ HillaireTables ReadHillaireTables(const std::filesystem::path& name) {
                                                 " batches, its parameters have " + std::to_string(batches));
       tables.tables.push_back(std::move(table));
     }
+    // One set: the 2D tables flat and at least 2 texels a side (their mappings divide by W - 1 and
+    // H - 1, as the model's options require), the sky views' heights even and >= 4 (a sky and a
+    // ground half), the two sky views of one size, the two aerial tables of one size.
+    for (std::size_t i = 0; i < 4; ++i) {
+      const ExportedTable& t = tables.tables[i];
+      if (t.depth != 1 || t.width < 2 || t.height < 2) {
+        throw Error(where + t.name + ": " + std::to_string(t.width) + "x" + std::to_string(t.height) + "x" +
+                    std::to_string(t.depth) + ", a 2D table has depth 1 and at least 2 texels a side");
+      }
+      if (i >= 2 && (t.height % 2 != 0 || t.height < 4)) {
+        throw Error(where + t.name + ": height " + std::to_string(t.height) +
+                    ", a sky view's height is even and >= 4 (sky and ground halves)");
+      }
+    }
+    const auto check_same_size = [&](std::size_t a, std::size_t b) {
+      const ExportedTable& x = tables.tables[a];
+      const ExportedTable& y = tables.tables[b];
+      if (x.width != y.width || x.height != y.height || x.depth != y.depth) {
+        throw Error(where + y.name + " is " + std::to_string(y.width) + "x" + std::to_string(y.height) + "x" +
+                    std::to_string(y.depth) + ", " + x.name + " " + std::to_string(x.width) + "x" +
+                    std::to_string(x.height) + "x" + std::to_string(x.depth) + ": they must be of one size");
+      }
+    };
+    check_same_size(2, 3);
+    check_same_size(4, 5);
     const ExportedTable& aerial = tables.tables.back();
     tables.view.aerial.width = aerial.width;
     tables.view.aerial.height = aerial.height;
     tables.view.aerial.depth = aerial.depth;
+    // The view as the export checks it: an observer inside the atmosphere, a finite sun, a valid camera
+    // and volume.
+    try {
+      ValidateHillaireExportView(tables.parameters, tables.view);
+    } catch (const Error& e) {
+      throw Error(where + "view: " + e.what());
+    }
     return tables;
   } catch (const Json::exception& e) {
     throw Error(where + "missing or malformed key (" + std::string(e.what()) + ")");

@@ -229,6 +229,55 @@ std::vector<std::string> OrderExtraChannels(std::vector<std::string> extras, con
   return extras;
 }
 
+// Whether OpenEXR reads an attribute value of `type` in exactly its declared `value.size()` bytes.
+// Its readers of the known types do not follow the declared size: a box2i declared with 4 bytes
+// is read as 16, a channel list is read up to its empty name, a string vector by its inner
+// lengths, a preview by its width and height. The header is then read shifted from there on,
+// and a later field can become a string of gigabytes (a channel list of 19 bytes declared as 73
+// made a 1.9 GB string from a 249-byte file, found by fuzz_exr_reader).
+std::optional<std::string> AttributeLayoutProblem(const std::string& type, const std::vector<unsigned char>& value,
+                                                  std::size_t max_name) {
+  static const std::pair<std::string_view, std::size_t> kFixed[] = {
+      {"box2i", 16}, {"box2f", 16},    {"chromaticities", 32}, {"compression", 1}, {"double", 8},
+      {"envmap", 1}, {"float", 4},     {"int", 4},             {"keycode", 28},    {"lineOrder", 1},
+      {"m33f", 36},  {"m33d", 72},     {"m44f", 64},           {"m44d", 128},      {"rational", 8},
+      {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8},            {"v2f", 8},         {"v2d", 16},
+      {"v3i", 12},   {"v3f", 12},      {"v3d", 24},            {"deepImageState", 1}};
+  const std::size_t size = value.size();
+  const auto u32 = [&](std::size_t at) {
+    return std::uint32_t(value[at]) | std::uint32_t(value[at + 1]) << 8 | std::uint32_t(value[at + 2]) << 16 |
+           std::uint32_t(value[at + 3]) << 24;
+  };
+  const auto declared = [&](std::size_t read) {
+    return type + " of " + std::to_string(read) + " bytes declared as " + std::to_string(size);
+  };
+  for (const auto& [name, bytes] : kFixed) {
+    if (type == name) return size == bytes ? std::nullopt : std::optional<std::string>(declared(bytes));
+  }
+  if (type == "chlist") {
+    std::size_t at = 0;
+    while (true) {
+      const std::size_t start = at;
+      while (at < size && value[at] != 0) ++at;
+      if (at >= size) return "a channel list without its end";
+      if (at - start > max_name) return "a channel name longer than " + std::to_string(max_name) + " bytes";
+      if (at == start) break;  // the empty name that ends the list
+      at += 17;                // the NUL, pixel type, pLinear and reserved, x and y sampling
+    }
+    if (at + 1 != size) return declared(at + 1);
+  } else if (type == "stringvector") {
+    for (std::size_t at = 0; at < size;) {
+      if (at + 4 > size || u32(at) > size - at - 4) return "a string vector whose strings overrun its " + std::to_string(size) + " bytes";
+      at += 4 + u32(at);
+    }
+  } else if (type == "preview") {
+    if (size < 8 || (std::uint64_t{u32(0)} * u32(4) * 4 + 8) != size) return "a preview image of another size than declared";
+  } else if (type == "idmanifest") {
+    return std::string("an ID manifest (atmo reads none)");
+  }
+  return std::nullopt;
+}
+
 // The sizes an EXR header declares, checked before OpenEXR reads it: OpenEXR 3.1 allocates
 // what the header says before it finds that the file is shorter (found by fuzz_exr_reader): an
 // attribute of a declared 1.7 GB, line-offset tables and line buffers for a data window of 2^31
@@ -284,6 +333,9 @@ std::optional<std::string> ExrHeaderProblem(const fs::path& path) {
       }
       std::vector<unsigned char> value(size);
       if (!in.read(reinterpret_cast<char*>(value.data()), size)) return "attribute '" + OneLine(name) + "' cut off";
+      if (auto problem = AttributeLayoutProblem(type, value, max_name)) {
+        return "attribute '" + OneLine(name) + "': " + *problem;
+      }
       const auto i32 = [&](std::size_t at) {
         return static_cast<std::int32_t>(std::uint32_t(value[at]) | std::uint32_t(value[at + 1]) << 8 |
                                          std::uint32_t(value[at + 2]) << 16 | std::uint32_t(value[at + 3]) << 24);
@@ -297,9 +349,16 @@ std::optional<std::string> ExrHeaderProblem(const fs::path& path) {
       } else if (name == "channels" && type == "chlist") {
         // name\0, int32 pixel type (0 uint, 1 half, 2 float), 4 bytes, int32 x and y sampling.
         for (std::size_t at = 0; at < value.size() && value[at] != 0;) {
+          const std::size_t start = at;
           while (at < value.size() && value[at] != 0) ++at;
           if (at + 17 > value.size()) break;
           bytes_per_pixel += i32(at + 1) == 1 ? 2 : 4;
+          // Subsampled channels are refused below anyway; OpenEXR sized its buffers by a huge
+          // sampling before that (1.9 GB for a 249-byte file, found by fuzz_exr_reader).
+          if (i32(at + 9) != 1 || i32(at + 13) != 1) {
+            return "channel '" + OneLine(std::string(value.begin() + start, value.begin() + at)) + "' has sampling " +
+                   std::to_string(i32(at + 9)) + "x" + std::to_string(i32(at + 13)) + "; atmo reads only 1x1";
+          }
           at += 17;
         }
       }
@@ -466,6 +525,8 @@ void AtomicFileSet::Commit() {
   if (committed_) return;
   committed_ = true;
   std::error_code ec;
+  // A signal waits until every file is renamed (then removes nothing of the set and ends).
+  const DeferInterrupts defer;
   for (Staged& staged : staged_) {
     fs::rename(staged.temporary, staged.target, ec);
     if (ec) {

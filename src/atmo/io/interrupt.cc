@@ -35,7 +35,14 @@ void WriteAll(const char* text) {
   }
 }
 
-extern "C" void HandleInterrupt(int signal_number) {
+// DeferInterrupts: while g_deferring > 0 a signal is only recorded in g_pending; the last
+// DeferInterrupts to end acts on it. Both sides take g_pending with an exchange, so exactly one
+// of them (the handler or the ending scope) finishes the process, whatever their interleaving.
+std::atomic<int> g_deferring{0};
+std::atomic<int> g_pending{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+void Finish(int signal_number) {
   for (Slot& slot : g_slots) {
     if (slot.state.load(std::memory_order_acquire) == kPublished) ::unlink(slot.path);
   }
@@ -44,6 +51,13 @@ extern "C" void HandleInterrupt(int signal_number) {
                                    : ": error: interrupted by SIGTERM; temporary files removed\n");
   std::signal(signal_number, SIG_DFL);
   std::raise(signal_number);
+}
+
+extern "C" void HandleInterrupt(int signal_number) {
+  g_pending.store(signal_number);
+  if (g_deferring.load() > 0) return;  // the ending DeferInterrupts finishes
+  const int pending = g_pending.exchange(0);
+  if (pending != 0) Finish(pending);
 }
 
 }  // namespace
@@ -70,6 +84,14 @@ int RegisterTemporaryFile(const char* path) {
     }
   }
   return -1;
+}
+
+DeferInterrupts::DeferInterrupts() { g_deferring.fetch_add(1); }
+
+DeferInterrupts::~DeferInterrupts() {
+  if (g_deferring.fetch_sub(1) != 1) return;
+  const int pending = g_pending.exchange(0);
+  if (pending != 0) Finish(pending);
 }
 
 void ReleaseTemporaryFile(int slot) {

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "atmo/error.h"
+#include "printable.h"
 #include "io/elek_table_file.h"
 
 namespace atmo {
@@ -56,7 +57,7 @@ void CheckTableVersions(const Json& manifest, int format_version, const std::str
   }
   const std::string atmo_version = manifest.at("atmo_version").get<std::string>();
   if (atmo_version != ATMO_VERSION) {
-    PrintWarning(where + "written by atmo " + atmo_version + ", this is atmo " + ATMO_VERSION + "; format version " +
+    PrintWarning(where + "written by atmo " + Printable(atmo_version) + ", this is atmo " + ATMO_VERSION + "; format version " +
                  std::to_string(version) + " matches, loading it");
   }
 }
@@ -183,19 +184,19 @@ ExportedTable ReadTable(const Json& entry, const std::string& name, const std::f
   }
   const std::string file = entry.at("raw").get<std::string>();
   if (file.empty() || std::filesystem::path(file).filename().string() != file) {
-    throw Error(at + "raw must be a file name beside the manifest (got '" + file + "')");
+    throw Error(at + "raw must be a file name beside the manifest (got '" + Printable(file) + "')");
   }
   const std::filesystem::path path = folder / file;
   const std::string data = ReadFileBounded(path, "table data ", expected);
   if (data.size() != expected) {
-    throw Error("table '" + path.string() + "': " + std::to_string(data.size()) + " bytes, expected " +
+    throw Error("table '" + Printable(path.string()) + "': " + std::to_string(data.size()) + " bytes, expected " +
                 std::to_string(expected));
   }
   const std::span<const unsigned char> bytes(reinterpret_cast<const unsigned char*>(data.data()), data.size());
   const std::string hash = Hex64(Fnv1a64(bytes));
   if (hash != entry.at("raw_hash_fnv1a64").get<std::string>()) {
-    throw Error("table '" + path.string() + "': data hash " + hash + " does not match the manifest's " +
-                entry.at("raw_hash_fnv1a64").get<std::string>() + " (corrupt or modified)");
+    throw Error("table '" + Printable(path.string()) + "': data hash " + hash + " does not match the manifest's " +
+                Printable(entry.at("raw_hash_fnv1a64").get<std::string>()) + " (corrupt or modified)");
   }
   table.rgb = FloatsFromLittleEndian(bytes);
   return table;

@@ -16,6 +16,7 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/parameters.h"
+#include "printable.h"
 
 namespace atmo {
 namespace {
@@ -72,7 +73,7 @@ void CheckKeys(const Json& object, const std::string& path,
   for (const auto& item : object.items()) {
     bool found = false;
     for (std::string_view k : known) found = found || item.key() == k;
-    if (!found) Fail("unknown key '" + Join(path, item.key()) + "'");
+    if (!found) Fail("unknown key '" + Printable(Join(path, item.key())) + "'");
   }
 }
 
@@ -127,7 +128,7 @@ PhaseFunction ParsePhaseFunction(const Json& value, const std::string& key) {
     if (name == ToString(phase)) return phase;
     known += (known.empty() ? "" : ", ") + std::string(ToString(phase));
   }
-  Fail(key + ": unknown phase function '" + name + "' (known: " + known + ")");
+  Fail(key + ": unknown phase function '" + Printable(name) + "' (known: " + known + ")");
 }
 
 Geometry ParseGeometry(const Json& value, const std::string& key) {
@@ -138,7 +139,7 @@ Geometry ParseGeometry(const Json& value, const std::string& key) {
     if (name == ToString(geometry)) return geometry;
     known += (known.empty() ? "" : ", ") + std::string(ToString(geometry));
   }
-  Fail(key + ": unknown geometry '" + name + "' (known: " + known + ")");
+  Fail(key + ": unknown geometry '" + Printable(name) + "' (known: " + known + ")");
 }
 
 void ReadMedium(const Json& object, const std::string& path, std::size_t channel_count,

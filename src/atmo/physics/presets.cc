@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "atmo/error.h"
+#include "printable.h"
 #include "atmo/parameters.h"
 #include "atmo/spectrum.h"
 
@@ -136,7 +137,7 @@ AtmosphereParameters Preset(std::string_view name) {
   for (const std::string& preset : PresetNames()) {
     known += (known.empty() ? "" : ", ") + preset;
   }
-  throw Error("unknown preset '" + std::string(name) + "' (known: " + known + ")");
+  throw Error("unknown preset '" + Printable(name) + "' (known: " + known + ")");
 }
 
 std::vector<std::string> PresetNames() { return {"earth", "earth-spectral", "atmosphere-plus", "simple"}; }
