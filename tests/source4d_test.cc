@@ -239,7 +239,14 @@ TEST(Source4dModel, RefusesBadOptions) {
   EXPECT_THROW(CreateModel("source4d", p, {{"orders", "0"}}), Error);
   EXPECT_THROW(CreateModel("source4d", p, {{"tail", "maybe"}}), Error);
   EXPECT_THROW(CreateModel("source4d", p, {{"colour", "red"}}), Error);
+  EXPECT_THROW(CreateModel("source4d", p, {{"table", "512x8x512x8"}, {"gather", "512x3"}}), Error);  // 2^27 rays
   EXPECT_THROW(CreateModel("source4d", Preset("simple")), Error);
+  try {
+    CreateModel("source4d", p, {{"gather", "49xA"}});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gather=49xA"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

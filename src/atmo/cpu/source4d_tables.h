@@ -31,7 +31,7 @@ struct Source4dSettings {
   // The table: r layers, view zeniths, sun zeniths, azimuths.
   int r_size = 16;
   int mu_size = 24;
-  int mu_s_size = 32;
+  int mu_s_size = 48;
   int phi_size = 8;
   // The gathering grid of incident directions (zenith nodes over [0, pi], azimuth nodes over
   // [0, pi]) and the steps of each gathering ray.

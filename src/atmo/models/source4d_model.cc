@@ -13,20 +13,26 @@
 namespace atmo {
 namespace {
 
-// "AxBxCxD": four sizes, each in [lo, hi].
+// "AxBxCxD": `count` sizes, each in [lo, hi].
 std::vector<int> ParseSizes(const std::string& key, const std::string& value, std::size_t count, int lo, int hi) {
+  const auto fail = [&] {
+    return Error("option " + key + "=" + value + ": expected " + std::to_string(count) + " integers in [" +
+                 std::to_string(lo) + ", " + std::to_string(hi) + "] joined by 'x'");
+  };
   std::vector<int> sizes;
   std::size_t begin = 0;
   while (true) {
     const std::size_t x = value.find('x', begin);
-    sizes.push_back(ParseIntOption(key, value.substr(begin, x == std::string::npos ? std::string::npos : x - begin),
-                                   lo, hi));
+    try {
+      sizes.push_back(ParseIntOption(key, value.substr(begin, x == std::string::npos ? std::string::npos : x - begin),
+                                     lo, hi));
+    } catch (const Error&) {
+      throw fail();
+    }
     if (x == std::string::npos) break;
     begin = x + 1;
   }
-  if (sizes.size() != count) {
-    throw Error("option " + key + "=" + value + ": expected " + std::to_string(count) + " sizes joined by 'x'");
-  }
+  if (sizes.size() != count) throw fail();
   return sizes;
 }
 
@@ -47,7 +53,7 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
       t.gather_zeniths = n[0];
       t.gather_azimuths = n[1];
     } else if (key == "gather_samples") {
-      t.gather_samples = ParseIntOption(key, value, 2, 10000);
+      t.gather_samples = ParseIntOption(key, value, 2, 1000);
     } else if (key == "orders") {
       t.orders = ParseIntOption(key, value, 1, 32);
     } else if (key == "tail") {
@@ -69,6 +75,12 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
     throw Error("option table: " + std::to_string(t.r_size) + "x" + std::to_string(t.mu_size) + "x" +
                 std::to_string(t.mu_s_size) + "x" + std::to_string(t.phi_size) +
                 " has more than 2^26 texels (the limit)");
+  }
+  const double rays = double(t.r_size) * t.mu_s_size * t.gather_zeniths * t.gather_azimuths;
+  if (rays > 64.0 * 1024 * 1024) {
+    throw Error("options table and gather: " + std::to_string(static_cast<long long>(rays)) +
+                " gathering rays per order (r layers x sun zeniths x gathering directions) is more than 2^26 "
+                "(the limit; the default is 225792)");
   }
   return s;
 }

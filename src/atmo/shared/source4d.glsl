@@ -21,37 +21,42 @@
 // layers are blended by hand: the z coordinate of one lookup stays inside its layer.
 
 // The sun zeniths the table covers; beyond it the table's last row (sun 120 degrees, where G is
-// about 1e-6 of its daytime value) is used. The axis is piecewise linear in the sun zenith, with
-// knots at 80 and 110 degrees: G is smooth and slowly varying with the sun up, and falls by
-// decades between 90 and 110 degrees, where 55 % of the rows lie.
-const Number kSource4dMaxSunZenith = 2.0943951023931953;    // 120 degrees
-const Number kSource4dTwilightStart = 1.3962634015954636;   // 80 degrees
-const Number kSource4dTwilightEnd = 1.9198621771937625;     // 110 degrees
-const Number kSource4dTwilightStartUnit = 0.3;
-const Number kSource4dTwilightEndUnit = 0.85;
+// about 1e-6 of its daytime value) is used. The axis is piecewise linear in the sun zenith with
+// knots at 60, 84 and 104 degrees (unit 0.15, 0.35, 0.78): G varies slowly with a high sun,
+// steepens as the sun nears the horizon, bends most between 84 and 104 degrees (43 % of the
+// rows, 1 degree apart with 48) and falls by decades into the night.
+const Number kSource4dMaxSunZenith = 2.0943951023931953;  // 120 degrees
+const Number kSource4dSunKnot1 = 1.0471975511965976;      // 60 degrees
+const Number kSource4dSunKnot2 = 1.4660765716752369;      // 84 degrees
+const Number kSource4dSunKnot3 = 1.8151424220741028;      // 104 degrees
+const Number kSource4dSunUnit1 = 0.15;
+const Number kSource4dSunUnit2 = 0.35;
+const Number kSource4dSunUnit3 = 0.78;
+
+Number Source4dLerp(Number x, Number x_0, Number x_1, Number y_0, Number y_1) {
+  return y_0 + (y_1 - y_0) * (x - x_0) / (x_1 - x_0);
+}
 
 Number GetSource4dUnitFromSunZenith(Number theta_s) {
-  if (theta_s < kSource4dTwilightStart) {
-    return kSource4dTwilightStartUnit * theta_s / kSource4dTwilightStart;
+  if (theta_s < kSource4dSunKnot1) return Source4dLerp(theta_s, 0.0, kSource4dSunKnot1, 0.0, kSource4dSunUnit1);
+  if (theta_s < kSource4dSunKnot2) {
+    return Source4dLerp(theta_s, kSource4dSunKnot1, kSource4dSunKnot2, kSource4dSunUnit1, kSource4dSunUnit2);
   }
-  if (theta_s < kSource4dTwilightEnd) {
-    return kSource4dTwilightStartUnit + (kSource4dTwilightEndUnit - kSource4dTwilightStartUnit) *
-        (theta_s - kSource4dTwilightStart) / (kSource4dTwilightEnd - kSource4dTwilightStart);
+  if (theta_s < kSource4dSunKnot3) {
+    return Source4dLerp(theta_s, kSource4dSunKnot2, kSource4dSunKnot3, kSource4dSunUnit2, kSource4dSunUnit3);
   }
-  return min(kSource4dTwilightEndUnit + (1.0 - kSource4dTwilightEndUnit) * (theta_s - kSource4dTwilightEnd) /
-      (kSource4dMaxSunZenith - kSource4dTwilightEnd), 1.0);
+  return min(Source4dLerp(theta_s, kSource4dSunKnot3, kSource4dMaxSunZenith, kSource4dSunUnit3, 1.0), 1.0);
 }
 
 Number GetSource4dSunZenithFromUnit(Number x) {
-  if (x < kSource4dTwilightStartUnit) {
-    return kSource4dTwilightStart * x / kSource4dTwilightStartUnit;
+  if (x < kSource4dSunUnit1) return Source4dLerp(x, 0.0, kSource4dSunUnit1, 0.0, kSource4dSunKnot1);
+  if (x < kSource4dSunUnit2) {
+    return Source4dLerp(x, kSource4dSunUnit1, kSource4dSunUnit2, kSource4dSunKnot1, kSource4dSunKnot2);
   }
-  if (x < kSource4dTwilightEndUnit) {
-    return kSource4dTwilightStart + (kSource4dTwilightEnd - kSource4dTwilightStart) *
-        (x - kSource4dTwilightStartUnit) / (kSource4dTwilightEndUnit - kSource4dTwilightStartUnit);
+  if (x < kSource4dSunUnit3) {
+    return Source4dLerp(x, kSource4dSunUnit2, kSource4dSunUnit3, kSource4dSunKnot2, kSource4dSunKnot3);
   }
-  return kSource4dTwilightEnd + (kSource4dMaxSunZenith - kSource4dTwilightEnd) * (x - kSource4dTwilightEndUnit) /
-      (1.0 - kSource4dTwilightEndUnit);
+  return Source4dLerp(x, kSource4dSunUnit3, 1.0, kSource4dSunKnot3, kSource4dMaxSunZenith);
 }
 
 // acos by Abramowitz and Stegun 4.4.46 (|error| <= 2e-8 rad): the table's three coordinates
