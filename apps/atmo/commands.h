@@ -50,14 +50,15 @@ AtmosphereParameters LoadParameters(const CommonOptions& common);
 // Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
 ModelOptions ParseModelOptions(const std::vector<std::string>& options);
 // Throws atmo::Error for a backend this build does not have, or gl for a command without a gl path
-// (`command_has_gl` false) or a model other than hillaire and elek.
+// (`command_has_gl` false) or a model other than hillaire, elek and source4d.
 void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 #ifdef ATMO_HAVE_GL
 // The --option settings of models hillaire and elek (the "seed" option dropped, as on the CPU).
 HillaireSettings GlHillaireSettings(const CommonOptions& common);
 ElekSettings GlElekSettings(const CommonOptions& common);
-// Renders model hillaire or elek on the gl backend (--option settings as for the CPU model), each
-// pass's GPU time into `timings`: every table and the frame are GPU passes.
+// Renders model hillaire, elek or source4d on the gl backend (--option settings as for the CPU
+// model), each pass's GPU time into `timings`: every table and the frame are GPU passes, except
+// source4d's tables, built on the CPU (their CPU times as cpu_NAME) and uploaded.
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings = nullptr);
 #endif

@@ -14,6 +14,8 @@
 #include "gl/context.h"
 #include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
+#include "gl/source4d_gl.h"
+#include "models/source4d_model.h"
 #endif
 
 namespace atmo::cli {
@@ -47,8 +49,9 @@ void CheckBackend(const CommonOptions& common, bool command_has_gl) {
     if (!command_has_gl) {
       throw Error("the gl backend runs `atmo render`, `sample`, `precompute` and `bench`; use --backend cpu");
     }
-    if (common.model != "hillaire" && common.model != "elek") {
-      throw Error("the gl backend runs models hillaire and elek (got model '" + common.model + "'); use --backend cpu");
+    if (common.model != "hillaire" && common.model != "elek" && common.model != "source4d") {
+      throw Error("the gl backend runs models hillaire, elek and source4d (got model '" + common.model +
+                  "'); use --backend cpu");
     }
     return;
 #else
@@ -81,6 +84,15 @@ ElekSettings GlElekSettings(const CommonOptions& common) {
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings) {
   if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
+  if (common.model == "source4d") {
+    // The tables on the CPU (their passes' CPU times under cpu_NAME), the frame on the GPU.
+    Source4dModel model(parameters, Source4dModelSettings::FromOptions(DeterministicModelOptions(common)));
+    model.Precompute();
+    if (timings != nullptr) {
+      for (const PassTiming& pass : model.timings().entries()) timings->Add("cpu_" + pass.name, pass.total_ms);
+    }
+    return gl::RenderSource4dGl(context, model, settings, timings);
+  }
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
 #endif
