@@ -58,7 +58,7 @@ HillaireSettings GlHillaireSettings(const CommonOptions& common);
 ElekSettings GlElekSettings(const CommonOptions& common);
 // Renders model hillaire, elek or source4d on the gl backend (--option settings as for the CPU
 // model), each pass's GPU time into `timings`: every table and the frame are GPU passes, except
-// source4d's tables, built on the CPU (their CPU times as cpu_NAME) and uploaded.
+// source4d's transmittance table and quadrature matrices, computed on the CPU (times as cpu_NAME).
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings = nullptr);
 #endif

@@ -15,7 +15,6 @@
 #include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
 #include "gl/source4d_gl.h"
-#include "models/source4d_model.h"
 #endif
 
 namespace atmo::cli {
@@ -85,13 +84,11 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
                  const RenderSettings& settings, PassTimings* timings) {
   if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
   if (common.model == "source4d") {
-    // The tables on the CPU (their passes' CPU times under cpu_NAME), the frame on the GPU.
-    Source4dModel model(parameters, Source4dModelSettings::FromOptions(DeterministicModelOptions(common)));
-    model.Precompute();
-    if (timings != nullptr) {
-      for (const PassTiming& pass : model.timings().entries()) timings->Add("cpu_" + pass.name, pass.total_ms);
-    }
-    return gl::RenderSource4dGl(context, model, settings, timings);
+    // The tables and the frame on the GPU; the transmittance table and the quadrature matrices on
+    // the CPU (their times as cpu_NAME).
+    return gl::RenderSource4dGl(context, parameters,
+                                Source4dModelSettings::FromOptions(DeterministicModelOptions(common)), settings,
+                                timings);
   }
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
