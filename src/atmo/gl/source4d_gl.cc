@@ -252,8 +252,12 @@ void main() {
 }
 )glsl";
 
-// One invocation per output direction and column: G of the next order, both media, by the
-// quadrature matrices (Convolve, in the CPU's order of summation), added to the sums.
+// One invocation per column and block of kSource4dConvolveBlock output directions: G of the next
+// order, both media, by the quadrature matrices (Convolve, in the CPU's order of summation over
+// the field's directions), added to the sums. A block reads each field value once for all its
+// directions (8 times fewer reads than an invocation per direction; on llvmpipe, where the reads
+// are strided across invocations, the default table's products ran 1.7x faster at the median).
+constexpr int kSource4dConvolveBlock = 8;
 constexpr const char* kConvolveMain = R"glsl(
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer FieldBuffer { float field[]; };
@@ -261,21 +265,30 @@ layout(std430, binding = 1) readonly buffer WeightBuffer { float weights[]; };  
 layout(std430, binding = 2) writeonly buffer GBuffer { float g[]; };
 layout(std430, binding = 3) buffer SumBuffer { float sum[]; };
 uniform int in_count;
+const int kBlock = 8;  // kSource4dConvolveBlock
 
 void main() {
   int id = int(gl_GlobalInvocationID.x);
-  if (id >= out_count * columns) return;
-  int cd = id / columns;
+  int blocks = (out_count + kBlock - 1) / kBlock;
+  if (id >= blocks * columns) return;
   int k = id % columns;
+  int cd_0 = (id / columns) * kBlock;
+  int count = min(kBlock, out_count - cd_0);
   for (int m = 0; m < 2; ++m) {
-    int row = (m * out_count + cd) * in_count;
-    float value = 0.0;
+    float value[kBlock];
+    for (int q = 0; q < kBlock; ++q) value[q] = 0.0;
     for (int ab = 0; ab < in_count; ++ab) {
-      float w = weights[row + ab];
-      if (w != 0.0) value += w * field[ab * columns + k];
+      float f = field[ab * columns + k];
+      for (int q = 0; q < count; ++q) {
+        float w = weights[(m * out_count + cd_0 + q) * in_count + ab];
+        if (w != 0.0) value[q] += w * f;
+      }
     }
-    g[m * out_count * columns + id] = value;
-    sum[m * out_count * columns + id] += value;
+    for (int q = 0; q < count; ++q) {
+      int at = (m * out_count + cd_0 + q) * columns + k;
+      g[at] = value[q];
+      sum[at] += value[q];
+    }
   }
 }
 )glsl";
@@ -428,7 +441,8 @@ Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::A
   const int nodes = s.r_size * s.mu_s_size;
   const int columns = nodes * 3;
   const long long gather_count = static_cast<long long>(nodes) * s.gather_zeniths * s.gather_azimuths;
-  const long long convolve_count = static_cast<long long>(s.mu_size) * s.phi_size * columns;
+  const long long convolve_count =
+      static_cast<long long>((s.mu_size * s.phi_size + kSource4dConvolveBlock - 1) / kSource4dConvolveBlock) * columns;
   if (std::max(gather_count, convolve_count) > 65535LL * kGroupSize1D) {
     throw Error("GL source4d: table " + std::to_string(s.r_size) + "x" + std::to_string(s.mu_size) + "x" +
                 std::to_string(s.mu_s_size) + "x" + std::to_string(s.phi_size) + " with gather " +
