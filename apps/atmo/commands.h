@@ -63,8 +63,8 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
                  const RenderSettings& settings, PassTimings* timings = nullptr);
 #endif
 // Creates (and so precomputes) the model named by --model with the --option settings. With
-// --backend gl, model elek computes its table on the GPU (gl::PrecomputeElekGl) and answers from
-// it; other models throw atmo::Error there.
+// --backend gl, models elek and source4d compute their tables on the GPU (gl::PrecomputeElekGl,
+// gl::PrecomputeSource4dGl) and answer from them; other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.

@@ -103,6 +103,14 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
     gl::PrecomputeElekGl(context, *model);
     return model;
   }
+  if (common.backend == "gl" && common.model == "source4d") {
+    // The tables computed on the GPU and read back, as for elek.
+    auto model = std::make_unique<Source4dModel>(
+        parameters, Source4dModelSettings::FromOptions(DeterministicModelOptions(common)));
+    const gl::Context context;
+    gl::PrecomputeSource4dGl(context, *model);
+    return model;
+  }
   if (common.backend == "gl") throw Error("model " + common.model + " has no CPU model with GL tables; use --backend cpu");
 #endif
   // --seed travels as the "seed" option that every model accepts (deterministic ones ignore it).

@@ -578,4 +578,19 @@ Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::A
   return tables;
 }
 
+void PrecomputeSource4dGl(const Context& context, Source4dModel& model, PassTimings* timings) {
+  for (std::size_t b = 0; b < model.batches().size(); ++b) {
+    const Source4dTablesGl gl =
+        ComputeSource4dTablesGl(context, ToSharedParameters(model.parameters(), b, 1000.0), model.settings().tables,
+                                timings);
+    cpu::Source4dTables tables;
+    tables.transmittance = gl.transmittance.Download2D();
+    tables.rayleigh = gl.rayleigh.Download3D();
+    tables.mie = gl.mie.Download3D();
+    tables.ground_irradiance = gl.ground_irradiance.Download2D();
+    tables.mu_s_size = gl.mu_s_size;
+    model.SetComputedTables(b, std::move(tables));
+  }
+}
+
 }  // namespace atmo::gl

@@ -53,6 +53,10 @@ Source4dTablesGl UploadSource4dTables(const cpu::Source4dTables& tables);
 Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                                          const cpu::Source4dSettings& settings, PassTimings* timings = nullptr);
 
+// Fills every batch of `model` with tables computed on GL (ComputeSource4dTablesGl) and
+// downloaded (Source4dModel::SetComputedTables), so that its SkyView answers from them on the CPU.
+void PrecomputeSource4dGl(const Context& context, Source4dModel& model, PassTimings* timings = nullptr);
+
 // Per pixel of `out` (rgba32f, the camera's size): the camera ray (GetCameraRayDirection),
 // GetSource4dRadiance with `samples` steps for an observer at `r_km` (km from the planet's centre)
 // and the unit `sun_direction`, plus its ground term where `ground` and the per-pixel sun disc
