@@ -351,7 +351,7 @@ const FailureCase kFailureCases[] = {
     {"PresetAndConfigTogether", "sample --preset earth --config earth.json" ATMO_SAMPLE_ONE, "--config"},
 #ifdef ATMO_HAVE_GL
     {"GlBackendOtherModel", "render --backend gl --model simple --preset simple" ATMO_TINY_RENDER,
-     "the gl backend runs models hillaire and elek"},
+     "the gl backend runs models hillaire, elek and source4d"},
     {"GlBackendOtherCommand", "compare --backend gl", "the gl backend runs `atmo render`, `sample`"},
 #else
     {"GlBackend", "render --backend gl" ATMO_TINY_RENDER, "the gl backend is not available in this build"},

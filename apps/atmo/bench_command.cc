@@ -1,6 +1,8 @@
 // `atmo bench`: times the model's precomputation passes and one frame, repeated, on the CPU or (models
-// hillaire and elek, --backend gl) on the GL backend, where every pass is the GPU time of its dispatch
-// (with more than 3 channels, of its dispatches: one per batch of three channels, summed).
+// hillaire, elek and source4d, --backend gl) on the GL backend, where every pass is the GPU time of its
+// dispatch (with more than 3 channels, of its dispatches: one per batch of three channels, summed);
+// source4d's transmittance table and quadrature matrices are computed on the CPU there, their
+// times named cpu_NAME.
 //
 // Each repeat runs model->Precompute(), builds the view for a sun at 30 degrees elevation, and
 // renders a perspective frame towards the sun. Per pass it reports the median, min and max over the
@@ -97,7 +99,7 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     const glm::dvec3 sun = SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg);
     std::function<void(PassTimings*)> run;
     std::unique_ptr<gl::HillaireGl> sky;
-    if (common.model == "elek") {
+    if (common.model == "elek" || common.model == "source4d") {
       // The table's passes then the frame; the textures are made anew each repeat.
       run = [&](PassTimings* timings) { RenderOnGl(context, common, parameters, settings, timings); };
     } else {
@@ -117,7 +119,8 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       // time in this repeat is the sum over the batches (total_ms; `timings` is this repeat's).
       for (const PassTiming& pass : timings.entries()) {
         samples.Add(pass.name, pass.total_ms);
-        if (EndsWith(pass.name, "_lut")) all_luts_ms += pass.total_ms;
+        // source4d's CPU parts (cpu_NAME) are not GPU passes.
+        if (EndsWith(pass.name, "_lut") && pass.name.rfind("cpu_", 0) != 0) all_luts_ms += pass.total_ms;
       }
       samples.Add("all_luts", all_luts_ms);
     }

@@ -111,7 +111,7 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   CLI::Option* config =
       app->add_option("--config", common.config, "parameters as a JSON file (instead of --preset)");
   preset->excludes(config);
-  app->add_option("--backend", common.backend, "cpu, or gl (OpenGL compute: render, sample, precompute, bench of hillaire and elek)")
+  app->add_option("--backend", common.backend, "cpu, or gl (OpenGL compute: render, sample, precompute, bench of hillaire and elek; render, sample, bench of source4d)")
       ->check(CLI::IsMember({"cpu", "gl"}))
       ->capture_default_str();
   app->add_option("--threads", common.threads, "worker threads (default: all cores)")

@@ -50,20 +50,21 @@ AtmosphereParameters LoadParameters(const CommonOptions& common);
 // Parses KEY=VALUE strings; throws atmo::Error for a malformed or repeated one.
 ModelOptions ParseModelOptions(const std::vector<std::string>& options);
 // Throws atmo::Error for a backend this build does not have, or gl for a command without a gl path
-// (`command_has_gl` false) or a model other than hillaire and elek.
+// (`command_has_gl` false) or a model other than hillaire, elek and source4d.
 void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 #ifdef ATMO_HAVE_GL
 // The --option settings of models hillaire and elek (the "seed" option dropped, as on the CPU).
 HillaireSettings GlHillaireSettings(const CommonOptions& common);
 ElekSettings GlElekSettings(const CommonOptions& common);
-// Renders model hillaire or elek on the gl backend (--option settings as for the CPU model), each
-// pass's GPU time into `timings`: every table and the frame are GPU passes.
+// Renders model hillaire, elek or source4d on the gl backend (--option settings as for the CPU
+// model), each pass's GPU time into `timings`: every table and the frame are GPU passes, except
+// source4d's transmittance table and quadrature matrices, computed on the CPU (times as cpu_NAME).
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings = nullptr);
 #endif
 // Creates (and so precomputes) the model named by --model with the --option settings. With
-// --backend gl, model elek computes its table on the GPU (gl::PrecomputeElekGl) and answers from
-// it; other models throw atmo::Error there.
+// --backend gl, models elek and source4d compute their tables on the GPU (gl::PrecomputeElekGl,
+// gl::PrecomputeSource4dGl) and answer from them; other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.

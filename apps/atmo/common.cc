@@ -14,6 +14,7 @@
 #include "gl/context.h"
 #include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
+#include "gl/source4d_gl.h"
 #endif
 
 namespace atmo::cli {
@@ -47,8 +48,9 @@ void CheckBackend(const CommonOptions& common, bool command_has_gl) {
     if (!command_has_gl) {
       throw Error("the gl backend runs `atmo render`, `sample`, `precompute` and `bench`; use --backend cpu");
     }
-    if (common.model != "hillaire" && common.model != "elek") {
-      throw Error("the gl backend runs models hillaire and elek (got model '" + common.model + "'); use --backend cpu");
+    if (common.model != "hillaire" && common.model != "elek" && common.model != "source4d") {
+      throw Error("the gl backend runs models hillaire, elek and source4d (got model '" + common.model +
+                  "'); use --backend cpu");
     }
     return;
 #else
@@ -81,6 +83,13 @@ ElekSettings GlElekSettings(const CommonOptions& common) {
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings) {
   if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
+  if (common.model == "source4d") {
+    // The tables and the frame on the GPU; the transmittance table and the quadrature matrices on
+    // the CPU (their times as cpu_NAME).
+    return gl::RenderSource4dGl(context, parameters,
+                                Source4dModelSettings::FromOptions(DeterministicModelOptions(common)), settings,
+                                timings);
+  }
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
 #endif
@@ -92,6 +101,14 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
     auto model = std::make_unique<ElekModel>(parameters, GlElekSettings(common));
     const gl::Context context;
     gl::PrecomputeElekGl(context, *model);
+    return model;
+  }
+  if (common.backend == "gl" && common.model == "source4d") {
+    // The tables computed on the GPU and read back, as for elek.
+    auto model = std::make_unique<Source4dModel>(
+        parameters, Source4dModelSettings::FromOptions(DeterministicModelOptions(common)));
+    const gl::Context context;
+    gl::PrecomputeSource4dGl(context, *model);
     return model;
   }
   if (common.backend == "gl") throw Error("model " + common.model + " has no CPU model with GL tables; use --backend cpu");

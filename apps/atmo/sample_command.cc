@@ -10,7 +10,7 @@
 //
 // Points that share an altitude and a sun share one view. With --backend gl, model hillaire
 // computes its tables and every point of a view on the GPU (one pass over the view's directions);
-// model elek computes its table on the GPU and answers from it.
+// models elek and source4d compute their tables on the GPU and answer from them.
 #include <cmath>
 #include <cstdio>
 #include <fstream>

@@ -13,7 +13,9 @@ std::string_view SharedGlslSource(std::string_view file_name) {
 }
 
 // The GLSL side of glsl_cpp.h. Compute shaders need GLSL 4.30; GL_LINEAR samplers stand for
-// shared::Texture2D, whose sampling rules are those of GL_LINEAR with clamp to edge.
+// shared::Texture2D, whose sampling rules are those of GL_LINEAR with clamp to edge, and
+// Texture3D. TexturePair3D, which finds the taps once for two textures on the CPU, is two
+// texture() calls here (the sampler finds them in hardware).
 std::string_view GlslPrelude() {
   return R"glsl(#version 430 core
 #define Number float
@@ -25,6 +27,11 @@ std::string_view GlslPrelude() {
 #define SkyViewTexture sampler2D
 #define Texture2D sampler2D
 #define Texture3D sampler3D
+#define Source4dTexture sampler3D
+void TexturePair3D(sampler3D a, sampler3D b, vec3 uvw, out vec3 value_a, out vec3 value_b) {
+  value_a = texture(a, uvw).rgb;
+  value_b = texture(b, uvw).rgb;
+}
 )glsl";
 }
 

@@ -106,6 +106,19 @@ void Source4dModel::Precompute() {
   }
 }
 
+void Source4dModel::SetComputedTables(std::size_t b, cpu::Source4dTables tables) {
+  const cpu::Source4dSettings& s = settings_.tables;
+  const auto sized = [&](const shared::Texture3D& t) {
+    return t.width == s.phi_size && t.height == s.mu_size && t.depth == s.r_size * s.mu_s_size;
+  };
+  const bool ok = tables.mu_s_size == s.mu_s_size && tables.transmittance.width == s.transmittance_lut.x &&
+                  tables.transmittance.height == s.transmittance_lut.y && sized(tables.rayleigh) &&
+                  sized(tables.mie) && tables.ground_irradiance.width == s.mu_s_size &&
+                  tables.ground_irradiance.height == 1;
+  if (!ok) throw Error("model source4d: computed tables of other sizes than its settings'");
+  batches_.at(b).tables = std::move(tables);
+}
+
 namespace {
 
 class Source4dSkyView final : public SkyView {

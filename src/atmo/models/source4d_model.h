@@ -44,6 +44,10 @@ class Source4dModel final : public Model {
   };
   const std::vector<Batch>& batches() const { return batches_; }
   const Source4dModelSettings& settings() const { return settings_; }
+  // Replaces batch `batch`'s tables with ones computed elsewhere (the GL backend's,
+  // gl/source4d_gl.h), instead of Precompute. Throws atmo::Error when their sizes are not the
+  // settings'.
+  void SetComputedTables(std::size_t batch, cpu::Source4dTables tables);
 
  private:
   Source4dModelSettings settings_;
