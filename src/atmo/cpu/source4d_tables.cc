@@ -115,7 +115,7 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
   const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
   struct Step {
-    double t, r, y, layer;
+    double t, r, mu, y, layer;
     glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
   };
   oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
@@ -151,7 +151,7 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
           const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
           const glm::dvec3 weight =
               transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-          steps.push_back({t, r_t, shared::GetSource4dZenithCoord(rayleigh, mu_t),
+          steps.push_back({t, r_t, mu_t, shared::GetSource4dZenithCoord(rayleigh, mu_t),
                            shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, r_t),
                            weight * medium.rayleigh_scattering, weight * medium.mie_scattering});
           transmittance *= step_transmittance;
@@ -170,9 +170,9 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
         glm::dvec3 L(0.0);
         for (const Step& step : steps) {
           const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
-          const double mu_t = shared::ClampCosine((r * mu + step.t) / step.r);
           glm::dvec3 log_rayleigh, log_mie;
-          shared::GetSource4dLogTermsAt(rayleigh, mie, s.mu_s_size, shared::GetSource4dAzimuthCoord(rayleigh, mu_t, mu_s_t, nu),
+          shared::GetSource4dLogTermsAt(rayleigh, mie, s.mu_s_size,
+                                        shared::GetSource4dAzimuthCoord(rayleigh, step.mu, mu_s_t, nu),
                                         step.y, shared::GetSource4dSunRow(s.mu_s_size, mu_s_t), step.layer, log_rayleigh,
                                         log_mie);
           L += step.weight_rayleigh * glm::exp(log_rayleigh) + step.weight_mie * glm::exp(log_mie);
