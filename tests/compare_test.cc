@@ -97,7 +97,8 @@ class CompareTest : public atmo::testing::CliFixture {
 TEST_F(CompareTest, HasHelp) {
   const RunResult r = Run("compare --help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* flag : {"--against", "--against-option", "--grid", "--csv", "--json", "--image", "--image-range"}) {
+  for (const char* flag : {"--against", "--against-option", "--against-samples", "--grid", "--csv", "--json", "--image",
+                           "--image-range"}) {
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
   }
 }
@@ -115,6 +116,68 @@ TEST_F(CompareTest, ModelAgainstItselfHasZeroErrors) {
   }
   EXPECT_GT(included, 0u);
   EXPECT_NE(r.out.find("overall"), std::string::npos);
+}
+
+// A reference sampled once (`atmo sample`) and read back gives the rows a reference model gives
+// (its radiances and standard errors, to the file's 10 digits), so several models can be measured
+// against one expensive Monte Carlo run.
+TEST_F(CompareTest, SamplesFileStandsInForTheReferenceModel) {
+  const RunResult sampled = Run("sample --model reference --samples 256 --seed 3 --grid grid.csv --out ref.csv");
+  ASSERT_EQ(sampled.exit_code, 0) << sampled.err;
+  const RunResult direct = Run(
+      "compare --model hillaire --against reference --against-option samples=256 --seed 3 --grid grid.csv --csv a.csv");
+  ASSERT_EQ(direct.exit_code, 0) << direct.err;
+  const RunResult from_file = Run("compare --model hillaire --against-samples ref.csv --csv b.csv --json b.json");
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  EXPECT_NE(from_file.out.find("against the samples of ref.csv"), std::string::npos) << from_file.out;
+  const std::vector<CompareRow> a = ReadCompareCsv(dir_ / "a.csv");
+  const std::vector<CompareRow> b = ReadCompareCsv(dir_ / "b.csv");
+  ASSERT_EQ(a.size(), kSmallGridConfigurations * kChannels);
+  ASSERT_EQ(b.size(), a.size());
+  std::size_t included = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(b[i].view_zenith_deg, a[i].view_zenith_deg);
+    EXPECT_EQ(b[i].radiance, a[i].radiance);
+    EXPECT_NEAR(b[i].reference, a[i].reference, 1e-9 * a[i].reference) << i;
+    EXPECT_NEAR(b[i].relative_error, a[i].relative_error, 1e-7) << i;
+    EXPECT_EQ(b[i].included, a[i].included) << i;
+    included += b[i].included;
+  }
+  EXPECT_GT(included, kSmallGridConfigurations);
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(dir_ / "b.json"));
+  EXPECT_EQ(j["reference"]["samples"], "ref.csv");
+  EXPECT_EQ(j["configurations"].get<std::size_t>(), kSmallGridConfigurations);
+}
+
+// A samples file of other media, of other channels, cut short, or combined with a grid or a
+// reference model is refused in one line; the output never replaces the samples file.
+TEST_F(CompareTest, SamplesFileMismatchesAreRefused) {
+  ASSERT_EQ(Run("sample --model hillaire --grid grid.csv --out ref.csv").exit_code, 0);
+  const std::string before = ReadFile(dir_ / "ref.csv");
+  ExpectOneErrorLine(Run("compare --model hillaire --preset atmosphere-plus --against-samples ref.csv"),
+                     "wavelength_nm 680 where the atmosphere's channel 1 is 650 nm");
+  // The same channels, ten times the red Rayleigh coefficient: caught by the transmittance.
+  std::string thick = Run("presets --dump earth").out;
+  const std::size_t red = thick.find("5.802e-06");
+  ASSERT_NE(red, std::string::npos);
+  thick.replace(red, 9, "5.802e-05");
+  std::ofstream(dir_ / "thick.json") << thick;
+  ExpectOneErrorLine(Run("compare --model hillaire --config thick.json --against-samples ref.csv"),
+                     "the samples were taken with other parameters");
+  ExpectOneErrorLine(Run("compare --model hillaire --against-samples ref.csv --grid grid.csv"),
+                     "--grid excludes --against-samples");
+  ExpectOneErrorLine(Run("compare --model hillaire --against-samples ref.csv --against reference"), "excludes");
+  ExpectOneErrorLine(Run("compare --model hillaire --against-samples ref.csv --csv ref.csv"),
+                     "is the --against-samples input");
+  ExpectOneErrorLine(Run("compare --model hillaire --against-samples ref.csv --image e.png"),
+                     "--image needs a reference model");
+  std::vector<std::string> lines = Lines(before);
+  ASSERT_GT(lines.size(), 3u);
+  std::string cut;
+  for (std::size_t i = 0; i + 1 < lines.size(); ++i) cut += lines[i] + "\n";  // the last channel row gone
+  std::ofstream(dir_ / "cut.csv") << cut;
+  ExpectOneErrorLine(Run("compare --model hillaire --against-samples cut.csv"), "the last configuration has 2 of its 3");
+  EXPECT_EQ(ReadFile(dir_ / "ref.csv"), before);
 }
 
 TEST_F(CompareTest, TwoDirectionMultipleScatteringIsDarkerAtNoon) {

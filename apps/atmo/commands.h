@@ -202,6 +202,9 @@ int RunSample(const CommonOptions& common, const SampleCommand& command);
 struct CompareCommand {
   std::string against = "reference";
   std::vector<std::string> against_options;  // KEY=VALUE for the reference model
+  // A file of `atmo sample` (default unit): R and its standard errors read from it, on its
+  // configurations, instead of a model (excludes --against, --against-option, --grid, --image).
+  std::string against_samples;
   std::string grid = "standard";  // "standard", "twilight", "space" or an IN.csv path (as `atmo sample`)
   // Rows with R <= floor x the largest R of their sky (altitude, sun zenith, channel) are left
   // out of the relative statistics.

@@ -234,8 +234,16 @@ glm::dvec3 SunAtZenith(double sun_zenith_deg) {
 
 // Evaluates both models on every point: rows[point * channels + channel]. `progress(done, total)`
 // is called as configurations complete, one call at a time (a busy reporter is skipped, not waited for).
-std::vector<Row> Evaluate(const Model& model, const Model& reference, const std::vector<SamplePoint>& points,
-                          double floor, const std::function<void(std::size_t, std::size_t)>& progress) {
+//
+// R comes from `reference`, or, where it is null, from `samples` (the rows of `atmo sample`, for
+// the same points), whose transmittance must then agree with the model's to kTransmittanceTolerance
+// where it is above kTransmittanceFloor: a file sampled from other media is refused.
+constexpr double kTransmittanceTolerance = 0.02;
+constexpr double kTransmittanceFloor = 0.05;
+
+std::vector<Row> Evaluate(const Model& model, const Model* reference, const SampleTable* samples,
+                          const std::vector<SamplePoint>& points, double floor,
+                          const std::function<void(std::size_t, std::size_t)>& progress) {
   const std::size_t channels = model.channel_count();
   std::atomic<std::size_t> done{0};
   std::mutex reporting;
@@ -248,7 +256,7 @@ std::vector<Row> Evaluate(const Model& model, const Model& reference, const std:
     std::unique_ptr<SkyView> reference_view;
     try {
       view = model.View(sky.altitude_m, sun);
-      reference_view = reference.View(sky.altitude_m, sun);
+      if (reference != nullptr) reference_view = reference->View(sky.altitude_m, sun);
     } catch (const Error& error) {
       const std::string& where = points[sky.points.front()].location;
       throw Error((where.empty() ? "" : where + ": ") + error.what());
@@ -259,7 +267,23 @@ std::vector<Row> Evaluate(const Model& model, const Model& reference, const std:
           DirectionFromZenithAzimuth(glm::radians(point.view_zenith_deg), glm::radians(point.azimuth_deg));
       std::vector<double> l(channels), se(channels, 0.0), r(channels), r_se(channels, 0.0);
       view->RadianceEstimate(direction, l, se);
-      reference_view->RadianceEstimate(direction, r, r_se);
+      const std::size_t first = sky.points[i] * channels;
+      if (reference_view) {
+        reference_view->RadianceEstimate(direction, r, r_se);
+      } else {
+        std::vector<double> t(channels);
+        view->Transmittance(direction, t);
+        for (std::size_t c = 0; c < channels; ++c) {
+          r[c] = samples->radiance[first + c];
+          r_se[c] = samples->standard_error[first + c];
+          const double file_t = samples->transmittance[first + c];
+          if (std::max(t[c], file_t) > kTransmittanceFloor && !(std::fabs(t[c] - file_t) <= kTransmittanceTolerance)) {
+            throw Error(Format("%s: transmittance %.4g where --model gives %.4g: the samples were taken with other "
+                               "parameters (--preset/--config)",
+                               point.location.c_str(), file_t, t[c]));
+          }
+        }
+      }
       for (std::size_t c = 0; c < channels; ++c) {
         Row& row = rows[sky.points[i] * channels + c];
         row.radiance = l[c];
@@ -706,7 +730,9 @@ Image ErrorImage(const Model& model, const Model& reference, const CompareComman
 
 int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   CheckBackend(common);
-  CheckOutputsApart(common, {{"--grid", IsNamedGrid(command.grid) ? std::string() : command.grid}},
+  CheckOutputsApart(common,
+                    {{"--grid", IsNamedGrid(command.grid) ? std::string() : command.grid},
+                     {"--against-samples", command.against_samples == "-" ? std::string() : command.against_samples}},
                     {{"--csv", command.csv_path},
                      {"--json", command.json_path},
                      {"--markdown", command.markdown_path},
@@ -715,7 +741,13 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
     throw Error(Format("--floor %g is outside [0, 1]", command.floor));
   }
   const AtmosphereParameters parameters = LoadParameters(common);
-  const std::vector<SamplePoint> points = GridFor(command.grid, parameters);
+  const bool from_samples = !command.against_samples.empty();
+  if (from_samples && !command.image_path.empty()) {
+    throw Error("--image needs a reference model, not --against-samples");
+  }
+  SampleTable samples;
+  if (from_samples) samples = ReadSamples(command.against_samples, parameters.wavelengths_nm);
+  const std::vector<SamplePoint> points = from_samples ? samples.points : GridFor(command.grid, parameters);
   for (const std::string& path : {command.csv_path, command.json_path, command.markdown_path, command.image_path}) {
     if (!path.empty()) CheckOutputWritable(path);
   }
@@ -727,17 +759,19 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   const ModelOptions options = EffectiveOptions(common.options, common);
   const ModelOptions reference_options = EffectiveOptions(command.against_options, common);
   const std::string model_text = Describe(common.model, options);
-  const std::string reference_text = Describe(command.against, reference_options);
+  const std::string reference_name = from_samples ? "samples" : command.against;
+  const std::string reference_text =
+      from_samples ? "the samples of " + command.against_samples : Describe(command.against, reference_options);
   const std::string preset = common.config.empty() ? common.preset : common.config;
   const std::string hash = ParameterHashHex(parameters);
-  const std::string& grid = command.grid;
+  const std::string& grid = from_samples ? command.against_samples : command.grid;
   const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
   // The header comes before the work (a Monte Carlo reference takes minutes), the table after it.
   std::string header = Format("atmo compare: %s against %s; parameters %s (hash %s); grid %s\n", model_text.c_str(),
                               reference_text.c_str(), preset.c_str(), hash.c_str(), grid.c_str());
   header += Format("%zu configurations x %zu channels = %zu rows; e = (M - R)/R, M: %s, R: %s\n", points.size(),
                    wavelengths_nm.size(), points.size() * wavelengths_nm.size(), common.model.c_str(),
-                   command.against.c_str());
+                   reference_name.c_str());
   if (std::fwrite(header.data(), 1, header.size(), stdout) != header.size() || std::fflush(stdout) != 0) {
     throw Error("cannot write to standard output");
   }
@@ -748,16 +782,17 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
   const std::unique_ptr<Model> model = CreateModel(common.model, parameters, options);
   const double model_precompute_s = seconds_since(start);
   const auto reference_start = std::chrono::steady_clock::now();
-  const std::unique_ptr<Model> reference = CreateModel(command.against, parameters, reference_options);
+  const std::unique_ptr<Model> reference =
+      from_samples ? nullptr : CreateModel(command.against, parameters, reference_options);
   const double reference_precompute_s = seconds_since(reference_start);
-  if (reference->channel_count() != model->channel_count()) {
+  if (reference && reference->channel_count() != model->channel_count()) {
     throw Error("the models have different channel counts");
   }
 
   const auto evaluate_start = std::chrono::steady_clock::now();
   ProgressBar bar("compare: configurations");
   const std::vector<Row> rows =
-      Evaluate(*model, *reference, points, command.floor,
+      Evaluate(*model, reference.get(), from_samples ? &samples : nullptr, points, command.floor,
                [&bar](std::size_t done, std::size_t total) { bar.Update(static_cast<double>(done), static_cast<double>(total)); });
   bar.Finish();
   const double evaluate_s = seconds_since(evaluate_start);
@@ -795,7 +830,11 @@ int RunCompare(const CommonOptions& common, const CompareCommand& command) {
     j["atmo_version"] = ATMO_VERSION;
     j["command"] = "compare";
     j["model"] = {{"name", common.model}, {"options", options}};
-    j["reference"] = {{"name", command.against}, {"options", reference_options}};
+    if (from_samples) {
+      j["reference"] = {{"samples", command.against_samples}};
+    } else {
+      j["reference"] = {{"name", command.against}, {"options", reference_options}};
+    }
     j["preset"] = common.config.empty() ? nlohmann::ordered_json(common.preset) : nlohmann::ordered_json(nullptr);
     j["config"] = common.config.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(common.config);
     j["parameter_hash"] = hash;

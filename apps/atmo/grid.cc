@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <string_view>
@@ -86,15 +87,20 @@ std::vector<SamplePoint> ReadGrid(const std::string& given_path) {
   return ParseGrid(from_stdin ? ReadStandardInput() : ReadFileBounded(path), path);
 }
 
-std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& path) {
+namespace {
+
+// The rows of a CSV of numbers after its header line: `row(values, where, line_number)` for each
+// non-empty line, `values` of size `columns`. Errors name the file and line.
+void ParseNumberRows(std::string_view text, const std::string& path, const char* header, std::size_t columns,
+                     const std::function<void(const std::vector<double>&, const std::string&, int)>& row) {
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
     throw Error(path + ": a NUL byte at byte " + std::to_string(nul + 1) + "; a grid is CSV text");
   }
-
-  std::vector<SamplePoint> points;
+  const std::string count = std::to_string(columns);
   bool header_seen = false;
   int line_number = 0;
   std::size_t start = 0;
+  std::vector<double> values(columns);
   while (start < text.size()) {
     std::size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
@@ -106,18 +112,17 @@ std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& pat
 
     if (!header_seen) {
       const std::vector<std::string_view> names = SplitCommas(line);
-      const std::vector<std::string_view> expected = SplitCommas(kGridHeader);
+      const std::vector<std::string_view> expected = SplitCommas(header);
       if (names != expected) {
-        throw Error(where + "expected the header '" + kGridHeader + "', got '" + std::string(line) + "'");
+        throw Error(where + "expected the header '" + header + "', got '" + std::string(line) + "'");
       }
       header_seen = true;
       continue;
     }
 
     const std::vector<std::string_view> fields = SplitCommas(line);
-    if (fields.size() != 4) throw Error(where + "expected 4 comma-separated numbers");
-    double values[4];
-    for (int i = 0; i < 4; ++i) {
+    if (fields.size() != columns) throw Error(where + "expected " + count + " comma-separated numbers");
+    for (std::size_t i = 0; i < columns; ++i) {
       std::string_view field = fields[i];
       if (field.size() > 1 && field.front() == '+') field.remove_prefix(1);  // from_chars takes no '+'
 
@@ -127,17 +132,75 @@ std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& pat
         if (error == std::errc::result_out_of_range && ptr == last) {
           throw Error(where + "'" + std::string(field) + "' is out of range");
         }
-        throw Error(where + "expected 4 comma-separated numbers, got '" + std::string(field) + "'");
+        throw Error(where + "expected " + count + " comma-separated numbers, got '" + std::string(field) + "'");
       }
     }
-    SamplePoint point{values[0], values[1], values[2], values[3], path + ":" + std::to_string(line_number)};
-    CheckPoint(point, where);
-    points.push_back(std::move(point));
+    row(values, where, line_number);
   }
   if (!header_seen) {
-    throw Error(path + ": expected the header '" + std::string(kGridHeader) + "', got an empty file");
+    throw Error(path + ": expected the header '" + std::string(header) + "', got an empty file");
   }
+}
+
+std::string ReadInput(const std::string& given_path) {
+  return given_path == "-" ? ReadStandardInput() : ReadFileBounded(given_path);
+}
+
+}  // namespace
+
+std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& path) {
+  std::vector<SamplePoint> points;
+  ParseNumberRows(text, path, kGridHeader, 4, [&](const std::vector<double>& v, const std::string& where, int line) {
+    SamplePoint point{v[0], v[1], v[2], v[3], path + ":" + std::to_string(line)};
+    CheckPoint(point, where);
+    points.push_back(std::move(point));
+  });
   return points;
+}
+
+SampleTable ReadSamples(const std::string& given_path, const std::vector<double>& wavelengths_nm) {
+  const std::string path = given_path == "-" ? "<stdin>" : given_path;
+  return ParseSamples(ReadInput(given_path), path, wavelengths_nm);
+}
+
+SampleTable ParseSamples(std::string_view text, const std::string& path, const std::vector<double>& wavelengths_nm) {
+  SampleTable table;
+  const std::size_t channels = wavelengths_nm.size();
+  std::size_t channel = 0;  // of the next row
+  std::string first_where;  // of the configuration being read
+  ParseNumberRows(text, path, kSamplesHeader, 8, [&](const std::vector<double>& v, const std::string& where, int line) {
+    const SamplePoint point{v[0], v[1], v[2], v[3], path + ":" + std::to_string(line)};
+    CheckPoint(point, where);
+    if (channel == 0) {
+      table.points.push_back(point);
+      first_where = where;
+    } else {
+      const SamplePoint& open = table.points.back();
+      if (point.altitude_m != open.altitude_m || point.sun_zenith_deg != open.sun_zenith_deg ||
+          point.view_zenith_deg != open.view_zenith_deg || point.azimuth_deg != open.azimuth_deg) {
+        throw Error(where + "a new configuration after " + std::to_string(channel) + " of its " +
+                    std::to_string(channels) + " channels (" + std::to_string(channels) +
+                    " rows a configuration, one per wavelength)");
+      }
+    }
+    if (!(std::fabs(v[4] - wavelengths_nm[channel]) <= 1e-6)) {
+      throw Error(where + "wavelength_nm " + Number(v[4]) + " where the atmosphere's channel " +
+                  std::to_string(channel + 1) + " is " + Number(wavelengths_nm[channel]) + " nm");
+    }
+    if (!(std::isfinite(v[5]) && v[5] >= 0.0)) throw Error(where + "radiance " + Number(v[5]) + " is not finite and >= 0");
+    if (!(v[6] >= 0.0 && v[6] <= 1.0)) throw Error(where + "transmittance " + Number(v[6]) + " is outside [0, 1]");
+    if (!(std::isfinite(v[7]) && v[7] >= 0.0)) throw Error(where + "stderr " + Number(v[7]) + " is not finite and >= 0");
+    table.radiance.push_back(v[5]);
+    table.transmittance.push_back(v[6]);
+    table.standard_error.push_back(v[7]);
+    channel = (channel + 1) % channels;
+  });
+  if (channel != 0) {
+    throw Error(path + ": the last configuration has " + std::to_string(channel) + " of its " +
+                std::to_string(channels) + " channels");
+  }
+  if (table.points.empty()) throw Error(path + ": no configurations after the header");
+  return table;
 }
 
 }  // namespace atmo::cli

@@ -33,4 +33,25 @@ std::vector<SamplePoint> ReadGrid(const std::string& path);
 // The same for the text of a grid; `path` names it in messages. Throws atmo::Error.
 std::vector<SamplePoint> ParseGrid(std::string_view text, const std::string& path);
 
+// The output of `atmo sample` (its default unit), read back: one row per configuration and
+// channel, the channels of a configuration on consecutive rows in the order of the atmosphere's
+// wavelengths. `atmo compare --against-samples` takes its reference from such a file.
+inline constexpr const char* kSamplesHeader =
+    "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,transmittance,stderr";
+
+struct SampleTable {
+  std::vector<SamplePoint> points;
+  // [point * channels + channel]
+  std::vector<double> radiance;
+  std::vector<double> transmittance;
+  std::vector<double> standard_error;
+};
+
+// Reads and checks a whole samples file (a regular file of at most 64 MiB, or "-" for standard
+// input): the header, 8 numbers a row, every configuration with exactly the channels
+// `wavelengths_nm` (to 1e-6 nm) in order, radiance and standard error finite and >= 0,
+// transmittance in [0, 1]. Errors name the file and line. Throws atmo::Error.
+SampleTable ReadSamples(const std::string& path, const std::vector<double>& wavelengths_nm);
+SampleTable ParseSamples(std::string_view text, const std::string& path, const std::vector<double>& wavelengths_nm);
+
 }  // namespace atmo::cli

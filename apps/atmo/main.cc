@@ -3,7 +3,7 @@
 //   atmo render  [--camera perspective|fisheye|equirect] [--width W --height H] ... [-o NAME | --exr F --png F]
 //   atmo sample  --model M [--preset P | --config F.json] (--grid IN.csv|- | --altitude --sun-zenith|--sun-elevation
 //                --view-zenith --azimuth) [--out OUT.csv]
-//   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|twilight|space|IN.csv] [--csv F]
+//   atmo compare --model M [--against R] [--against-option K=V] [--grid standard|twilight|space|IN.csv | --against-samples S.csv] [--csv F]
 //                [--json F] [--image F.png [--altitude A --sun-zenith S --image-range PERCENT]]
 //   atmo presets [--dump NAME]
 //   atmo bench   [--repeat N | --quick] [--width W --height H]
@@ -159,14 +159,25 @@ int main(int argc, char** argv) {
   CLI::App* compare_app =
       app.add_subcommand("compare", "relative error of --model against a reference model on a grid");
   AddCommonOptions(compare_app, common);
-  compare_app->add_option("--against", compare.against, "the reference model")->capture_default_str();
-  compare_app->add_option("--against-option", compare.against_options, "reference model setting KEY=VALUE (repeatable)")
-      ->expected(1)
-      ->take_all();
-  compare_app->add_option("--grid", compare.grid,
-                          "'standard', 'twilight' (sun 90-108), 'space' (observers 100-1000 km) or a CSV like "
-                          "`atmo sample --grid`")
-      ->capture_default_str();
+  CLI::Option* against =
+      compare_app->add_option("--against", compare.against, "the reference model")->capture_default_str();
+  CLI::Option* against_option =
+      compare_app
+          ->add_option("--against-option", compare.against_options, "reference model setting KEY=VALUE (repeatable)")
+          ->expected(1)
+          ->take_all();
+  CLI::Option* compare_grid =
+      compare_app
+          ->add_option("--grid", compare.grid,
+                       "'standard', 'twilight' (sun 90-108), 'space' (observers 100-1000 km) or a CSV like "
+                       "`atmo sample --grid`")
+          ->capture_default_str();
+  compare_app
+      ->add_option("--against-samples", compare.against_samples,
+                   "the reference read from an `atmo sample` CSV (its configurations are the grid)")
+      ->excludes(against)
+      ->excludes(against_option)
+      ->excludes(compare_grid);
   AddNumber(compare_app, "--floor", compare.floor,
             "leave out rows whose reference is at most FLOOR x the largest of their sky")
       ->check(RangeOf(0.0, 1.0));
