@@ -17,7 +17,9 @@ replaces what is between the markers; everything else on the page is left alone.
     scripts/accuracy_tables.py --dry-run             # print the commands, run nothing
 
 Options: --atmo PATH (default build/apps/atmo/atmo), --doc PATH (default docs/accuracy.md),
---work DIR (default a temporary folder; the CSV/JSON/Markdown of every run are kept there).
+--work DIR (default a temporary folder; the CSV/JSON/Markdown of every run are kept there),
+--reuse-samples (read the references sampled into --work by an earlier run: several tables compare
+against one `atmo sample --model reference` CSV each, SAMPLED_REFERENCES).
 Only the Python standard library is used. The page is written atomically (temporary file, then
 rename), and only after every requested comparison succeeded.
 """
@@ -53,6 +55,36 @@ MARKDOWN_TABLES = {
     "source4d-reference-grid": ["--model", "source4d", "--grid", "docs/data/source4d_grid.csv"] + PRECISE_REFERENCE,
     "hillaire-reference-source4d-grid": ["--model", "hillaire", "--grid", "docs/data/source4d_grid.csv"]
                                         + PRECISE_REFERENCE,
+    # Against a reference sampled once ({samples:ID}, SAMPLED_REFERENCES below) for several models.
+    "source4d-reference-twilight": ["--model", "source4d", "--against-samples", "{samples:twilight}"],
+    "hillaire-reference-twilight-1pc": ["--model", "hillaire", "--against-samples", "{samples:twilight}"],
+    "hillaire-converged-reference-twilight-1pc": [
+        "--model", "hillaire", "--option", "multiple_scattering_lut=256x128", "--option",
+        "multiple_scattering_directions=1024", "--option", "multiple_scattering_samples=100",
+        "--against-samples", "{samples:twilight}"],
+    "source4d-reference-altitudes": ["--model", "source4d", "--against-samples", "{samples:altitudes}"],
+    "hillaire-reference-altitudes": ["--model", "hillaire", "--against-samples", "{samples:altitudes}"],
+    "source4d-reference-hazy": ["--model", "source4d", "--config", "{hazy}", "--against-samples", "{samples:hazy}"],
+    "hillaire-reference-hazy": ["--model", "hillaire", "--config", "{hazy}", "--against-samples", "{samples:hazy}"],
+    "source4d-reference-albedo-0": ["--model", "source4d", "--config", "{albedo_0}",
+                                    "--against-samples", "{samples:albedo_0}"],
+    "source4d-reference-albedo-1": ["--model", "source4d", "--config", "{albedo_1}",
+                                    "--against-samples", "{samples:albedo_1}"],
+}
+
+# ID -> the `atmo sample --model reference` arguments of a reference that several tables read
+# (`--against-samples`); each is sampled once per run of this script, when a selected table needs it.
+SAMPLED_REFERENCES = {
+    # Sun 92 and 95 degrees to 1 % relative standard error per direction (the twilight estimator).
+    "twilight": ["--grid", "docs/data/source4d_twilight_grid.csv", "--target-rel-error", "0.01", "--seed", "7"],
+    # 2^16 paths: about 0.5 % with the sun up.
+    "altitudes": ["--grid", "docs/data/source4d_altitude_grid.csv", "--samples", "65536", "--seed", "7"],
+    "hazy": ["--config", "{hazy}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",
+             "--seed", "7"],
+    "albedo_0": ["--config", "{albedo_0}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",
+                 "--seed", "7"],
+    "albedo_1": ["--config", "{albedo_1}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",
+                 "--seed", "7"],
 }
 
 # The elek table: one row per order count K, selected columns of each run's JSON summary.
@@ -117,8 +149,50 @@ def albedo_config(atmo, work):
     return path
 
 
-def run_compare(atmo, args, work, name, dry_run, substitutions):
-    args = [a.format(**substitutions) for a in args]
+def earth_variant(atmo, work, name, change):
+    """The earth preset with `change(preset)` applied, written to WORK/NAME.json."""
+    dump = subprocess.run([atmo, "presets", "--dump", "earth"], check=True, capture_output=True, text=True).stdout
+    preset = json.loads(dump)
+    change(preset)
+    path = os.path.join(work, name + ".json")
+    with open(path, "w") as f:
+        json.dump(preset, f, indent=2)
+    return path
+
+
+def hazy(preset):
+    """Mie x 10: ten times the aerosol's scattering and absorption (its density)."""
+    for key in ("scattering_per_m", "absorption_per_m"):
+        preset["mie"][key] = [10.0 * x for x in preset["mie"][key]]
+
+
+def albedo(value):
+    def change(preset):
+        preset["ground_albedo"] = [value for _ in preset["ground_albedo"]]
+    return change
+
+
+def sample_reference(atmo, reference_id, work, dry_run, substitutions, reuse):
+    """Runs `atmo sample --model reference` for SAMPLED_REFERENCES[reference_id] once; its CSV path.
+    With `reuse`, a WORK/reference-ID.csv of an earlier run is read instead."""
+    path = os.path.join(work, "reference-%s.csv" % reference_id)
+    if reuse and os.path.exists(path):
+        print("# reusing %s" % path, flush=True)
+        return path
+    args = [a.format(**substitutions) for a in SAMPLED_REFERENCES[reference_id]]
+    command = [atmo, "sample", "--model", "reference"] + args + ["--out", path]
+    print("$ " + " ".join(command), flush=True)
+    if not dry_run:
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    return path
+
+
+def run_compare(atmo, args, work, name, dry_run, substitutions, reuse=False):
+    for reference_id in sorted({a[len("{samples:"):-1] for a in args if a.startswith("{samples:")}):
+        key = "samples:" + reference_id
+        if key not in substitutions:
+            substitutions[key] = sample_reference(atmo, reference_id, work, dry_run, substitutions, reuse)
+    args = [substitutions[a[1:-1]] if a.startswith("{samples:") else a.format(**substitutions) for a in args]
     markdown = os.path.join(work, name + ".md")
     summary = os.path.join(work, name + ".json")
     command = [atmo, "compare"] + args + ["--markdown", markdown, "--json", summary,
@@ -149,6 +223,8 @@ def main():
     parser.add_argument("--only", nargs="+", default=None)
     parser.add_argument("--list", action="store_true")
     parser.add_argument("--dry-run", action="store_true")
+    parser.add_argument("--reuse-samples", action="store_true",
+                        help="read the sampled references (reference-ID.csv) already in --work instead of sampling")
     options = parser.parse_args()
 
     ids = list(MARKDOWN_TABLES) + ["elek-reference-orders"]
@@ -157,6 +233,8 @@ def main():
             print("%-36s atmo compare %s" % (table_id, " ".join(MARKDOWN_TABLES[table_id])))
         print("%-36s atmo compare %s  (K = %s)" % ("elek-reference-orders", " ".join(ELEK_ARGS),
                                                   ", ".join(map(str, ELEK_ORDERS))))
+        for reference_id, args in SAMPLED_REFERENCES.items():
+            print("%-36s atmo sample --model reference %s" % ("{samples:%s}" % reference_id, " ".join(args)))
         return 0
     selected = options.only or ids
     unknown = [i for i in selected if i not in ids]
@@ -181,6 +259,10 @@ def main():
     else:
         substitutions["albedo"] = os.path.join(work, "atmosphere_plus_albedo_0.3.json")
 
+    for name, change in (("hazy", hazy), ("albedo_0", albedo(0.0)), ("albedo_1", albedo(1.0))):
+        path = os.path.join(work, "earth_%s.json" % name)
+        substitutions[name] = path if options.dry_run else earth_variant(options.atmo, work, "earth_" + name, change)
+
     for table_id in selected:
         if table_id == "elek-reference-orders":
             summaries = []
@@ -193,7 +275,7 @@ def main():
                 page = replace_block(page, table_id, elek_table(summaries))
         else:
             table, _ = run_compare(options.atmo, MARKDOWN_TABLES[table_id], work, table_id, options.dry_run,
-                                   substitutions)
+                                   substitutions, options.reuse_samples)
             if not options.dry_run:
                 page = replace_block(page, table_id, table)
     if options.dry_run:
