@@ -273,4 +273,19 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
   }
 }
 
+void LookupSkyViewDirections(const SkyViewLookup& lookup, std::span<const glm::dvec3> views, std::span<float> out) {
+  // Chunks in structure-of-arrays form, for the vectorised kernel.
+  constexpr std::size_t kChunk = 256;
+  float x[kChunk], y[kChunk], z[kChunk];
+  for (std::size_t first = 0; first < views.size(); first += kChunk) {
+    const std::size_t count = std::min(kChunk, views.size() - first);
+    for (std::size_t i = 0; i < count; ++i) {
+      x[i] = static_cast<float>(views[first + i].x);
+      y[i] = static_cast<float>(views[first + i].y);
+      z[i] = static_cast<float>(views[first + i].z);
+    }
+    LookupSkyViewRow(lookup, x, y, z, static_cast<int>(count), &out[3 * first]);
+  }
+}
+
 }  // namespace atmo::cpu

@@ -14,6 +14,7 @@
 // LookupSkyViewRow on rows of directions (any count; thread-safe, the lookup is read-only).
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -69,6 +70,10 @@ SkyViewLookup MakeSkyViewLookup(const shared::Texture2D& sky_view, double horizo
 // in-bounds lookup (z is clamped to [-1, 1], a NaN azimuth reads as the sun's).
 void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* y, const float* z, int count,
                       float* out);
+
+// LookupSkyViewRow over any number of double-precision directions: three values per direction
+// into out[3 i + c].
+void LookupSkyViewDirections(const SkyViewLookup& lookup, std::span<const glm::dvec3> views, std::span<float> out);
 
 // The sampling positions of LookupSkyViewRow, for tests: texel coordinates s = u * width - 0.5
 // and t = v * height - 0.5 (texel i's centre at i), s[i] in [0, width] after the wrap in x,

@@ -243,7 +243,7 @@ class HillaireSkyView final : public SkyView {
     if (n == 3) {
       // The vectorised float kernel, on chunks of directions in structure-of-arrays form.
       const cpu::SkyViewLookup& lookup = terms.ground ? sky_and_ground_lookup_ : sky_lookup_;
-      LookupRows(lookup, views, out);
+      cpu::LookupSkyViewDirections(lookup, views, out);
     } else {
       const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
       for (std::size_t i = 0; i < views.size(); ++i) {
@@ -292,7 +292,7 @@ class HillaireSkyView final : public SkyView {
       }
       lookup = terms.ground ? &folded_sky_and_ground_ : &folded_sky_;
     }
-    LookupRows(*lookup, views, out);
+    cpu::LookupSkyViewDirections(*lookup, views, out);
     const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
     std::vector<double> disc(n);
     for (std::size_t i = 0; i < views.size(); ++i) {
@@ -311,22 +311,6 @@ class HillaireSkyView final : public SkyView {
   }
 
  private:
-  // The vectorised float kernel over the directions, in chunks of structure-of-arrays form: three
-  // values per direction into out.
-  static void LookupRows(const cpu::SkyViewLookup& lookup, std::span<const glm::dvec3> views, std::span<float> out) {
-    constexpr std::size_t kChunk = 256;
-    float x[kChunk], y[kChunk], z[kChunk];
-    for (std::size_t first = 0; first < views.size(); first += kChunk) {
-      const std::size_t count = std::min(kChunk, views.size() - first);
-      for (std::size_t i = 0; i < count; ++i) {
-        x[i] = static_cast<float>(views[first + i].x);
-        y[i] = static_cast<float>(views[first + i].y);
-        z[i] = static_cast<float>(views[first + i].z);
-      }
-      cpu::LookupSkyViewRow(lookup, x, y, z, static_cast<int>(count), &out[3 * first]);
-    }
-  }
-
   // sum over channels of weights[c] x table_b(c): the per-batch tables as one folded table.
   static shared::Texture2D Fold(const std::vector<shared::Texture2D>& tables, std::span<const glm::vec3> weights) {
     shared::Texture2D folded(tables.front().width, tables.front().height, tables.front().repeat_u);

@@ -7,6 +7,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "cpu/sky_view_lookup.h"
 #include "models/model_options.h"
 #include "physics/shared_parameters.h"
 
@@ -65,9 +66,28 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
       t.transmittance_lut = ParseSizeOption(key, value, 2, 4096);
     } else if (key == "transmittance_samples") {
       t.transmittance_samples = ParseIntOption(key, value, 1, 100000);
+    } else if (key == "sky_view") {
+      if (value == "auto") {
+        s.sky_view = Source4dModelSettings::SkyViewMode::kAuto;
+      } else if (value == "on") {
+        s.sky_view = Source4dModelSettings::SkyViewMode::kOn;
+      } else if (value == "off") {
+        s.sky_view = Source4dModelSettings::SkyViewMode::kOff;
+      } else {
+        throw Error("option sky_view=" + value + ": expected auto, on or off");
+      }
+    } else if (key == "sky_view_lut") {
+      s.sky_view_lut = ParseSizeOption(key, value, 4, 8192);
+      if (s.sky_view_lut.x % 2 != 0 || s.sky_view_lut.y % 2 != 0) {
+        throw Error("option sky_view_lut=" + value +
+                    ": the width and the height must be even (mirrored azimuths; sky and ground halves)");
+      }
+      if (double(s.sky_view_lut.x) * s.sky_view_lut.y > 16.0 * 1024 * 1024) {
+        throw Error("option sky_view_lut=" + value + " has more than 2^24 texels (the limit)");
+      }
     } else {
       throw Error("unknown option '" + key + "' for model source4d (known: table, gather, gather_samples, orders, "
-                  "tail, samples, transmittance_lut, transmittance_samples)");
+                  "tail, samples, transmittance_lut, transmittance_samples, sky_view, sky_view_lut)");
     }
   }
   const double texels = double(t.r_size) * t.mu_size * t.mu_s_size * t.phi_size;
@@ -127,9 +147,21 @@ class Source4dSkyView final : public SkyView {
       : SkyView(altitude_m, sun, model.channel_count(), model.parameters().sun_angular_radius_rad),
         model_(model),
         r_(model.parameters().ground_radius_m + altitude_m),
-        mu_s_(shared::ClampCosine(sun.z)) {}
+        mu_s_(shared::ClampCosine(sun.z)) {
+    horizon_nadir_angle_ = shared::GetHorizonNadirAngle(model.batches().front().atmosphere, r_);
+    using Mode = Source4dModelSettings::SkyViewMode;
+    table_serves_ = model.settings().sky_view != Mode::kOff && r_ <= model.batches().front().atmosphere.top_radius;
+    if (table_serves_ && model.settings().sky_view == Mode::kOn) EnsureTables();
+  }
 
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
+    if (table_serves_ && model_.settings().sky_view == Source4dModelSettings::SkyViewMode::kOn) {
+      const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
+      ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
+        return shared::GetSkyRadianceFromSkyView(model_.batches()[b].atmosphere, sky_view_[b], r_, view.z, azimuth);
+      });
+      return;
+    }
     ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
       shared::vec3 ground;
       return Evaluate(model_.batches()[b], view, ground);
@@ -179,10 +211,15 @@ class Source4dSkyView final : public SkyView {
     }
   }
 
-  // Both terms from one march per batch.
+  // Both terms from one march per batch, or from the sky-view tables.
   void RadianceBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms,
                      std::span<float> out) const override {
     const std::size_t n = channel_count();
+    if (table_serves_) {
+      EnsureTables();
+      LookupBatch(views, terms, out);
+      return;
+    }
     oneapi::tbb::parallel_for(std::size_t{0}, views.size(), [&](std::size_t i) {
       const glm::dvec3& view = views[i];
       if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) return;
@@ -200,6 +237,79 @@ class Source4dSkyView final : public SkyView {
   }
 
  private:
+  // The sky-view tables of every batch and their float lookups, made once (thread-safe).
+  void EnsureTables() const {
+    std::call_once(tables_made_, [this] {
+      const auto& batches = model_.batches();
+      const auto start = std::chrono::steady_clock::now();
+      for (const auto& batch : batches) {
+        sky_view_.emplace_back();
+        sky_and_ground_view_.emplace_back();
+        ComputeTables(batch, sky_view_.back(), sky_and_ground_view_.back());
+      }
+      model_.RecordSkyViewPass(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      if (batches.size() == 1) {  // three channels: the frame kernel's float copies
+        sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun_direction());
+        sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun_direction());
+      }
+    });
+  }
+
+  // The sky-view table of one batch: the scattered radiance of each texel's direction, and the
+  // same with the lit ground added in the ground half. Texel x looks at azimuth 2 pi x / width
+  // from the sun, so columns x and width - x are mirror images: half of them are marched.
+  void ComputeTables(const Source4dModel::Batch& batch, shared::Texture2D& sky, shared::Texture2D& sky_and_ground) const {
+    const glm::ivec2 size = model_.settings().sky_view_lut;
+    sky = shared::Texture2D(size.x, size.y, /*repeat=*/true);
+    sky_and_ground = shared::Texture2D(size.x, size.y, /*repeat=*/true);
+    const cpu::Source4dTables& t = batch.tables;
+    const int half_width = size.x / 2;
+    oneapi::tbb::parallel_for(0, size.y * (half_width + 1), [&](int i) {
+      const int y = i / (half_width + 1);
+      const int x = i % (half_width + 1);
+      shared::vec3 ground;
+      const shared::vec3 l = shared::ComputeSource4dSkyViewTexel(
+          batch.atmosphere, t.transmittance, t.rayleigh, t.mie, t.ground_irradiance, t.mu_s_size,
+          shared::ivec2(size.x, size.y), shared::vec2(x + 0.5, y + 0.5), r_, mu_s_, model_.settings().samples, ground);
+      for (const int column : {x, (size.x - x) % size.x}) {
+        sky.at(column, y) = glm::vec3(l);
+        sky_and_ground.at(column, y) = glm::vec3(l + ground);
+      }
+    });
+  }
+
+  void LookupBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms, std::span<float> out) const {
+    const std::size_t n = channel_count();
+    if (n == 3) {
+      cpu::LookupSkyViewDirections(terms.ground ? sky_and_ground_lookup_ : sky_lookup_, views, out);
+    } else {
+      const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
+      oneapi::tbb::parallel_for(std::size_t{0}, views.size(), [&](std::size_t i) {
+        const double azimuth = shared::GetAzimuthFromSun(views[i], sun_direction());
+        const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut,
+                                                                    horizon_nadir_angle_, views[i].z, azimuth);
+        for (std::size_t b = 0; b < tables.size(); ++b) {
+          const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
+          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
+        }
+      });
+    }
+    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
+    std::vector<double> disc(n);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const glm::dvec3& view = views[i];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+        for (std::size_t c = 0; c < n; ++c) out[i * n + c] = 0.0f;
+        continue;
+      }
+      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
+        SunDiscRadiance(view, disc);
+        for (std::size_t c = 0; c < n; ++c) out[i * n + c] += static_cast<float>(disc[c]);
+      }
+    }
+  }
+
   shared::vec3 Evaluate(const Source4dModel::Batch& batch, const glm::dvec3& view, shared::vec3& ground) const {
     const cpu::Source4dTables& t = batch.tables;
     const double nu = shared::ClampCosine(glm::dot(view, sun_direction()));
@@ -211,6 +321,14 @@ class Source4dSkyView final : public SkyView {
   const Source4dModel& model_;
   double r_;
   double mu_s_;
+  double horizon_nadir_angle_ = 0.0;
+  bool table_serves_ = false;  // sky_view on or auto, and the observer inside the atmosphere
+  // Made by EnsureTables, once.
+  mutable std::once_flag tables_made_;
+  mutable std::vector<shared::Texture2D> sky_view_;             // one per batch
+  mutable std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
+  mutable cpu::SkyViewLookup sky_lookup_;                       // float frame-kernel copies (three channels only)
+  mutable cpu::SkyViewLookup sky_and_ground_lookup_;
 };
 
 }  // namespace

@@ -12,9 +12,16 @@
 //   tail=on                on | off: the geometric tail after the last order
 //   samples=64             steps of the per-view ray march (split at the shadow's edges)
 //   transmittance_lut=256x64, transmittance_samples=200   the 2D transmittance table
+//   sky_view=auto          inside the atmosphere, a sky-view table per observer and sun (the rays
+//                          of sky.glsl's mapping, marched with `samples` steps each): auto: images
+//                          (RadianceBatch) read it, made on their first use, and single queries
+//                          march their direction; on: every query reads it; off: none
+//   sky_view_lut=384x216   its azimuths (over 360 degrees; even) x rows (even: sky and ground
+//                          halves)
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "atmo/model.h"
@@ -26,6 +33,9 @@ namespace atmo {
 struct Source4dModelSettings {
   cpu::Source4dSettings tables;
   int samples = 64;
+  enum class SkyViewMode { kAuto, kOn, kOff };
+  SkyViewMode sky_view = SkyViewMode::kAuto;
+  glm::ivec2 sky_view_lut{384, 216};
   // Throws atmo::Error for an unknown key or a value out of range.
   static Source4dModelSettings FromOptions(const ModelOptions& options);
 };
@@ -48,6 +58,8 @@ class Source4dModel final : public Model {
   // gl/source4d_gl.h), instead of Precompute. Throws atmo::Error when their sizes are not the
   // settings'.
   void SetComputedTables(std::size_t batch, cpu::Source4dTables tables);
+  // The time of a view's sky-view tables, as pass "sky_view_lut" (Model::pass_timings).
+  void RecordSkyViewPass(double ms) const { RecordPass("sky_view_lut", ms); }
 
  private:
   Source4dModelSettings settings_;

@@ -312,19 +312,15 @@ vec3 IntegrateSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(Transmitt
       r, mu, mu_s, nu, RayIntersectsGround(atmosphere, r, mu), t_limit, sample_count, 1.0, 1.0, transmittance);
 }
 
-// Radiance scattered towards an observer anywhere along (mu, nu) with all orders, and in
-// `ground_radiance` the light that the Lambertian ground reflects towards it where the ray
-// meets the ground (the direct sun, exactly, and the sky's irradiance from the table), attenuated.
-vec3 GetSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+// Radiance scattered towards an observer inside the atmosphere along (mu, nu) with all orders,
+// and in `ground_radiance` the light that the Lambertian ground reflects towards it where the ray
+// meets the ground (`hits_ground`: the direct sun, exactly, and the sky's irradiance from the
+// table), attenuated.
+vec3 GetSource4dRadianceInside(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(Source4dTexture) rayleigh_texture, IN(Source4dTexture) mie_texture,
     IN(TransmittanceTexture) irradiance_texture, int mu_s_size, Number r, Number mu, Number mu_s, Number nu,
-    int sample_count, OUT(vec3) ground_radiance) {
+    bool hits_ground, Number t_limit, int sample_count, OUT(vec3) ground_radiance) {
   ground_radiance = vec3(0.0);
-  Number t_limit = 1e30;
-  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
-    return vec3(0.0);
-  }
-  bool hits_ground = RayIntersectsGround(atmosphere, r, mu);
   vec3 transmittance;
   vec3 radiance = IntegrateSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
       mu_s_size, r, mu, mu_s, nu, hits_ground, t_limit, sample_count, 1.0, 1.0, transmittance);
@@ -338,4 +334,37 @@ vec3 GetSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTe
         (direct + GetSource4dGroundIrradiance(irradiance_texture, mu_s_ground));
   }
   return radiance;
+}
+
+// The same for an observer anywhere (above the atmosphere: from where the ray enters it).
+vec3 GetSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(Source4dTexture) rayleigh_texture, IN(Source4dTexture) mie_texture,
+    IN(TransmittanceTexture) irradiance_texture, int mu_s_size, Number r, Number mu, Number mu_s, Number nu,
+    int sample_count, OUT(vec3) ground_radiance) {
+  ground_radiance = vec3(0.0);
+  Number t_limit = 1e30;
+  if (!MoveToAtmosphereEntry(atmosphere, r, mu, mu_s, nu, t_limit)) {
+    return vec3(0.0);
+  }
+  return GetSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
+      irradiance_texture, mu_s_size, r, mu, mu_s, nu, RayIntersectsGround(atmosphere, r, mu), t_limit, sample_count,
+      ground_radiance);
+}
+
+// The per-texel kernel of source4d's sky-view table: the directions of sky.glsl's sky-view
+// mapping (GetViewAnglesFromSkyViewTextureUv; the lower half of the rows meets the ground) for an
+// observer inside the atmosphere at radius r and a sun at zenith cosine mu_s and azimuth 0. The
+// march of GetSource4dRadiance per texel: the scattered radiance, and the ground's in
+// `ground_radiance`.
+vec3 ComputeSource4dSkyViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(Source4dTexture) rayleigh_texture, IN(Source4dTexture) mie_texture,
+    IN(TransmittanceTexture) irradiance_texture, int mu_s_size, IN(ivec2) texture_size, IN(vec2) frag_coord,
+    Number r, Number mu_s, int sample_count, OUT(vec3) ground_radiance) {
+  Number mu;
+  Number azimuth;
+  GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
+  Number nu = ClampCosine(SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s);
+  return GetSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
+      irradiance_texture, mu_s_size, r, mu, mu_s, nu, frag_coord.y >= 0.5 * Number(texture_size.y), 1e30,
+      sample_count, ground_radiance);
 }
