@@ -1,12 +1,14 @@
 #include "cpu/source4d_tables.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "cpu/hillaire_tables.h"
@@ -98,6 +100,109 @@ GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmitta
   return field;
 }
 
+// The lanes of one lookup in the sun loop of GatherMultipleRadiance: ln G_R (3 channels), ln G_M
+// (3), two unused (0, with weight 0), so that each texel of a slice is one 8-float vector.
+constexpr int kLanes = 8;
+
+// exp for the sun loop, in float (the tables are float): Cody-Waite reduction to
+// |r| <= ln(2) / 2 and Cephes' degree-7 polynomial, relative error about 2e-7, written without
+// branches so that the compiler vectorises it. Arguments are clamped to [-87, 88] (ln G >= ln
+// 1e-30 = -69 in the tables); NaN gives exp(-87).
+inline float ExpFloat(float x) {
+  x = !(x > -87.0f) ? -87.0f : (x < 88.0f ? x : 88.0f);
+  const float n = std::floor(x * 1.44269504088896341f + 0.5f);
+  const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * r * r + r + 1.0f;
+  return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
+}
+
+// shared::GetSource4dUnitSunZenith of a clamped cosine, with the knots' branches as selects.
+inline double SunUnit(double mu_s) {
+  const double theta = shared::Source4dAcos(mu_s);
+  const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, shared::kSource4dSunUnit1);
+  const double u_1 = shared::Source4dLerp(theta, shared::kSource4dSunKnot1, shared::kSource4dSunKnot2,
+                                          shared::kSource4dSunUnit1, shared::kSource4dSunUnit2);
+  const double u_2 = shared::Source4dLerp(theta, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3,
+                                          shared::kSource4dSunUnit2, shared::kSource4dSunUnit3);
+  const double u_3 = std::min(shared::Source4dLerp(theta, shared::kSource4dSunKnot3, shared::kSource4dMaxSunZenith,
+                                                   shared::kSource4dSunUnit3, 1.0),
+                              1.0);
+  return theta < shared::kSource4dSunKnot1 ? u_0
+         : theta < shared::kSource4dSunKnot2 ? u_1
+         : theta < shared::kSource4dSunKnot3 ? u_2
+                                             : u_3;
+}
+
+// shared::GetSource4dAzimuth (radians, 0..pi) with its branch as a select.
+inline double Azimuth(double mu, double mu_s, double nu) {
+  const double s = std::sqrt(std::max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
+  const double angle = shared::Source4dAcos(shared::ClampCosine((nu - mu * mu_s) / std::max(s, 1e-9)));
+  return s > 1e-9 ? angle : 0.0;
+}
+
+// The 2D slice of both tables at one step of a gathering ray: the step's view-zenith coordinate y
+// and r layer position are the same for every sun node, so the two r layers and two view-zenith
+// texels are blended once per step, leaving a bilinear lookup in (sun-zenith row, azimuth) per
+// sun node. slice[(row * phi_size + x) * kLanes + lane].
+void Slice(const shared::Texture3D& rayleigh, const shared::Texture3D& mie, int mu_s_size, double y, double layer,
+           std::vector<float>& slice) {
+  int y_0, y_1;
+  double wy;
+  shared::detail::LinearTaps(y, rayleigh.height, false, y_0, y_1, wy);
+  const int r_size = rayleigh.depth / mu_s_size;
+  const int layer_0 = static_cast<int>(std::min(std::floor(layer), double(r_size - 2)));
+  const float fy = static_cast<float>(wy);
+  const float fl = static_cast<float>(layer - layer_0);
+  const int width = rayleigh.width;
+  const std::size_t plane = static_cast<std::size_t>(width) * rayleigh.height;
+  for (int k = 0; k < mu_s_size; ++k) {
+    const std::size_t z_0 = static_cast<std::size_t>(layer_0 * mu_s_size + k) * plane;
+    const std::size_t z_1 = z_0 + static_cast<std::size_t>(mu_s_size) * plane;
+    for (int x = 0; x < width; ++x) {
+      const std::size_t a = z_0 + static_cast<std::size_t>(y_0) * width + x;
+      const std::size_t b = z_0 + static_cast<std::size_t>(y_1) * width + x;
+      const std::size_t c = z_1 + static_cast<std::size_t>(y_0) * width + x;
+      const std::size_t d = z_1 + static_cast<std::size_t>(y_1) * width + x;
+      float* out = slice.data() + static_cast<std::size_t>(k * width + x) * kLanes;
+      const auto blend = [&](const std::vector<glm::vec3>& t) {
+        return glm::mix(glm::mix(t[a], t[b], fy), glm::mix(t[c], t[d], fy), fl);
+      };
+      const glm::vec3 g_r = blend(rayleigh.texels);
+      const glm::vec3 g_m = blend(mie.texels);
+      for (int ch = 0; ch < 3; ++ch) {
+        out[ch] = g_r[ch];
+        out[3 + ch] = g_m[ch];
+      }
+      out[6] = 0.0f;
+      out[7] = 0.0f;
+    }
+  }
+}
+
+// Per-thread buffers of the sun loop.
+struct SunScratch {
+  std::vector<double> r_mu_s, nu;  // per pair (sun node j, azimuth b)
+  std::vector<int> base;           // per pair: the slice index of its first tap
+  std::vector<float> w_row, w_x;   // per pair: the taps' weights
+  std::vector<float> sum;          // per pair, kLanes
+  std::vector<float> slice;
+  void Resize(int pairs, int slice_texels) {
+    r_mu_s.resize(pairs);
+    nu.resize(pairs);
+    base.resize(pairs);
+    w_row.resize(pairs);
+    w_x.resize(pairs);
+    sum.resize(static_cast<std::size_t>(pairs) * kLanes);
+    slice.resize(static_cast<std::size_t>(slice_texels) * kLanes);
+  }
+};
+
 // GatherRadiance for an order n >= 2 (the table's orders alone, no single scattering), with the
 // work that does not depend on the sun done once per ray: a ray of given (r_i, theta'_a) has the
 // same steps, media, throughputs and view-zenith and layer coordinates for every sun zenith and
@@ -118,6 +223,13 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
     double t, r, mu, y, layer;
     glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
   };
+  std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
+  for (int j = 0; j < s.mu_s_size; ++j) {
+    sun_mu_s[j] = grid.mu_s(j);
+    sun_sin_s[j] = std::sqrt(std::max(1.0 - sun_mu_s[j] * sun_mu_s[j], 0.0));
+  }
+  for (int b = 0; b < s.gather_azimuths; ++b) azimuth_cos[b] = std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi));
+  oneapi::tbb::enumerable_thread_specific<SunScratch> scratch;
   oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
     const int i = ray / s.gather_zeniths;
     const int a = ray % s.gather_zeniths;
@@ -160,25 +272,70 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
       }
     }
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
+    // The (sun zenith j, azimuth b) pairs of this ray: r mu_s and nu.
+    const int pairs = s.mu_s_size * s.gather_azimuths;
+    SunScratch& w = scratch.local();
+    w.Resize(pairs, s.mu_s_size * s.phi_size);
     for (int j = 0; j < s.mu_s_size; ++j) {
-      const double mu_s = grid.mu_s(j);
-      const double sin_s = std::sqrt(std::max(1.0 - mu_s * mu_s, 0.0));
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const int p = j * s.gather_azimuths + b;
+        w.r_mu_s[p] = r * sun_mu_s[j];
+        w.nu[p] = shared::ClampCosine(mu * sun_mu_s[j] + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+      }
+    }
+    std::fill(w.sum.begin(), w.sum.end(), 0.0f);
+    for (const Step& step : steps) {
+      Slice(rayleigh, mie, s.mu_s_size, step.y, step.layer, w.slice);
+      // Every pair's sun-zenith row and azimuth at this step (vectorised).
+      const double inv_r = 1.0 / step.r;
+      const double mu_t = step.mu;
+      const double row_scale = s.mu_s_size - 1;
+      const double azimuth_scale = (s.phi_size - 1) / shared::kPi;
+      const double t = step.t;
+      const int last_row = s.mu_s_size - 2;
+      const int last_x = s.phi_size - 2;
+      const int phi_size = s.phi_size;
+      const double* __restrict r_mu_s = w.r_mu_s.data();
+      const double* __restrict nu = w.nu.data();
+      int* __restrict base = w.base.data();
+      float* __restrict w_row = w.w_row.data();
+      float* __restrict w_x = w.w_x.data();
+      for (int p = 0; p < pairs; ++p) {
+        const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
+        const double row = SunUnit(mu_s_t) * row_scale;
+        const double azimuth = Azimuth(mu_t, mu_s_t, nu[p]) * azimuth_scale;
+        const int row_0 = std::min(static_cast<int>(row), last_row);
+        const int x_0 = std::min(static_cast<int>(azimuth), last_x);
+        base[p] = (row_0 * phi_size + x_0) * kLanes;
+        w_row[p] = static_cast<float>(row - row_0);
+        w_x[p] = static_cast<float>(azimuth - x_0);
+      }
+      float weights[kLanes] = {};
+      for (int c = 0; c < 3; ++c) {
+        weights[c] = static_cast<float>(step.weight_rayleigh[c]);
+        weights[3 + c] = static_cast<float>(step.weight_mie[c]);
+      }
+      const int row_stride = s.phi_size * kLanes;
+      for (int p = 0; p < pairs; ++p) {
+        const float* q = w.slice.data() + w.base[p];
+        const float fx = w.w_x[p];
+        const float fr = w.w_row[p];
+        float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
+        for (int l = 0; l < kLanes; ++l) {
+          const float low = q[l] + (q[kLanes + l] - q[l]) * fx;
+          const float high = q[row_stride + l] + (q[row_stride + kLanes + l] - q[row_stride + l]) * fx;
+          sum[l] += weights[l] * ExpFloat(low + (high - low) * fr);
+        }
+      }
+    }
+    for (int j = 0; j < s.mu_s_size; ++j) {
       const int node = i * s.mu_s_size + j;
       for (int b = 0; b < s.gather_azimuths; ++b) {
-        const double nu =
-            shared::ClampCosine(mu * mu_s + sin_v * sin_s * std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi)));
-        glm::dvec3 L(0.0);
-        for (const Step& step : steps) {
-          const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
-          glm::dvec3 log_rayleigh, log_mie;
-          shared::GetSource4dLogTermsAt(rayleigh, mie, s.mu_s_size,
-                                        shared::GetSource4dAzimuthCoord(rayleigh, step.mu, mu_s_t, nu),
-                                        step.y, shared::GetSource4dSunRow(s.mu_s_size, mu_s_t), step.layer, log_rayleigh,
-                                        log_mie);
-          L += step.weight_rayleigh * glm::exp(log_rayleigh) + step.weight_mie * glm::exp(log_mie);
-        }
+        const int p = j * s.gather_azimuths + b;
+        const float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
+        glm::dvec3 L(double(sum[0]) + sum[3], double(sum[1]) + sum[4], double(sum[2]) + sum[5]);
         if (hits_ground && ground) {
-          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * nu) / atmosphere.bottom_radius);
+          const double mu_s_ground = shared::ClampCosine((w.r_mu_s[p] + t_ground * w.nu[p]) / atmosphere.bottom_radius);
           L += transmittance * albedo_over_pi * shared::GetSource4dGroundIrradiance(previous_irradiance, mu_s_ground);
         }
         const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
