@@ -100,6 +100,55 @@ GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmitta
   return field;
 }
 
+// One step of a gathering ray without the planet's shadow: the steps of
+// shared::IntegrateSource4dRadianceInside when no shadow edge lies on the ray (segments at the
+// ray's lowest point only), with what does not depend on the sun.
+struct Step {
+  double t, r, mu;
+  double y = 0.0, layer = 0.0;             // the table's view-zenith coordinate and r layer position
+  glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
+};
+
+std::vector<Step> RaySteps(const shared::AtmosphereParameters& atmosphere, double r, double mu, bool hits_ground,
+                           int sample_count, glm::dvec3& transmittance) {
+  std::vector<Step> steps;
+  transmittance = glm::dvec3(1.0);
+  const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
+  if (!(t_max > 0.0)) return steps;
+  const double t_low = -r * mu;
+  double breaks[2];
+  int break_count = 0;
+  if (t_low > 0.0 && t_low < t_max) breaks[break_count++] = t_low;
+  breaks[break_count++] = t_max;
+  const int per_segment = std::max(2, (sample_count + break_count - 1) / break_count);
+  double t_a = 0.0;
+  for (int k = 0; k < break_count; ++k) {
+    const double t_b = breaks[k];
+    const bool dense_at_a = !(t_b <= t_low);
+    for (int n = 0; n < per_segment; ++n) {
+      const double t_0 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n, per_segment);
+      const double t_1 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n + 1, per_segment);
+      const double dt = t_1 - t_0;
+      const double t = 0.5 * (t_0 + t_1);
+      const double r_t = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+      const double mu_t = shared::ClampCosine((r * mu + t) / r_t);
+      const shared::MediumSample medium = shared::SampleMedium(atmosphere, r_t);
+      const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
+      const glm::dvec3 weight = transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+      Step step;
+      step.t = t;
+      step.r = r_t;
+      step.mu = mu_t;
+      step.weight_rayleigh = weight * medium.rayleigh_scattering;
+      step.weight_mie = weight * medium.mie_scattering;
+      steps.push_back(step);
+      transmittance *= step_transmittance;
+    }
+    t_a = std::max(t_a, t_b);
+  }
+  return steps;
+}
+
 // The lanes of one lookup in the sun loop of GatherMultipleRadiance: ln G_R (3 channels), ln G_M
 // (3), two unused (0, with weight 0), so that each texel of a slice is one 8-float vector.
 constexpr int kLanes = 8;
@@ -219,10 +268,6 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
   const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
   const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
-  struct Step {
-    double t, r, mu, y, layer;
-    glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
-  };
   std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
   for (int j = 0; j < s.mu_s_size; ++j) {
     sun_mu_s[j] = grid.mu_s(j);
@@ -238,38 +283,11 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
     const double mu = std::cos(theta);
     const double sin_v = std::sin(theta);
     const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
-    const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
-    std::vector<Step> steps;
-    glm::dvec3 transmittance(1.0);
-    if (t_max > 0.0) {
-      const double t_low = -r * mu;
-      double breaks[2];
-      int break_count = 0;
-      if (t_low > 0.0 && t_low < t_max) breaks[break_count++] = t_low;
-      breaks[break_count++] = t_max;
-      const int per_segment = std::max(2, (s.gather_samples + break_count - 1) / break_count);
-      double t_a = 0.0;
-      for (int k = 0; k < break_count; ++k) {
-        const double t_b = breaks[k];
-        const bool dense_at_a = !(t_b <= t_low);
-        for (int n = 0; n < per_segment; ++n) {
-          const double t_0 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n, per_segment);
-          const double t_1 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n + 1, per_segment);
-          const double dt = t_1 - t_0;
-          const double t = 0.5 * (t_0 + t_1);
-          const double r_t = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
-          const double mu_t = shared::ClampCosine((r * mu + t) / r_t);
-          const shared::MediumSample medium = shared::SampleMedium(atmosphere, r_t);
-          const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
-          const glm::dvec3 weight =
-              transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-          steps.push_back({t, r_t, mu_t, shared::GetSource4dZenithCoord(rayleigh, mu_t),
-                           shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, r_t),
-                           weight * medium.rayleigh_scattering, weight * medium.mie_scattering});
-          transmittance *= step_transmittance;
-        }
-        t_a = std::max(t_a, t_b);
-      }
+    glm::dvec3 transmittance;
+    std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, transmittance);
+    for (Step& step : steps) {
+      step.y = shared::GetSource4dZenithCoord(rayleigh, step.mu);
+      step.layer = shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, step.r);
     }
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
     // The (sun zenith j, azimuth b) pairs of this ray: r mu_s and nu.
@@ -346,6 +364,78 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   return field;
 }
 
+// GatherRadiance for order 1 with the sun-independent work done once per ray where it can be: a
+// (sun node, azimuth) pair whose ray has no shadow edge on it (the sun up at every step, or the
+// whole ray in the planet's shadow) has exactly the ray's shadow-free steps, and only the sun's
+// transmittance and the phase functions differ per pair; the other pairs take the general march,
+// whose steps end at the shadow's edges (tests/source4d_test.cc checks that the two agree).
+GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& transmittance_table) {
+  const Source4dSettings& s = grid.s;
+  const auto& atmosphere = grid.atmosphere;
+  GatherField field;
+  field.in_count = s.gather_zeniths * s.gather_azimuths;
+  field.columns = grid.nodes() * 3;
+  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
+  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  const shared::Texture3D no_table;
+  std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
+  for (int j = 0; j < s.mu_s_size; ++j) {
+    sun_mu_s[j] = grid.mu_s(j);
+    sun_sin_s[j] = std::sqrt(std::max(1.0 - sun_mu_s[j] * sun_mu_s[j], 0.0));
+  }
+  for (int b = 0; b < s.gather_azimuths; ++b) azimuth_cos[b] = std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi));
+  oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
+    const int i = ray / s.gather_zeniths;
+    const int a = ray % s.gather_zeniths;
+    const double r = grid.r(i);
+    const double theta = NodeAngle(a, s.gather_zeniths, shared::kPi);
+    const double mu = std::cos(theta);
+    const double sin_v = std::sin(theta);
+    const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
+    const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
+    const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
+    glm::dvec3 ray_transmittance;
+    const std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, ray_transmittance);
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      const double mu_s = sun_mu_s[j];
+      const int node = i * s.mu_s_size + j;
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const double nu = shared::ClampCosine(mu * mu_s + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+        double shadow_0, shadow_1;
+        const bool shadow = t_max > 0.0 && shared::GetSource4dShadowInterval(atmosphere, r, mu, mu_s, nu, t_max,
+                                                                             shadow_0, shadow_1);
+        glm::dvec3 L(0.0);
+        glm::dvec3 path_transmittance = ray_transmittance;
+        if (!shadow || (!(shadow_0 > 0.0) && !(shadow_1 < t_max))) {
+          const double rayleigh_phase = shared::GetRayleighPhase(atmosphere, nu);
+          const double mie_phase = shared::GetMiePhase(atmosphere, nu);
+          for (const Step& step : steps) {
+            const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
+            L += shared::GetTransmittanceToSun(atmosphere, transmittance_table, step.r, mu_s_t) *
+                 (step.weight_rayleigh * rayleigh_phase + step.weight_mie * mie_phase);
+          }
+        } else {
+          L = shared::IntegrateSource4dRadianceInside(atmosphere, transmittance_table, no_table, no_table, s.mu_s_size,
+                                                      r, mu, mu_s, nu, hits_ground,
+                                                      std::numeric_limits<double>::infinity(), s.gather_samples, 1.0,
+                                                      0.0, path_transmittance);
+        }
+        if (hits_ground && ground) {
+          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * nu) / atmosphere.bottom_radius);
+          if (mu_s_ground > 0.0) {
+            L += path_transmittance * albedo_over_pi * mu_s_ground *
+                 shared::GetTransmittanceToSun(atmosphere, transmittance_table, atmosphere.bottom_radius, mu_s_ground);
+          }
+        }
+        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
+      }
+    }
+  });
+  return field;
+}
+
 // G[cd * columns + column] = sum over ab of W[cd][ab] field[ab][column].
 std::vector<float> Convolve(const std::vector<float>& w, int out_count, const GatherField& field) {
   std::vector<float> g(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
@@ -398,8 +488,9 @@ void WriteLogTable(const Grid& grid, const std::vector<float>& g, shared::Textur
 std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
                                        const Source4dTables& tables, int order, bool shared_geometry) {
   const Grid grid{atmosphere, settings};
-  if (order >= 2 && shared_geometry) {
-    return GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
+  if (shared_geometry) {
+    return order == 1 ? GatherSingleRadiance(grid, tables.transmittance).values
+                      : GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
   }
   return GatherRadiance(grid, tables.transmittance, tables.rayleigh, tables.mie, tables.ground_irradiance, order).values;
 }
@@ -527,7 +618,7 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
   start = Clock::now();
   GatherField field;
   if (s.orders >= 2) {
-    field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, 1);
+    field = GatherSingleRadiance(grid, tables.transmittance);
     note("source4d_gather_1", start);
   }
   for (int n = 2; n <= s.orders; ++n) {
