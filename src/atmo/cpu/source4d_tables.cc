@@ -257,7 +257,9 @@ struct SunScratch {
 // same steps, media, throughputs and view-zenith and layer coordinates for every sun zenith and
 // azimuth of the grid; only the sun's coordinates and the lookups differ. The steps are those of
 // shared::IntegrateSource4dRadianceInside with single_weight = 0 (tests/source4d_test.cc checks
-// that the two agree).
+// that the two agree). Per step the tables are reduced to a 2D slice (Slice), and the sun loop
+// runs over all (sun node, azimuth) pairs of the ray at once: their coordinates in double, then
+// the bilinear lookups, exp (ExpFloat) and weighted sums in 8-float vectors.
 GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& rayleigh, const shared::Texture3D& mie,
                                    const shared::Texture2D& previous_irradiance) {
   const Source4dSettings& s = grid.s;
