@@ -366,6 +366,22 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   return field;
 }
 
+// Per-thread buffers of GatherSingleRadiance, per (sun node, azimuth) pair of a ray.
+struct SingleScratch {
+  std::vector<double> r_mu_s, nu, rayleigh_phase, mie_phase;
+  std::vector<char> shared_steps;
+  std::vector<glm::dvec3> sum, path_transmittance;
+  std::vector<int> x_0;  // per step: the transmittance table's column tap and weight, lit or not
+  std::vector<double> w_x, lit;
+  void Resize(int pairs) {
+    for (std::vector<double>* v : {&r_mu_s, &nu, &rayleigh_phase, &mie_phase, &w_x, &lit}) v->resize(pairs);
+    shared_steps.resize(pairs);
+    sum.resize(pairs);
+    path_transmittance.resize(pairs);
+    x_0.resize(pairs);
+  }
+};
+
 // GatherRadiance for order 1 with the sun-independent work done once per ray where it can be: a
 // (sun node, azimuth) pair whose ray has no shadow edge on it (the sun up at every step, or the
 // whole ray in the planet's shadow) has exactly the ray's shadow-free steps, and only the sun's
@@ -387,6 +403,10 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
     sun_sin_s[j] = std::sqrt(std::max(1.0 - sun_mu_s[j] * sun_mu_s[j], 0.0));
   }
   for (int b = 0; b < s.gather_azimuths; ++b) azimuth_cos[b] = std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi));
+  const double bottom = atmosphere.bottom_radius;
+  const double top = atmosphere.top_radius;
+  const double top_rho = std::sqrt((top - bottom) * (top + bottom));  // H of the transmittance mapping
+  oneapi::tbb::enumerable_thread_specific<SingleScratch> scratch;
   oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
     const int i = ray / s.gather_zeniths;
     const int a = ray % s.gather_zeniths;
@@ -399,34 +419,89 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
     glm::dvec3 ray_transmittance;
     const std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, ray_transmittance);
+    const int pairs = s.mu_s_size * s.gather_azimuths;
+    SingleScratch& w = scratch.local();
+    w.Resize(pairs);
+    // Per pair: nu, and whether it shares the ray's steps (else: the general march, now).
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      const double mu_s = sun_mu_s[j];
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const int p = j * s.gather_azimuths + b;
+        const double nu = shared::ClampCosine(mu * mu_s + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+        w.r_mu_s[p] = r * mu_s;
+        w.nu[p] = nu;
+        double shadow_0, shadow_1;
+        const bool shadow = t_max > 0.0 && shared::GetSource4dShadowInterval(atmosphere, r, mu, mu_s, nu, t_max,
+                                                                             shadow_0, shadow_1);
+        w.shared_steps[p] = !shadow || (!(shadow_0 > 0.0) && !(shadow_1 < t_max));
+        w.path_transmittance[p] = ray_transmittance;
+        if (w.shared_steps[p]) {
+          w.rayleigh_phase[p] = shared::GetRayleighPhase(atmosphere, nu);
+          w.mie_phase[p] = shared::GetMiePhase(atmosphere, nu);
+          w.sum[p] = glm::dvec3(0.0);
+        } else {
+          w.sum[p] = shared::IntegrateSource4dRadianceInside(
+              atmosphere, transmittance_table, no_table, no_table, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
+              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0, w.path_transmittance[p]);
+        }
+      }
+    }
+    // The shared steps: per step the transmittance table's row taps (the step's r), then every
+    // pair's column tap (vectorised) and lookup: shared::GetTransmittanceToSun, reorganised.
+    const int width = transmittance_table.width;
+    for (const Step& step : steps) {
+      const double r_t = step.r;
+      const double rho = std::sqrt(std::max((r_t - bottom) * (r_t + bottom), 0.0));
+      const double d_min = top - r_t;
+      const double d_max = rho + top_rho;
+      int y_0, y_1;
+      double wy;
+      shared::detail::LinearTaps(shared::GetTextureCoordFromUnitRange(rho / top_rho, transmittance_table.height),
+                                 transmittance_table.height, false, y_0, y_1, wy);
+      const double c_top = (top - r_t) * (top + r_t);
+      const double c_bottom = (bottom - r_t) * (bottom + r_t);
+      const double inv_r = 1.0 / r_t;
+      const double t = step.t;
+      const double column_scale = (width - 1) / (d_max - d_min);
+      const double last_column = width - 1;
+      const int last_x = width - 2;
+      const double* __restrict r_mu_s = w.r_mu_s.data();
+      const double* __restrict nu = w.nu.data();
+      int* __restrict x_0 = w.x_0.data();
+      double* __restrict w_x = w.w_x.data();
+      double* __restrict lit = w.lit.data();
+      for (int p = 0; p < pairs; ++p) {
+        const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
+        const double r_mu = r_t * mu_s_t;
+        const double root = std::sqrt(std::max(c_top + r_mu * r_mu, 0.0));
+        const double d = std::max(mu_s_t > 0.0 ? c_top / (r_mu + root) : -r_mu + root, 0.0);
+        const double column = std::clamp((d - d_min) * column_scale, 0.0, last_column);
+        const int x = std::min(static_cast<int>(column), last_x);
+        x_0[p] = x;
+        w_x[p] = column - x;
+        lit[p] = mu_s_t < 0.0 && c_bottom + r_mu * r_mu >= 0.0 ? 0.0 : 1.0;  // below the horizon: 0
+      }
+      const glm::vec3* row_0 = transmittance_table.texels.data() + static_cast<std::size_t>(y_0) * width;
+      const glm::vec3* row_1 = transmittance_table.texels.data() + static_cast<std::size_t>(y_1) * width;
+      for (int p = 0; p < pairs; ++p) {
+        if (!w.shared_steps[p] || lit[p] == 0.0) continue;
+        const int x = x_0[p];
+        const glm::dvec3 low = glm::mix(glm::dvec3(row_0[x]), glm::dvec3(row_0[x + 1]), w_x[p]);
+        const glm::dvec3 high = glm::mix(glm::dvec3(row_1[x]), glm::dvec3(row_1[x + 1]), w_x[p]);
+        w.sum[p] += glm::mix(low, high, wy) *
+                    (step.weight_rayleigh * w.rayleigh_phase[p] + step.weight_mie * w.mie_phase[p]);
+      }
+    }
     for (int j = 0; j < s.mu_s_size; ++j) {
       const double mu_s = sun_mu_s[j];
       const int node = i * s.mu_s_size + j;
       for (int b = 0; b < s.gather_azimuths; ++b) {
-        const double nu = shared::ClampCosine(mu * mu_s + sin_v * sun_sin_s[j] * azimuth_cos[b]);
-        double shadow_0, shadow_1;
-        const bool shadow = t_max > 0.0 && shared::GetSource4dShadowInterval(atmosphere, r, mu, mu_s, nu, t_max,
-                                                                             shadow_0, shadow_1);
-        glm::dvec3 L(0.0);
-        glm::dvec3 path_transmittance = ray_transmittance;
-        if (!shadow || (!(shadow_0 > 0.0) && !(shadow_1 < t_max))) {
-          const double rayleigh_phase = shared::GetRayleighPhase(atmosphere, nu);
-          const double mie_phase = shared::GetMiePhase(atmosphere, nu);
-          for (const Step& step : steps) {
-            const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
-            L += shared::GetTransmittanceToSun(atmosphere, transmittance_table, step.r, mu_s_t) *
-                 (step.weight_rayleigh * rayleigh_phase + step.weight_mie * mie_phase);
-          }
-        } else {
-          L = shared::IntegrateSource4dRadianceInside(atmosphere, transmittance_table, no_table, no_table, s.mu_s_size,
-                                                      r, mu, mu_s, nu, hits_ground,
-                                                      std::numeric_limits<double>::infinity(), s.gather_samples, 1.0,
-                                                      0.0, path_transmittance);
-        }
+        const int p = j * s.gather_azimuths + b;
+        glm::dvec3 L = w.sum[p];
         if (hits_ground && ground) {
-          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * nu) / atmosphere.bottom_radius);
+          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * w.nu[p]) / atmosphere.bottom_radius);
           if (mu_s_ground > 0.0) {
-            L += path_transmittance * albedo_over_pi * mu_s_ground *
+            L += w.path_transmittance[p] * albedo_over_pi * mu_s_ground *
                  shared::GetTransmittanceToSun(atmosphere, transmittance_table, atmosphere.bottom_radius, mu_s_ground);
           }
         }
