@@ -610,7 +610,7 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
   // The sub-samples of every cell: direction, solid angle (both mirror halves together are
   // handled per output), and the four hat weights.
   struct SubSample {
-    double cos_theta, sin_theta, phi, solid_angle;
+    double cos_theta, sin_theta, phi, cos_phi, sin_phi, solid_angle;
     int node[4];
     double hat[4];
   };
@@ -626,6 +626,8 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
           sub.cos_theta = std::cos(theta);
           sub.sin_theta = std::sin(theta);
           sub.phi = (b + fv) * d_phi;
+          sub.cos_phi = std::cos(sub.phi);
+          sub.sin_phi = std::sin(sub.phi);
           sub.solid_angle = sub.sin_theta * d_theta * d_phi / (kSubSamples * kSubSamples);
           const int n00 = a * s.gather_azimuths + b;
           sub.node[0] = n00;
@@ -655,6 +657,8 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
     const double phi_v = NodeAngle(d, s.phi_size, shared::kPi);
     const double cv = std::cos(theta_v);
     const double sv = std::sin(theta_v);
+    const double cos_phi_v = std::cos(phi_v);
+    const double sin_phi_v = std::sin(phi_v);
     std::vector<double> wr(q.in_count, 0.0);
     std::vector<double> wm(q.in_count, 0.0);
     double sum_r = 0.0;
@@ -663,8 +667,10 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
       double pr = 0.0;
       double pm = 0.0;
       for (int mirror = 0; mirror < 2; ++mirror) {
-        const double dphi = mirror == 0 ? sub.phi - phi_v : sub.phi + phi_v;
-        const double nu = shared::ClampCosine(cv * sub.cos_theta + sv * sub.sin_theta * std::cos(dphi));
+        // cos(phi - phi_v) and cos(phi + phi_v), the view and its mirror image.
+        const double cos_dphi = mirror == 0 ? sub.cos_phi * cos_phi_v + sub.sin_phi * sin_phi_v
+                                            : sub.cos_phi * cos_phi_v - sub.sin_phi * sin_phi_v;
+        const double nu = shared::ClampCosine(cv * sub.cos_theta + sv * sub.sin_theta * cos_dphi);
         pr += shared::GetRayleighPhase(atmosphere, nu);
         pm += shared::GetMiePhase(atmosphere, nu);
       }
