@@ -154,7 +154,7 @@ std::vector<Step> RaySteps(const shared::AtmosphereParameters& atmosphere, doubl
 constexpr int kLanes = 8;
 
 // exp for the sun loop, in float (the tables are float): Cody-Waite reduction to
-// |r| <= ln(2) / 2 and Cephes' degree-7 polynomial, relative error about 2e-7, written without
+// |r| <= ln(2) / 2 and Cephes' degree-7 polynomial, relative error < 1e-7 on [-87, 20], without
 // branches so that the compiler vectorises it. Arguments are clamped to [-87, 88] (ln G >= ln
 // 1e-30 = -69 in the tables); NaN gives exp(-87).
 inline float ExpFloat(float x) {
