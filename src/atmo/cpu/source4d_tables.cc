@@ -1,12 +1,14 @@
 #include "cpu/source4d_tables.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "cpu/hillaire_tables.h"
@@ -98,12 +100,166 @@ GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmitta
   return field;
 }
 
+// One step of a gathering ray without the planet's shadow: the steps of
+// shared::IntegrateSource4dRadianceInside when no shadow edge lies on the ray (segments at the
+// ray's lowest point only), with what does not depend on the sun.
+struct Step {
+  double t, r, mu;
+  double y = 0.0, layer = 0.0;             // the table's view-zenith coordinate and r layer position
+  glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
+};
+
+std::vector<Step> RaySteps(const shared::AtmosphereParameters& atmosphere, double r, double mu, bool hits_ground,
+                           int sample_count, glm::dvec3& transmittance) {
+  std::vector<Step> steps;
+  transmittance = glm::dvec3(1.0);
+  const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
+  if (!(t_max > 0.0)) return steps;
+  const double t_low = -r * mu;
+  double breaks[2];
+  int break_count = 0;
+  if (t_low > 0.0 && t_low < t_max) breaks[break_count++] = t_low;
+  breaks[break_count++] = t_max;
+  const int per_segment = std::max(2, (sample_count + break_count - 1) / break_count);
+  double t_a = 0.0;
+  for (int k = 0; k < break_count; ++k) {
+    const double t_b = breaks[k];
+    const bool dense_at_a = !(t_b <= t_low);
+    for (int n = 0; n < per_segment; ++n) {
+      const double t_0 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n, per_segment);
+      const double t_1 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n + 1, per_segment);
+      const double dt = t_1 - t_0;
+      const double t = 0.5 * (t_0 + t_1);
+      const double r_t = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+      const double mu_t = shared::ClampCosine((r * mu + t) / r_t);
+      const shared::MediumSample medium = shared::SampleMedium(atmosphere, r_t);
+      const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
+      const glm::dvec3 weight = transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+      Step step;
+      step.t = t;
+      step.r = r_t;
+      step.mu = mu_t;
+      step.weight_rayleigh = weight * medium.rayleigh_scattering;
+      step.weight_mie = weight * medium.mie_scattering;
+      steps.push_back(step);
+      transmittance *= step_transmittance;
+    }
+    t_a = std::max(t_a, t_b);
+  }
+  return steps;
+}
+
+// The lanes of one lookup in the sun loop of GatherMultipleRadiance: ln G_R (3 channels), ln G_M
+// (3), two unused (0, with weight 0), so that each texel of a slice is one 8-float vector.
+constexpr int kLanes = 8;
+
+// exp for the sun loop, in float (the tables are float): Cody-Waite reduction to
+// |r| <= ln(2) / 2 and Cephes' degree-7 polynomial, relative error < 1e-7 on [-87, 20], without
+// branches so that the compiler vectorises it. Arguments are clamped to [-87, 88] (ln G >= ln
+// 1e-30 = -69 in the tables); NaN gives exp(-87).
+inline float ExpFloat(float x) {
+  x = !(x > -87.0f) ? -87.0f : (x < 88.0f ? x : 88.0f);
+  const float n = std::floor(x * 1.44269504088896341f + 0.5f);
+  const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * r * r + r + 1.0f;
+  return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
+}
+
+// shared::GetSource4dUnitSunZenith of a clamped cosine, with the knots' branches as selects.
+inline double SunUnit(double mu_s) {
+  const double theta = shared::Source4dAcos(mu_s);
+  const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, shared::kSource4dSunUnit1);
+  const double u_1 = shared::Source4dLerp(theta, shared::kSource4dSunKnot1, shared::kSource4dSunKnot2,
+                                          shared::kSource4dSunUnit1, shared::kSource4dSunUnit2);
+  const double u_2 = shared::Source4dLerp(theta, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3,
+                                          shared::kSource4dSunUnit2, shared::kSource4dSunUnit3);
+  const double u_3 = std::min(shared::Source4dLerp(theta, shared::kSource4dSunKnot3, shared::kSource4dMaxSunZenith,
+                                                   shared::kSource4dSunUnit3, 1.0),
+                              1.0);
+  return theta < shared::kSource4dSunKnot1 ? u_0
+         : theta < shared::kSource4dSunKnot2 ? u_1
+         : theta < shared::kSource4dSunKnot3 ? u_2
+                                             : u_3;
+}
+
+// shared::GetSource4dAzimuth (radians, 0..pi) with its branch as a select.
+inline double Azimuth(double mu, double mu_s, double nu) {
+  const double s = std::sqrt(std::max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
+  const double angle = shared::Source4dAcos(shared::ClampCosine((nu - mu * mu_s) / std::max(s, 1e-9)));
+  return s > 1e-9 ? angle : 0.0;
+}
+
+// The 2D slice of both tables at one step of a gathering ray: the step's view-zenith coordinate y
+// and r layer position are the same for every sun node, so the two r layers and two view-zenith
+// texels are blended once per step, leaving a bilinear lookup in (sun-zenith row, azimuth) per
+// sun node. slice[(row * phi_size + x) * kLanes + lane].
+void Slice(const shared::Texture3D& rayleigh, const shared::Texture3D& mie, int mu_s_size, double y, double layer,
+           std::vector<float>& slice) {
+  int y_0, y_1;
+  double wy;
+  shared::detail::LinearTaps(y, rayleigh.height, false, y_0, y_1, wy);
+  const int r_size = rayleigh.depth / mu_s_size;
+  const int layer_0 = static_cast<int>(std::min(std::floor(layer), double(r_size - 2)));
+  const float fy = static_cast<float>(wy);
+  const float fl = static_cast<float>(layer - layer_0);
+  const int width = rayleigh.width;
+  const std::size_t plane = static_cast<std::size_t>(width) * rayleigh.height;
+  for (int k = 0; k < mu_s_size; ++k) {
+    const std::size_t z_0 = static_cast<std::size_t>(layer_0 * mu_s_size + k) * plane;
+    const std::size_t z_1 = z_0 + static_cast<std::size_t>(mu_s_size) * plane;
+    for (int x = 0; x < width; ++x) {
+      const std::size_t a = z_0 + static_cast<std::size_t>(y_0) * width + x;
+      const std::size_t b = z_0 + static_cast<std::size_t>(y_1) * width + x;
+      const std::size_t c = z_1 + static_cast<std::size_t>(y_0) * width + x;
+      const std::size_t d = z_1 + static_cast<std::size_t>(y_1) * width + x;
+      float* out = slice.data() + static_cast<std::size_t>(k * width + x) * kLanes;
+      const auto blend = [&](const std::vector<glm::vec3>& t) {
+        return glm::mix(glm::mix(t[a], t[b], fy), glm::mix(t[c], t[d], fy), fl);
+      };
+      const glm::vec3 g_r = blend(rayleigh.texels);
+      const glm::vec3 g_m = blend(mie.texels);
+      for (int ch = 0; ch < 3; ++ch) {
+        out[ch] = g_r[ch];
+        out[3 + ch] = g_m[ch];
+      }
+      out[6] = 0.0f;
+      out[7] = 0.0f;
+    }
+  }
+}
+
+// Per-thread buffers of the sun loop.
+struct SunScratch {
+  std::vector<double> r_mu_s, nu;  // per pair (sun node j, azimuth b)
+  std::vector<int> base;           // per pair: the slice index of its first tap
+  std::vector<float> w_row, w_x;   // per pair: the taps' weights
+  std::vector<float> sum;          // per pair, kLanes
+  std::vector<float> slice;
+  void Resize(int pairs, int slice_texels) {
+    r_mu_s.resize(pairs);
+    nu.resize(pairs);
+    base.resize(pairs);
+    w_row.resize(pairs);
+    w_x.resize(pairs);
+    sum.resize(static_cast<std::size_t>(pairs) * kLanes);
+    slice.resize(static_cast<std::size_t>(slice_texels) * kLanes);
+  }
+};
+
 // GatherRadiance for an order n >= 2 (the table's orders alone, no single scattering), with the
 // work that does not depend on the sun done once per ray: a ray of given (r_i, theta'_a) has the
 // same steps, media, throughputs and view-zenith and layer coordinates for every sun zenith and
 // azimuth of the grid; only the sun's coordinates and the lookups differ. The steps are those of
 // shared::IntegrateSource4dRadianceInside with single_weight = 0 (tests/source4d_test.cc checks
-// that the two agree).
+// that the two agree). Per step the tables are reduced to a 2D slice (Slice), and the sun loop
+// runs over all (sun node, azimuth) pairs of the ray at once: their coordinates in double, then
+// the bilinear lookups, exp (ExpFloat) and weighted sums in 8-float vectors.
 GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& rayleigh, const shared::Texture3D& mie,
                                    const shared::Texture2D& previous_irradiance) {
   const Source4dSettings& s = grid.s;
@@ -114,10 +270,13 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
   const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
   const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
-  struct Step {
-    double t, r, mu, y, layer;
-    glm::dvec3 weight_rayleigh, weight_mie;  // throughput x step integral x scattering coefficient
-  };
+  std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
+  for (int j = 0; j < s.mu_s_size; ++j) {
+    sun_mu_s[j] = grid.mu_s(j);
+    sun_sin_s[j] = std::sqrt(std::max(1.0 - sun_mu_s[j] * sun_mu_s[j], 0.0));
+  }
+  for (int b = 0; b < s.gather_azimuths; ++b) azimuth_cos[b] = std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi));
+  oneapi::tbb::enumerable_thread_specific<SunScratch> scratch;
   oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
     const int i = ray / s.gather_zeniths;
     const int a = ray % s.gather_zeniths;
@@ -126,59 +285,77 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
     const double mu = std::cos(theta);
     const double sin_v = std::sin(theta);
     const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
-    const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
-    std::vector<Step> steps;
-    glm::dvec3 transmittance(1.0);
-    if (t_max > 0.0) {
-      const double t_low = -r * mu;
-      double breaks[2];
-      int break_count = 0;
-      if (t_low > 0.0 && t_low < t_max) breaks[break_count++] = t_low;
-      breaks[break_count++] = t_max;
-      const int per_segment = std::max(2, (s.gather_samples + break_count - 1) / break_count);
-      double t_a = 0.0;
-      for (int k = 0; k < break_count; ++k) {
-        const double t_b = breaks[k];
-        const bool dense_at_a = !(t_b <= t_low);
-        for (int n = 0; n < per_segment; ++n) {
-          const double t_0 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n, per_segment);
-          const double t_1 = shared::GetSource4dStep(t_a, t_b, dense_at_a, n + 1, per_segment);
-          const double dt = t_1 - t_0;
-          const double t = 0.5 * (t_0 + t_1);
-          const double r_t = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
-          const double mu_t = shared::ClampCosine((r * mu + t) / r_t);
-          const shared::MediumSample medium = shared::SampleMedium(atmosphere, r_t);
-          const glm::dvec3 step_transmittance = glm::exp(-medium.extinction * dt);
-          const glm::dvec3 weight =
-              transmittance * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-          steps.push_back({t, r_t, mu_t, shared::GetSource4dZenithCoord(rayleigh, mu_t),
-                           shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, r_t),
-                           weight * medium.rayleigh_scattering, weight * medium.mie_scattering});
-          transmittance *= step_transmittance;
-        }
-        t_a = std::max(t_a, t_b);
-      }
+    glm::dvec3 transmittance;
+    std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, transmittance);
+    for (Step& step : steps) {
+      step.y = shared::GetSource4dZenithCoord(rayleigh, step.mu);
+      step.layer = shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, step.r);
     }
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
+    // The (sun zenith j, azimuth b) pairs of this ray: r mu_s and nu.
+    const int pairs = s.mu_s_size * s.gather_azimuths;
+    SunScratch& w = scratch.local();
+    w.Resize(pairs, s.mu_s_size * s.phi_size);
     for (int j = 0; j < s.mu_s_size; ++j) {
-      const double mu_s = grid.mu_s(j);
-      const double sin_s = std::sqrt(std::max(1.0 - mu_s * mu_s, 0.0));
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const int p = j * s.gather_azimuths + b;
+        w.r_mu_s[p] = r * sun_mu_s[j];
+        w.nu[p] = shared::ClampCosine(mu * sun_mu_s[j] + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+      }
+    }
+    std::fill(w.sum.begin(), w.sum.end(), 0.0f);
+    for (const Step& step : steps) {
+      Slice(rayleigh, mie, s.mu_s_size, step.y, step.layer, w.slice);
+      // Every pair's sun-zenith row and azimuth at this step (vectorised).
+      const double inv_r = 1.0 / step.r;
+      const double mu_t = step.mu;
+      const double row_scale = s.mu_s_size - 1;
+      const double azimuth_scale = (s.phi_size - 1) / shared::kPi;
+      const double t = step.t;
+      const int last_row = s.mu_s_size - 2;
+      const int last_x = s.phi_size - 2;
+      const int phi_size = s.phi_size;
+      const double* __restrict r_mu_s = w.r_mu_s.data();
+      const double* __restrict nu = w.nu.data();
+      int* __restrict base = w.base.data();
+      float* __restrict w_row = w.w_row.data();
+      float* __restrict w_x = w.w_x.data();
+      for (int p = 0; p < pairs; ++p) {
+        const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
+        const double row = SunUnit(mu_s_t) * row_scale;
+        const double azimuth = Azimuth(mu_t, mu_s_t, nu[p]) * azimuth_scale;
+        const int row_0 = std::min(static_cast<int>(row), last_row);
+        const int x_0 = std::min(static_cast<int>(azimuth), last_x);
+        base[p] = (row_0 * phi_size + x_0) * kLanes;
+        w_row[p] = static_cast<float>(row - row_0);
+        w_x[p] = static_cast<float>(azimuth - x_0);
+      }
+      float weights[kLanes] = {};
+      for (int c = 0; c < 3; ++c) {
+        weights[c] = static_cast<float>(step.weight_rayleigh[c]);
+        weights[3 + c] = static_cast<float>(step.weight_mie[c]);
+      }
+      const int row_stride = s.phi_size * kLanes;
+      for (int p = 0; p < pairs; ++p) {
+        const float* q = w.slice.data() + w.base[p];
+        const float fx = w.w_x[p];
+        const float fr = w.w_row[p];
+        float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
+        for (int l = 0; l < kLanes; ++l) {
+          const float low = q[l] + (q[kLanes + l] - q[l]) * fx;
+          const float high = q[row_stride + l] + (q[row_stride + kLanes + l] - q[row_stride + l]) * fx;
+          sum[l] += weights[l] * ExpFloat(low + (high - low) * fr);
+        }
+      }
+    }
+    for (int j = 0; j < s.mu_s_size; ++j) {
       const int node = i * s.mu_s_size + j;
       for (int b = 0; b < s.gather_azimuths; ++b) {
-        const double nu =
-            shared::ClampCosine(mu * mu_s + sin_v * sin_s * std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi)));
-        glm::dvec3 L(0.0);
-        for (const Step& step : steps) {
-          const double mu_s_t = shared::ClampCosine((r * mu_s + step.t * nu) / step.r);
-          glm::dvec3 log_rayleigh, log_mie;
-          shared::GetSource4dLogTermsAt(rayleigh, mie, s.mu_s_size,
-                                        shared::GetSource4dAzimuthCoord(rayleigh, step.mu, mu_s_t, nu),
-                                        step.y, shared::GetSource4dSunRow(s.mu_s_size, mu_s_t), step.layer, log_rayleigh,
-                                        log_mie);
-          L += step.weight_rayleigh * glm::exp(log_rayleigh) + step.weight_mie * glm::exp(log_mie);
-        }
+        const int p = j * s.gather_azimuths + b;
+        const float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
+        glm::dvec3 L(double(sum[0]) + sum[3], double(sum[1]) + sum[4], double(sum[2]) + sum[5]);
         if (hits_ground && ground) {
-          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * nu) / atmosphere.bottom_radius);
+          const double mu_s_ground = shared::ClampCosine((w.r_mu_s[p] + t_ground * w.nu[p]) / atmosphere.bottom_radius);
           L += transmittance * albedo_over_pi * shared::GetSource4dGroundIrradiance(previous_irradiance, mu_s_ground);
         }
         const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
@@ -189,20 +366,192 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
   return field;
 }
 
-// G[cd * columns + column] = sum over ab of W[cd][ab] field[ab][column].
-std::vector<float> Convolve(const std::vector<float>& w, int out_count, const GatherField& field) {
-  std::vector<float> g(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
-  oneapi::tbb::parallel_for(0, out_count, [&](int cd) {
-    float* out = g.data() + static_cast<std::size_t>(cd) * field.columns;
-    const float* weights = w.data() + static_cast<std::size_t>(cd) * field.in_count;
-    for (int ab = 0; ab < field.in_count; ++ab) {
-      const float weight = weights[ab];
-      if (weight == 0.0f) continue;
-      const float* in = field.values.data() + static_cast<std::size_t>(ab) * field.columns;
-      for (int k = 0; k < field.columns; ++k) out[k] += weight * in[k];
+// Per-thread buffers of GatherSingleRadiance, per (sun node, azimuth) pair of a ray.
+struct SingleScratch {
+  std::vector<double> r_mu_s, nu, rayleigh_phase, mie_phase;
+  std::vector<char> shared_steps;
+  std::vector<glm::dvec3> sum, path_transmittance;
+  std::vector<int> x_0;  // per step: the transmittance table's column tap and weight, lit or not
+  std::vector<double> w_x, lit;
+  void Resize(int pairs) {
+    for (std::vector<double>* v : {&r_mu_s, &nu, &rayleigh_phase, &mie_phase, &w_x, &lit}) v->resize(pairs);
+    shared_steps.resize(pairs);
+    sum.resize(pairs);
+    path_transmittance.resize(pairs);
+    x_0.resize(pairs);
+  }
+};
+
+// GatherRadiance for order 1 with the sun-independent work done once per ray where it can be: a
+// (sun node, azimuth) pair whose ray has no shadow edge on it (the sun up at every step, or the
+// whole ray in the planet's shadow) has exactly the ray's shadow-free steps, and only the sun's
+// transmittance and the phase functions differ per pair; the other pairs take the general march,
+// whose steps end at the shadow's edges (tests/source4d_test.cc checks that the two agree).
+GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& transmittance_table) {
+  const Source4dSettings& s = grid.s;
+  const auto& atmosphere = grid.atmosphere;
+  GatherField field;
+  field.in_count = s.gather_zeniths * s.gather_azimuths;
+  field.columns = grid.nodes() * 3;
+  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
+  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  const shared::Texture3D no_table;
+  std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
+  for (int j = 0; j < s.mu_s_size; ++j) {
+    sun_mu_s[j] = grid.mu_s(j);
+    sun_sin_s[j] = std::sqrt(std::max(1.0 - sun_mu_s[j] * sun_mu_s[j], 0.0));
+  }
+  for (int b = 0; b < s.gather_azimuths; ++b) azimuth_cos[b] = std::cos(NodeAngle(b, s.gather_azimuths, shared::kPi));
+  const double bottom = atmosphere.bottom_radius;
+  const double top = atmosphere.top_radius;
+  const double top_rho = std::sqrt((top - bottom) * (top + bottom));  // H of the transmittance mapping
+  oneapi::tbb::enumerable_thread_specific<SingleScratch> scratch;
+  oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
+    const int i = ray / s.gather_zeniths;
+    const int a = ray % s.gather_zeniths;
+    const double r = grid.r(i);
+    const double theta = NodeAngle(a, s.gather_zeniths, shared::kPi);
+    const double mu = std::cos(theta);
+    const double sin_v = std::sin(theta);
+    const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
+    const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
+    const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
+    glm::dvec3 ray_transmittance;
+    const std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, ray_transmittance);
+    const int pairs = s.mu_s_size * s.gather_azimuths;
+    SingleScratch& w = scratch.local();
+    w.Resize(pairs);
+    // Per pair: nu, and whether it shares the ray's steps (else: the general march, now).
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      const double mu_s = sun_mu_s[j];
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const int p = j * s.gather_azimuths + b;
+        const double nu = shared::ClampCosine(mu * mu_s + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+        w.r_mu_s[p] = r * mu_s;
+        w.nu[p] = nu;
+        double shadow_0, shadow_1;
+        const bool shadow = t_max > 0.0 && shared::GetSource4dShadowInterval(atmosphere, r, mu, mu_s, nu, t_max,
+                                                                             shadow_0, shadow_1);
+        w.shared_steps[p] = !shadow || (!(shadow_0 > 0.0) && !(shadow_1 < t_max));
+        w.path_transmittance[p] = ray_transmittance;
+        if (w.shared_steps[p]) {
+          w.rayleigh_phase[p] = shared::GetRayleighPhase(atmosphere, nu);
+          w.mie_phase[p] = shared::GetMiePhase(atmosphere, nu);
+          w.sum[p] = glm::dvec3(0.0);
+        } else {
+          w.sum[p] = shared::IntegrateSource4dRadianceInside(
+              atmosphere, transmittance_table, no_table, no_table, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
+              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0, w.path_transmittance[p]);
+        }
+      }
+    }
+    // The shared steps: per step the transmittance table's row taps (the step's r), then every
+    // pair's column tap (vectorised) and lookup: shared::GetTransmittanceToSun, reorganised.
+    const int width = transmittance_table.width;
+    for (const Step& step : steps) {
+      const double r_t = step.r;
+      const double rho = std::sqrt(std::max((r_t - bottom) * (r_t + bottom), 0.0));
+      const double d_min = top - r_t;
+      const double d_max = rho + top_rho;
+      int y_0, y_1;
+      double wy;
+      shared::detail::LinearTaps(shared::GetTextureCoordFromUnitRange(rho / top_rho, transmittance_table.height),
+                                 transmittance_table.height, false, y_0, y_1, wy);
+      const double c_top = (top - r_t) * (top + r_t);
+      const double c_bottom = (bottom - r_t) * (bottom + r_t);
+      const double inv_r = 1.0 / r_t;
+      const double t = step.t;
+      const double column_scale = (width - 1) / (d_max - d_min);
+      const double last_column = width - 1;
+      const int last_x = width - 2;
+      const double* __restrict r_mu_s = w.r_mu_s.data();
+      const double* __restrict nu = w.nu.data();
+      int* __restrict x_0 = w.x_0.data();
+      double* __restrict w_x = w.w_x.data();
+      double* __restrict lit = w.lit.data();
+      for (int p = 0; p < pairs; ++p) {
+        const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
+        const double r_mu = r_t * mu_s_t;
+        const double root = std::sqrt(std::max(c_top + r_mu * r_mu, 0.0));
+        const double d = std::max(mu_s_t > 0.0 ? c_top / (r_mu + root) : -r_mu + root, 0.0);
+        const double column = std::clamp((d - d_min) * column_scale, 0.0, last_column);
+        const int x = std::min(static_cast<int>(column), last_x);
+        x_0[p] = x;
+        w_x[p] = column - x;
+        lit[p] = mu_s_t < 0.0 && c_bottom + r_mu * r_mu >= 0.0 ? 0.0 : 1.0;  // below the horizon: 0
+      }
+      const glm::vec3* row_0 = transmittance_table.texels.data() + static_cast<std::size_t>(y_0) * width;
+      const glm::vec3* row_1 = transmittance_table.texels.data() + static_cast<std::size_t>(y_1) * width;
+      for (int p = 0; p < pairs; ++p) {
+        if (!w.shared_steps[p] || lit[p] == 0.0) continue;
+        const int x = x_0[p];
+        const glm::dvec3 low = glm::mix(glm::dvec3(row_0[x]), glm::dvec3(row_0[x + 1]), w_x[p]);
+        const glm::dvec3 high = glm::mix(glm::dvec3(row_1[x]), glm::dvec3(row_1[x + 1]), w_x[p]);
+        w.sum[p] += glm::mix(low, high, wy) *
+                    (step.weight_rayleigh * w.rayleigh_phase[p] + step.weight_mie * w.mie_phase[p]);
+      }
+    }
+    for (int j = 0; j < s.mu_s_size; ++j) {
+      const double mu_s = sun_mu_s[j];
+      const int node = i * s.mu_s_size + j;
+      for (int b = 0; b < s.gather_azimuths; ++b) {
+        const int p = j * s.gather_azimuths + b;
+        glm::dvec3 L = w.sum[p];
+        if (hits_ground && ground) {
+          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * w.nu[p]) / atmosphere.bottom_radius);
+          if (mu_s_ground > 0.0) {
+            L += w.path_transmittance[p] * albedo_over_pi * mu_s_ground *
+                 shared::GetTransmittanceToSun(atmosphere, transmittance_table, atmosphere.bottom_radius, mu_s_ground);
+          }
+        }
+        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
+      }
     }
   });
-  return g;
+  return field;
+}
+
+// G_m[cd * columns + column] = sum over ab of W_m[cd][ab] field[ab][column], for both media in one
+// pass. Blocked so that each row of the field, read once per block of kBlockRows output
+// directions and kBlockColumns columns, serves both matrices and all rows of the block from the
+// cache (the unblocked product read the whole field, 4 MB by default, once per output direction
+// and medium); the sum over ab runs in the same order as unblocked, so the result is the same.
+constexpr int kBlockRows = 4;
+constexpr int kBlockColumns = 256;
+
+void Convolve(const std::vector<float>& w_r, const std::vector<float>& w_m, int out_count, const GatherField& field,
+              std::vector<float>& g_r, std::vector<float>& g_m) {
+  g_r.assign(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
+  g_m.assign(g_r.size(), 0.0f);
+  const int row_blocks = (out_count + kBlockRows - 1) / kBlockRows;
+  const int column_blocks = (field.columns + kBlockColumns - 1) / kBlockColumns;
+  oneapi::tbb::parallel_for(0, row_blocks * column_blocks, [&](int block) {
+    const int cd_0 = (block / column_blocks) * kBlockRows;
+    const int rows = std::min(kBlockRows, out_count - cd_0);
+    const int k_0 = (block % column_blocks) * kBlockColumns;
+    const int width = std::min(kBlockColumns, field.columns - k_0);
+    alignas(32) float sum[2][kBlockRows][kBlockColumns] = {};
+    for (int ab = 0; ab < field.in_count; ++ab) {
+      const float* in = field.values.data() + static_cast<std::size_t>(ab) * field.columns + k_0;
+      for (int m = 0; m < 2; ++m) {
+        const std::vector<float>& w = m == 0 ? w_r : w_m;
+        for (int c = 0; c < rows; ++c) {
+          const float weight = w[static_cast<std::size_t>(cd_0 + c) * field.in_count + ab];
+          if (weight == 0.0f) continue;
+          float* out = sum[m][c];
+          for (int k = 0; k < width; ++k) out[k] += weight * in[k];
+        }
+      }
+    }
+    for (int m = 0; m < 2; ++m) {
+      std::vector<float>& g = m == 0 ? g_r : g_m;
+      for (int c = 0; c < rows; ++c) {
+        std::copy(sum[m][c], sum[m][c] + width, g.data() + static_cast<std::size_t>(cd_0 + c) * field.columns + k_0);
+      }
+    }
+  });
 }
 
 // The ground node's irradiance from a field, per sun-zenith node.
@@ -241,8 +590,9 @@ void WriteLogTable(const Grid& grid, const std::vector<float>& g, shared::Textur
 std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
                                        const Source4dTables& tables, int order, bool shared_geometry) {
   const Grid grid{atmosphere, settings};
-  if (order >= 2 && shared_geometry) {
-    return GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
+  if (shared_geometry) {
+    return order == 1 ? GatherSingleRadiance(grid, tables.transmittance).values
+                      : GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
   }
   return GatherRadiance(grid, tables.transmittance, tables.rayleigh, tables.mie, tables.ground_irradiance, order).values;
 }
@@ -260,7 +610,7 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
   // The sub-samples of every cell: direction, solid angle (both mirror halves together are
   // handled per output), and the four hat weights.
   struct SubSample {
-    double cos_theta, sin_theta, phi, solid_angle;
+    double cos_theta, sin_theta, phi, cos_phi, sin_phi, solid_angle;
     int node[4];
     double hat[4];
   };
@@ -276,6 +626,8 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
           sub.cos_theta = std::cos(theta);
           sub.sin_theta = std::sin(theta);
           sub.phi = (b + fv) * d_phi;
+          sub.cos_phi = std::cos(sub.phi);
+          sub.sin_phi = std::sin(sub.phi);
           sub.solid_angle = sub.sin_theta * d_theta * d_phi / (kSubSamples * kSubSamples);
           const int n00 = a * s.gather_azimuths + b;
           sub.node[0] = n00;
@@ -305,6 +657,8 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
     const double phi_v = NodeAngle(d, s.phi_size, shared::kPi);
     const double cv = std::cos(theta_v);
     const double sv = std::sin(theta_v);
+    const double cos_phi_v = std::cos(phi_v);
+    const double sin_phi_v = std::sin(phi_v);
     std::vector<double> wr(q.in_count, 0.0);
     std::vector<double> wm(q.in_count, 0.0);
     double sum_r = 0.0;
@@ -313,8 +667,10 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
       double pr = 0.0;
       double pm = 0.0;
       for (int mirror = 0; mirror < 2; ++mirror) {
-        const double dphi = mirror == 0 ? sub.phi - phi_v : sub.phi + phi_v;
-        const double nu = shared::ClampCosine(cv * sub.cos_theta + sv * sub.sin_theta * std::cos(dphi));
+        // cos(phi - phi_v) and cos(phi + phi_v), the view and its mirror image.
+        const double cos_dphi = mirror == 0 ? sub.cos_phi * cos_phi_v + sub.sin_phi * sin_phi_v
+                                            : sub.cos_phi * cos_phi_v - sub.sin_phi * sin_phi_v;
+        const double nu = shared::ClampCosine(cv * sub.cos_theta + sv * sub.sin_theta * cos_dphi);
         pr += shared::GetRayleighPhase(atmosphere, nu);
         pm += shared::GetMiePhase(atmosphere, nu);
       }
@@ -370,14 +726,13 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
   start = Clock::now();
   GatherField field;
   if (s.orders >= 2) {
-    field = GatherRadiance(grid, tables.transmittance, order_r, order_m, order_irradiance, 1);
+    field = GatherSingleRadiance(grid, tables.transmittance);
     note("source4d_gather_1", start);
   }
   for (int n = 2; n <= s.orders; ++n) {
     start = Clock::now();
     previous_r = std::move(g_r);
-    g_r = Convolve(q.rayleigh, q.out_count, field);
-    g_m = Convolve(q.mie, q.out_count, field);
+    Convolve(q.rayleigh, q.mie, q.out_count, field, g_r, g_m);
     for (std::size_t k = 0; k < table_size; ++k) {
       sum_r[k] += g_r[k];
       sum_m[k] += g_m[k];

@@ -76,7 +76,9 @@ struct Source4dQuadrature {
 // with `tables` as the order below (exposed for tests): order 1 from single scattering; order
 // n >= 2 by marching `tables.rayleigh`/`mie` and reflecting `tables.ground_irradiance`, either
 // by the general per-ray march (shared::IntegrateSource4dRadianceInside) or, with
-// `shared_geometry`, by the path that does the sun-independent work once per ray.
+// `shared_geometry`, by the paths that the builder uses, which do the sun-independent work once
+// per ray (order 1: for the (sun node, azimuth) pairs without a shadow edge on the ray; orders
+// >= 2: one 2D slice of the tables per step, float exp).
 std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
                                        const Source4dTables& tables, int order, bool shared_geometry);
 
