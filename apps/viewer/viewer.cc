@@ -412,7 +412,24 @@ void CopyKnobs(const ViewState& from, ViewState& to) {
   to.ground_radius_m = from.ground_radius_m;
 }
 
-// Elek's table steps per frame run until this much time went on them (then the frame is drawn).
+// The options of model source4d (Source4dModelSettings::FromOptions's keys) for `settings`: the
+// panel's edits and a screenshot's atmo:modelOptions.
+ModelOptions Source4dOptions(const Source4dModelSettings& settings) {
+  const cpu::Source4dSettings& t = settings.tables;
+  ModelOptions options;
+  options["table"] = cli::Format("%dx%dx%dx%d", t.r_size, t.mu_size, t.mu_s_size, t.phi_size);
+  options["gather"] = cli::Format("%dx%d", t.gather_zeniths, t.gather_azimuths);
+  options["gather_samples"] = std::to_string(t.gather_samples);
+  options["orders"] = std::to_string(t.orders);
+  options["tail"] = t.tail ? "on" : "off";
+  options["samples"] = std::to_string(settings.samples);
+  options["transmittance_lut"] = cli::Format("%dx%d", t.transmittance_lut.x, t.transmittance_lut.y);
+  options["transmittance_samples"] = std::to_string(t.transmittance_samples);
+  return options;
+}
+
+// Elek's (and source4d's) table steps per frame run until this much time went on them (then the
+// frame is drawn).
 constexpr double kBuildBudgetMs = 25.0;
 // The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
 // 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
@@ -465,6 +482,8 @@ class Viewer {
   bool settings_changed_ = false;  // the panel's hillaire options moved
   HillaireSettings settings_;
   ElekSettings elek_settings_;     // --option of --model elek, else elek's defaults
+  Source4dModelSettings source4d_settings_;        // --option of --model source4d, then the panel's
+  Source4dModelSettings shown_source4d_settings_;  // of the shown sky (to go back to on an error)
   ModelOptions reference_options_;  // --option and --seed of --model reference
   std::string shown_model_;        // the model of sky_
   ViewState state_;
@@ -536,8 +555,8 @@ class Viewer {
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   const std::vector<std::string>& models = ViewerModelNames();
   if (std::find(models.begin(), models.end(), options_.common.model) == models.end()) {
-    throw Error("atmo-viewer shows models hillaire, elek, simple and reference (got --model " + options_.common.model +
-                ")");
+    throw Error("atmo-viewer shows models hillaire, elek, simple, reference and source4d (got --model " +
+                options_.common.model + ")");
   }
   if (options_.common.backend != "cpu" && options_.common.backend != "gl") {
     throw Error("unknown backend '" + options_.common.backend + "'");
@@ -572,6 +591,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   defaults.options.clear();
   settings_ = cli::GlHillaireSettings(model == "hillaire" ? options_.common : defaults);
   elek_settings_ = cli::GlElekSettings(model == "elek" ? options_.common : defaults);
+  source4d_settings_ = cli::GlSource4dSettings(model == "source4d" ? options_.common : defaults);
+  shown_source4d_settings_ = source4d_settings_;
   if (model == "reference") {
     reference_options_ = cli::ParseModelOptions(options_.common.options);
     ReferenceSettings::FromOptions(reference_options_);  // a bad option is refused now
@@ -611,7 +632,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   current_ = base_;
   compare_model_ = options_.compare;
   if (!compare_model_.empty() && std::find(models.begin(), models.end(), compare_model_) == models.end()) {
-    throw Error("--compare takes hillaire, elek, simple or reference (got " + compare_model_ + ")");
+    throw Error("--compare takes hillaire, elek, simple, reference or source4d (got " + compare_model_ + ")");
   }
   if (options_.compare_view != "split" && options_.compare_view != "difference") {
     throw Error("--compare-view takes split or difference (got " + options_.compare_view + ")");
@@ -693,6 +714,7 @@ std::unique_ptr<Sky> Viewer::MakeSky(const std::string& model, const AtmosphereP
   }
   request.hillaire = settings_;
   request.elek = elek_settings_;
+  request.source4d = source4d_settings_;
   request.reference_options = reference_options_;
   request.reference_spp = options_.render.spp.value_or(0);
   request.reference_divisor = options_.reference_divisor;
@@ -761,6 +783,15 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
     }
     if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
       set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
+  }
+  if (shown_model_ == "source4d") {
+    // The panel's source4d options where they differ from the flags'.
+    const ModelOptions flags = Source4dOptions(cli::GlSource4dSettings(common));
+    for (const auto& [key, value] : Source4dOptions(shown_source4d_settings_)) {
+      if (flags.at(key) == value) continue;
+      std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+      common.options.push_back(key + "=" + value);
+    }
   }
   command.width = image.width;
   command.height = image.height;
@@ -841,6 +872,7 @@ void Viewer::UpdateSky() {
     current_loaded_ = loaded_;
     current_preset_index_ = preset_index_;
     shown_settings_ = settings_;
+    shown_source4d_settings_ = source4d_settings_;
     settings_changed_ = false;
     shown_knobs_ = state_;
     UpdateDisplayWeights();
@@ -858,6 +890,7 @@ void Viewer::UpdateSky() {
     loaded_ = current_loaded_;
     preset_index_ = current_preset_index_;
     settings_ = shown_settings_;
+    source4d_settings_ = shown_source4d_settings_;
     settings_changed_ = false;
     state_.model = shown_model_;
     requested_model_ = shown_model_;
@@ -1022,7 +1055,7 @@ void Viewer::DrawPanels() {
     // The model: a new one is built while the last one stays on screen (elek: a progress bar).
     const std::vector<std::string>& models = ViewerModelNames();
     int index = static_cast<int>(std::find(models.begin(), models.end(), state_.model) - models.begin());
-    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0")) state_.model = models[index];
+    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0source4d\0")) state_.model = models[index];
     if (pending_ != nullptr) {
       const std::string label = "building " + pending_model_;
       ImGui::ProgressBar(static_cast<float>(pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
@@ -1126,6 +1159,46 @@ void Viewer::DrawPanels() {
       ++settings_generation_;
     }
   }
+  if (state_.model == "source4d" && ImGui::CollapsingHeader("source4d options")) {
+    // Applied on Enter (a typed value) or a +/- click; every table again, the last sky shown
+    // until they are built. Values the model refuses are shown as the error and not applied.
+    const cpu::Source4dSettings& t = source4d_settings_.tables;
+    int table[4] = {t.r_size, t.mu_size, t.mu_s_size, t.phi_size};
+    int gather[2] = {t.gather_zeniths, t.gather_azimuths};
+    int gather_samples = t.gather_samples;
+    int orders = t.orders;
+    bool tail = t.tail;
+    int samples = source4d_settings_.samples;
+    constexpr ImGuiInputTextFlags kEnter = ImGuiInputTextFlags_EnterReturnsTrue;
+    bool changed = ImGui::InputInt4("table r mu mu_s phi", table, kEnter);
+    changed |= ImGui::InputInt2("gather zeniths azimuths", gather, kEnter);
+    changed |= ImGui::InputInt("gather_samples", &gather_samples, 1, 8, kEnter);
+    changed |= ImGui::InputInt("orders", &orders, 1, 1, kEnter);
+    changed |= ImGui::Checkbox("tail", &tail);
+    changed |= ImGui::InputInt("samples (per pixel)", &samples, 1, 8, kEnter);
+    if (changed) {
+      ModelOptions options = Source4dOptions(source4d_settings_);
+      options["table"] = cli::Format("%dx%dx%dx%d", table[0], table[1], table[2], table[3]);
+      options["gather"] = cli::Format("%dx%d", gather[0], gather[1]);
+      options["gather_samples"] = std::to_string(gather_samples);
+      options["orders"] = std::to_string(orders);
+      options["tail"] = tail ? "on" : "off";
+      options["samples"] = std::to_string(samples);
+      try {
+        const Source4dModelSettings next = Source4dModelSettings::FromOptions(options);
+        if (Source4dOptions(next) != Source4dOptions(source4d_settings_)) {
+          source4d_settings_ = next;
+          settings_changed_ = true;
+          ++settings_generation_;
+        }
+      } catch (const Error& error) {
+        status_ = error.what();
+      }
+    }
+    if (pending_ != nullptr && pending_model_ == "source4d") {
+      ImGui::Text("building the tables: %.0f %%", 100.0 * pending_->progress());
+    }
+  }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Checkbox("auto-exposure", &state_.auto_exposure);
     float ev = static_cast<float>(state_.auto_exposure ? metered_ev100_ : state_.ev100);
@@ -1140,12 +1213,12 @@ void Viewer::DrawPanels() {
   }
   if (ImGui::CollapsingHeader("Compare", ImGuiTreeNodeFlags_DefaultOpen)) {
     // Model B beside or against the shown model A, on the same atmosphere and view.
-    const char* names[] = {"none", "hillaire", "elek", "simple", "reference"};
+    const char* names[] = {"none", "hillaire", "elek", "simple", "reference", "source4d"};
     int index = 0;
-    for (int i = 1; i < 5; ++i) {
+    for (int i = 1; i < 6; ++i) {
       if (compare_model_ == names[i]) index = i;
     }
-    if (ImGui::Combo("compare with", &index, names, 5)) compare_model_ = index == 0 ? "" : names[index];
+    if (ImGui::Combo("compare with", &index, names, 6)) compare_model_ = index == 0 ? "" : names[index];
     ImGui::RadioButton("split", &compare_view_, 1);
     ImGui::SameLine();
     ImGui::RadioButton("difference (B - A) / A", &compare_view_, 2);

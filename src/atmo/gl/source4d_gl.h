@@ -58,9 +58,12 @@ Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::A
 // The same tables built a step at a time, for a program that must keep drawing while they are
 // computed (atmo-viewer): every pass of ComputeSource4dTablesGl, in the same order and with the
 // same results, but the gathering and the matrix products (the passes that take the time) in
-// steps of `groups_per_step` work groups of 64 invocations (0: whole passes, what
-// ComputeSource4dTablesGl does); the CPU's transmittance table and quadrature matrices are a step
-// each. Each Step() runs one step (its time under the pass's name into `timings`); after the last,
+// steps of `groups_per_step` work groups of 64 invocations for the gathering and 1/8 of that for
+// the products, whose invocations cost ~10x more (0: whole passes, what ComputeSource4dTablesGl
+// does). The CPU's transmittance table and quadrature matrices (~0.1 s) run on a thread of their
+// own from the constructor on (with groups_per_step 0: in the first step); the first step uploads
+// them once ready and returns at once (nothing done, progress unchanged) while they are not.
+// Each Step() runs one step (its time under the pass's name into `timings`); after the last,
 // done() and Take() gives the tables. Between steps the caller may run other passes on the
 // context: every step sets the uniforms and binds what it uses. Throws as ComputeSource4dTablesGl.
 class Source4dTablesBuilder {
