@@ -86,6 +86,7 @@ class HillaireSky final : public Sky {
   }
   const gl::GpuTexture& frame_texture(std::size_t batch) const override { return sky_.frame_texture(batch); }
   Image ReadFrame() const override { return sky_.ReadFrame(); }
+  const gl::HillaireGl* hillaire_gl() const override { return &sky_; }
   // As `atmo render --backend gl` (gl::RenderHillaireGl): the frame pass without the disc, read
   // back, the disc integrated over the pixels on the host.
   Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {

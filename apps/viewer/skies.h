@@ -37,6 +37,10 @@
 #include "models/hillaire_model.h"
 #include "models/source4d_model.h"
 
+namespace atmo::gl {
+class HillaireGl;
+}  // namespace atmo::gl
+
 namespace atmo::viewer {
 
 // The model names of the viewer, in the panel's order.
@@ -82,6 +86,8 @@ class Sky {
   virtual std::string Status() const { return ""; }
   // Whether the shown estimate is final (reference: reference_spp reached); true for the others.
   virtual bool Converged() const { return true; }
+  // Model hillaire's GL sky (the viewer's fused frame-and-display pass runs its frame code), else null.
+  virtual const gl::HillaireGl* hillaire_gl() const { return nullptr; }
 };
 
 std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& request);

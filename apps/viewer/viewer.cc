@@ -29,6 +29,8 @@
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "gl/program.h"
+#include "gl/shader_sources.h"
 #include "models/reference_model.h"
 #include "skies.h"
 #include "physics/shared_parameters.h"
@@ -169,6 +171,9 @@ float DifferenceCoordinate(float a, float b) {
   if (abs(d) < 1e-3) return 0.0;
   return sign(d) * clamp((log(abs(d)) / log(10.0) + 3.0) / 3.0, 0.0, 1.0);
 }
+)glsl";
+
+constexpr const char* kDisplayMain = R"glsl(
 void main() {
   ivec2 texel = Texel(frame_size);
 #if VIEW == 2
@@ -193,6 +198,19 @@ void main() {
   colour = vec4(ToneMap(rgb), 1.0);
 #endif
 #endif
+}
+)glsl";
+
+// The fused pass (DisplayPass::DrawFused): hillaire's frame pass per pixel in the fragment shader
+// (gl::HillaireGl::FrameFunctionSource's GetFrameTexel at the pixel's centre, row 0 at the top, as
+// the frame pass's invocation of the same pixel computes it), then the display's tone mapping of
+// one batch: the frame texture is neither written nor read.
+constexpr const char* kFusedMain = R"glsl(
+void main() {
+  vec2 frag_coord = vec2(gl_FragCoord.x, float(window_size.y) - gl_FragCoord.y);
+  vec3 rgb = vec3(0.0);
+  rgb += weights[0] * GetFrameTexel(frag_coord).rgb;
+  colour = vec4(ToneMap(rgb), 1.0);
 }
 )glsl";
 
@@ -237,6 +255,29 @@ class DisplayPass {
     bool split_line = false;
   };
 
+  // Hillaire's frame and the tone mapping in one pass, straight into the window (one batch of
+  // three channels, one sky, no false colour): the pixels of RenderFrame then Draw, without the
+  // frame texture's write and read (the display pass costs about a third of the frame pass on
+  // llvmpipe, docs/performance.md).
+  void DrawFused(const gl::HillaireGl& sky, const shared::CameraParameters& camera, const RadianceTerms& terms,
+                 const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width, int height) const {
+    glViewport(0, 0, width, height);
+    const gl::ComputeProgram& program =
+        FusedProgram(sky, static_cast<int>(mapping.op), mapping.per_channel, sky.uses_sky_view());
+    sky.SetFrameUniforms(program, camera, terms, 0);
+    program.Use();
+    const GLuint id = program.id();
+    glUniformMatrix3fv(glGetUniformLocation(id, "weights"), 1, GL_FALSE, &weights[0][0][0]);
+    glUniform1f(glGetUniformLocation(id, "exposure"), static_cast<float>(mapping.exposure));
+    if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
+    glBindTextureUnit(8, encode_table_);
+    glUniform2i(glGetUniformLocation(id, "window_size"), width, height);
+    glBindVertexArray(vao_);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glUseProgram(0);
+  }
+
   void Draw(const Sky& sky, const Sky* compared, const View& view, const std::vector<glm::mat3>& weights,
             const ToneMapping& mapping, int width, int height) const {
     glViewport(0, 0, width, height);
@@ -268,6 +309,21 @@ class DisplayPass {
   }
 
  private:
+  // The fused program for a tone curve and the frame's sky function (sky-view table or march).
+  const gl::ComputeProgram& FusedProgram(const gl::HillaireGl& sky, int tone_op, bool per_channel,
+                                         bool sky_view) const {
+    const int key = (sky_view ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
+    const auto found = fused_programs_.find(key);
+    if (found != fused_programs_.end()) return *found->second;
+    const std::string main = sky.FrameFunctionSource() + "\n#define TONE_OP " + std::to_string(tone_op) +
+                             "\n#define PER_CHANNEL " + std::to_string(per_channel ? 1 : 0) +
+                             "\n#define SKY_A_SUM\n#define SKY_B_SUM\n" + kDisplayFragmentShader + kFusedMain;
+    const std::span<const std::string_view> files = gl::HillaireGl::FrameSharedFiles();
+    auto program = std::make_unique<gl::ComputeProgram>(kDisplayVertexShader,
+                                                        gl::BuildComputeShaderSource(files, main), "fused display",
+                                                        gl::DescribeSourceStrings(files));
+    return *fused_programs_.emplace(key, std::move(program)).first->second;
+  }
   // The program for a batch count, tone curve and mode, compiled on first use.
   GLuint Program(int batches, int tone_op, bool per_channel, int mode, bool false_colour) const {
     const int key = batches * 10000 + mode * 1000 + (false_colour ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
@@ -285,7 +341,7 @@ class DisplayPass {
                                std::to_string(per_channel ? 1 : 0) + "\n#define VIEW " + std::to_string(mode) +
                                "\n#define FALSE_COLOUR " + std::to_string(false_colour ? 1 : 0) +
                                "\n#define SKY_A_SUM " + sum_a + "\n#define SKY_B_SUM " + sum_b + "\n" +
-                               kDisplayFragmentShader;
+                               kDisplayFragmentShader + kDisplayMain;
     const GLuint vs = CompileShader(GL_VERTEX_SHADER, kDisplayVertexShader);
     const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, source.c_str());
     const GLuint program = glCreateProgram();
@@ -315,6 +371,7 @@ class DisplayPass {
   }
 
   mutable std::map<int, GLuint> programs_;
+  mutable std::map<int, std::unique_ptr<gl::ComputeProgram>> fused_programs_;
   GLuint vao_ = 0;
   GLuint encode_table_ = 0;
   mutable std::optional<DisplayTransfer> encoded_transfer_;
@@ -1366,13 +1423,19 @@ int Viewer::Run() {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
+      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
+      const bool meter = state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame();
+      // Hillaire alone in RGB, tone-mapped, not metered in this frame: its frame pass runs in the
+      // display's fragment shader (DrawFused), no frame texture.
+      const gl::HillaireGl* fused = compare_sky_ == nullptr && !false_colour_ && !meter && sky_->batch_count() == 1
+                                        ? sky_->hillaire_gl()
+                                        : nullptr;
+      if (fused == nullptr) sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       if (compare_sky_ != nullptr) {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       }
-      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
-      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
-      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
+      if (meter) {
         const Image frame = sky_->ReadFrame();
         metered_ = true;
         const Image srgb =
@@ -1382,7 +1445,13 @@ int Viewer::Run() {
         metered_ev100_ = AutoExposureEv100(srgb);
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
-      {
+      if (fused != nullptr) {
+        std::optional<ScopedPassTimer> timer;
+        if (timed) timer.emplace(timings_, "frame_and_display");
+        display_->DrawFused(*fused, ToSharedCamera(ViewCamera(state_, width, height)), terms, weights_, mapping_,
+                            width, height);
+        if (timed) glFinish();
+      } else {
         std::optional<ScopedPassTimer> timer;
         if (timed) timer.emplace(timings_, "display");
         DisplayPass::View view;
