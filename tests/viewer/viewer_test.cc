@@ -216,6 +216,9 @@ TEST_F(Viewer, WindowShowsWhatThePngShows) {
     const std::string flags = std::string(kSameFlags) + " " + display + " --no-sun-disc --no-dither";
     const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot window.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;
+    // At a fixed EV100 hillaire's frame pass runs in the display's fragment shader (one pass,
+    // DrawFused): what is compared below is that pass's window.
+    EXPECT_NE(v.out.find("frame_and_display"), std::string::npos) << v.out;
     const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     int vw = 0, vh = 0, rw = 0, rh = 0;
