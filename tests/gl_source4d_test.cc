@@ -361,6 +361,55 @@ TEST(GlSource4d, GpuTablesMatchCpu) {
   ExpectGpuTablesMatch(context, "atmosphere-plus", /*tail=*/false);
 }
 
+// The stepped builder (atmo-viewer's) gives the tables of the whole passes bit for bit, with
+// the gathering cut into steps of 3 work groups (the products 1), the CPU's part on its own
+// thread, and another builder (another
+// atmosphere, 4 orders, no tail) stepped in between, on the same programs and units; its
+// progress rises from 0 to 1.
+TEST(GlSource4d, SteppedBuilderEqualsWholePasses) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const Source4dModelSettings a = SmallSettings();
+  Source4dModelSettings b = SmallSettings();
+  b.tables.orders = 4;
+  b.tables.tail = false;
+  const shared::AtmosphereParameters km_a = ToSharedParameters(Preset("earth"), 0, 1000.0);
+  const shared::AtmosphereParameters km_b = ToSharedParameters(Preset("atmosphere-plus"), 0, 1000.0);
+  const Source4dTablesGl whole_a = ComputeSource4dTablesGl(context, km_a, a.tables);
+  const Source4dTablesGl whole_b = ComputeSource4dTablesGl(context, km_b, b.tables);
+  Source4dTablesBuilder builder_a(context, km_a, a.tables, /*groups_per_step=*/3);
+  Source4dTablesBuilder builder_b(context, km_b, b.tables, /*groups_per_step=*/3);
+  EXPECT_EQ(builder_a.progress(), 0.0);
+  int steps = 0;
+  double last_progress = 0.0;
+  bool rising = true;
+  while (!builder_a.done() || !builder_b.done()) {
+    if (!builder_a.done()) {
+      builder_a.Step();
+      // A step that waited for the CPU's part leaves the progress as it was.
+      rising = rising && builder_a.progress() >= last_progress;
+      if (builder_a.progress() > last_progress) ++steps;
+      last_progress = builder_a.progress();
+    }
+    builder_b.Step();
+  }
+  EXPECT_TRUE(rising);
+  EXPECT_EQ(builder_a.progress(), 1.0);
+  // Gathering 8 x 16 x 85 rays is 170 work groups: 57 steps per order alone.
+  EXPECT_GT(steps, 2 * 57);
+  std::printf("stepped source4d builder: %d steps\n", steps);
+  const auto expect_same = [](const Source4dTablesGl& stepped, const Source4dTablesGl& whole) {
+    EXPECT_EQ(stepped.mu_s_size, whole.mu_s_size);
+    EXPECT_EQ(stepped.rayleigh.Download3D().texels, whole.rayleigh.Download3D().texels);
+    EXPECT_EQ(stepped.mie.Download3D().texels, whole.mie.Download3D().texels);
+    EXPECT_EQ(stepped.ground_irradiance.Download2D().texels, whole.ground_irradiance.Download2D().texels);
+    EXPECT_EQ(stepped.transmittance.Download2D().texels, whole.transmittance.Download2D().texels);
+  };
+  expect_same(builder_a.Take(), whole_a);
+  expect_same(builder_b.Take(), whole_b);
+  // The two atmospheres' tables differ (the check above can fail).
+  EXPECT_NE(whole_a.rayleigh.Download3D().texels, whole_b.rayleigh.Download3D().texels);
+}
+
 using ::atmo::testing::Lines;
 using ::atmo::testing::ReadFile;
 using ::atmo::testing::Split;

@@ -24,6 +24,7 @@
 #include "gl/context.h"
 #include "models/elek_model.h"
 #include "models/hillaire_model.h"
+#include "models/source4d_model.h"
 #endif
 
 namespace atmo::cli {
@@ -53,9 +54,11 @@ ModelOptions ParseModelOptions(const std::vector<std::string>& options);
 // (`command_has_gl` false) or a model other than hillaire, elek and source4d.
 void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 #ifdef ATMO_HAVE_GL
-// The --option settings of models hillaire and elek (the "seed" option dropped, as on the CPU).
+// The --option settings of models hillaire, elek and source4d (the "seed" option dropped, as on
+// the CPU).
 HillaireSettings GlHillaireSettings(const CommonOptions& common);
 ElekSettings GlElekSettings(const CommonOptions& common);
+Source4dModelSettings GlSource4dSettings(const CommonOptions& common);
 // Renders model hillaire, elek or source4d on the gl backend (--option settings as for the CPU
 // model), each pass's GPU time into `timings`: every table and the frame are GPU passes, except
 // source4d's transmittance table and quadrature matrices, computed on the CPU (times as cpu_NAME).

@@ -80,15 +80,17 @@ ElekSettings GlElekSettings(const CommonOptions& common) {
   return ElekSettings::FromOptions(DeterministicModelOptions(common));
 }
 
+Source4dModelSettings GlSource4dSettings(const CommonOptions& common) {
+  return Source4dModelSettings::FromOptions(DeterministicModelOptions(common));
+}
+
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
                  const RenderSettings& settings, PassTimings* timings) {
   if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
   if (common.model == "source4d") {
     // The tables and the frame on the GPU; the transmittance table and the quadrature matrices on
     // the CPU (their times as cpu_NAME).
-    return gl::RenderSource4dGl(context, parameters,
-                                Source4dModelSettings::FromOptions(DeterministicModelOptions(common)), settings,
-                                timings);
+    return gl::RenderSource4dGl(context, parameters, GlSource4dSettings(common), settings, timings);
   }
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }

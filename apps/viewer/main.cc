@@ -1,5 +1,5 @@
-// atmo-viewer: the sky of models hillaire, elek, simple and reference live in a window, on the GL
-// backend (docs/viewer.md).
+// atmo-viewer: the sky of models hillaire, elek, simple, reference and source4d live in a window,
+// on the GL backend (docs/viewer.md).
 //
 //   atmo-viewer [--preset P | --config F.json] [--option K=V] [render flags of `atmo render`:
 //               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
@@ -22,7 +22,8 @@
 
 int main(int argc, char** argv) {
   atmo::InstallInterruptHandlers("atmo-viewer");
-  CLI::App app{"atmo-viewer: the sky of hillaire, elek, simple or reference live in a window (docs/viewer.md)",
+  CLI::App app{"atmo-viewer: the sky of hillaire, elek, simple, reference or source4d live in a window "
+               "(docs/viewer.md)",
                "atmo-viewer"};
   app.set_version_flag("--version", std::string("atmo-viewer ") + ATMO_VERSION);
   atmo::viewer::ViewerOptions options;
@@ -57,7 +58,8 @@ int main(int argc, char** argv) {
                  "model reference renders at the window's size divided by this (default 4)")
       ->check(CLI::Range(1, 64));
   app.add_option("--compare", options.compare,
-                 "compare mode: a second model (hillaire, elek, simple, reference) on the same atmosphere and view");
+                 "compare mode: a second model (hillaire, elek, simple, reference, source4d) on the same "
+                 "atmosphere and view");
   app.add_option("--compare-view", options.compare_view,
                  "split (the first model left of the split, the second right) or difference ((B - A) / A of "
                  "luminance in false colour)");

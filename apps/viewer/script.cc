@@ -108,8 +108,8 @@ void SetViewValue(ViewState& state, std::string_view key, std::string_view value
     return;
   }
   if (key == "model") {
-    if (value != "hillaire" && value != "elek" && value != "simple" && value != "reference") {
-      throw Error("unknown model '" + std::string(value) + "' (known: hillaire, elek, simple, reference)");
+    if (value != "hillaire" && value != "elek" && value != "simple" && value != "reference" && value != "source4d") {
+      throw Error("unknown model '" + std::string(value) + "' (known: hillaire, elek, simple, reference, source4d)");
     }
     state.model = std::string(value);
     return;

@@ -18,6 +18,7 @@
 #include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
 #include "gl/simple_gl.h"
+#include "gl/source4d_gl.h"
 #include "models/reference_model.h"
 #include "models/simple_model.h"
 #include "physics/shared_parameters.h"
@@ -85,6 +86,7 @@ class HillaireSky final : public Sky {
   }
   const gl::GpuTexture& frame_texture(std::size_t batch) const override { return sky_.frame_texture(batch); }
   Image ReadFrame() const override { return sky_.ReadFrame(); }
+  const gl::HillaireGl* hillaire_gl() const override { return &sky_; }
   // As `atmo render --backend gl` (gl::RenderHillaireGl): the frame pass without the disc, read
   // back, the disc integrated over the pixels on the host.
   Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
@@ -185,6 +187,95 @@ class ElekSky final : public Sky {
   std::vector<shared::AtmosphereParameters> km_;
   std::unique_ptr<gl::ElekTablesBuilder> builder_;  // of batch tables_.size()
   std::vector<gl::ElekTablesGl> tables_;
+  std::vector<gl::GpuTexture> frames_;
+  double r_km_ = 6360.0;
+  glm::dvec3 sun_{0.0, 0.0, 1.0};
+  bool has_alpha_ = false;
+};
+
+// Work groups (64 invocations) per source4d builder step: a few ms of the default gathering
+// (64 steps of 24 samples per invocation) on llvmpipe with 2 threads.
+constexpr int kSource4dGroupsPerStep = 16;
+
+// Source4d: per batch a gl::Source4dTablesBuilder run a few steps per frame (as elek's), then
+// RunSource4dFramePass, the passes of `atmo render --backend gl --model source4d`.
+class Source4dSky final : public Sky {
+ public:
+  Source4dSky(const gl::Context& context, const SkyRequest& request)
+      : context_(context), parameters_(request.parameters), model_(parameters_, request.source4d) {
+    for (std::size_t b = 0; b < model_.batches().size(); ++b) km_.push_back(ToSharedParameters(parameters_, b, 1000.0));
+    // The settings are checked (and the programs compiled) now, not in the first frame.
+    builder_ = std::make_unique<gl::Source4dTablesBuilder>(context_, km_[0], model_.settings().tables,
+                                                           kSource4dGroupsPerStep);
+  }
+  std::size_t batch_count() const override { return km_.size(); }
+  bool Build(double budget_ms, PassTimings* timings) override {
+    const auto start = Clock::now();
+    while (tables_.size() < km_.size()) {
+      if (builder_ == nullptr) {
+        builder_ = std::make_unique<gl::Source4dTablesBuilder>(context_, km_[tables_.size()],
+                                                               model_.settings().tables, kSource4dGroupsPerStep);
+      }
+      builder_->Step(timings);
+      if (builder_->done()) {
+        tables_.push_back(builder_->Take());
+        builder_.reset();
+      }
+      if (MillisecondsSince(start) >= budget_ms) break;
+    }
+    return tables_.size() == km_.size();
+  }
+  double progress() const override {
+    const double partial = builder_ != nullptr ? builder_->progress() : 0.0;
+    return (static_cast<double>(tables_.size()) + partial) / static_cast<double>(km_.size());
+  }
+  void Recompute(PassTimings* timings) override {
+    builder_.reset();
+    tables_.clear();
+    for (const shared::AtmosphereParameters& km : km_)
+      tables_.push_back(gl::ComputeSource4dTablesGl(context_, km, model_.settings().tables, timings));
+  }
+  void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool, PassTimings*) override {
+    const glm::dvec3 sun = glm::normalize(SunDirection(elevation_deg, azimuth_deg));
+    model_.View(altitude_m, sun);  // what the CPU model refuses (below the ground), as atmo render
+    r_km_ = (parameters_.ground_radius_m + altitude_m) / 1000.0;
+    sun_ = sun;
+  }
+  void RenderFrame(const Camera& camera, const RadianceTerms& terms, PassTimings* timings) override {
+    const shared::CameraParameters shared_camera = ToSharedCamera(camera);
+    SizeFrames(frames_, km_.size(), shared_camera);
+    has_alpha_ = camera.kind == CameraKind::kFisheye;
+    gl::GpuPassTimer timer(timings);
+    for (std::size_t b = 0; b < km_.size(); ++b) {
+      gl::RunSource4dFramePass(context_, km_[b], tables_.at(b), model_.settings().samples, shared_camera, r_km_, sun_,
+                               terms.ground, terms.sun_disc, BatchValues(parameters_.solar_irradiance, b),
+                               frames_[b]);
+    }
+    timer.Stop(FrameName(shared_camera));
+  }
+  const gl::GpuTexture& frame_texture(std::size_t batch) const override { return frames_.at(batch); }
+  Image ReadFrame() const override { return ReadFrames(frames_, parameters_.channel_count(), has_alpha_); }
+  // As `atmo render --backend gl --model source4d` (gl::RenderSource4dGl).
+  Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
+    RadianceTerms terms = render.terms;
+    terms.sun_disc = false;
+    RenderFrame(render.camera, terms, nullptr);
+    Image image = ReadFrame();
+    if (render.terms.sun_disc) {
+      std::vector<shared::Texture2D> transmittance;
+      for (const gl::Source4dTablesGl& t : tables_) transmittance.push_back(t.transmittance.Download2D());
+      gl::AddSunDiscOnHost(parameters_, transmittance, render, image);
+    }
+    return image;
+  }
+
+ private:
+  const gl::Context& context_;
+  AtmosphereParameters parameters_;
+  Source4dModel model_;  // checks the parameters and the settings; no tables of its own
+  std::vector<shared::AtmosphereParameters> km_;
+  std::unique_ptr<gl::Source4dTablesBuilder> builder_;  // of batch tables_.size()
+  std::vector<gl::Source4dTablesGl> tables_;
   std::vector<gl::GpuTexture> frames_;
   double r_km_ = 6360.0;
   glm::dvec3 sun_{0.0, 0.0, 1.0};
@@ -404,7 +495,7 @@ class ReferenceSky final : public Sky {
 }  // namespace
 
 const std::vector<std::string>& ViewerModelNames() {
-  static const std::vector<std::string> names = {"hillaire", "elek", "simple", "reference"};
+  static const std::vector<std::string> names = {"hillaire", "elek", "simple", "reference", "source4d"};
   return names;
 }
 
@@ -413,7 +504,8 @@ std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& reque
   if (request.model == "elek") return std::make_unique<ElekSky>(context, request);
   if (request.model == "simple") return std::make_unique<SimpleSky>(context, request);
   if (request.model == "reference") return std::make_unique<ReferenceSky>(context, request);
-  throw Error("unknown model '" + request.model + "' (atmo-viewer shows hillaire, elek, simple, reference)");
+  if (request.model == "source4d") return std::make_unique<Source4dSky>(context, request);
+  throw Error("unknown model '" + request.model + "' (atmo-viewer shows hillaire, elek, simple, reference, source4d)");
 }
 
 double MedianRelativeStandardError(const Image& radiance, const Image& standard_error) {

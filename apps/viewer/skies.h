@@ -5,6 +5,8 @@
 //   elek       gl::ElekTablesBuilder: the tables a few steps per frame (Build's time budget), so
 //              that the window keeps drawing (the last finished sky) while they are computed.
 //   simple     gl::RunSimpleFramePass: no tables, the closed form per pixel.
+//   source4d   gl::Source4dTablesBuilder: the tables a few steps per frame, as elek's; the frame
+//              pass gl::RunSource4dFramePass.
 //   reference  the CPU path tracer's progressive render (RenderProgressive) on a background
 //              thread at a fraction of the window's size, each finished pass uploaded; restarted
 //              when the view, the camera or the terms change.
@@ -33,6 +35,11 @@
 #include "gl/resources.h"
 #include "models/elek_model.h"
 #include "models/hillaire_model.h"
+#include "models/source4d_model.h"
+
+namespace atmo::gl {
+class HillaireGl;
+}  // namespace atmo::gl
 
 namespace atmo::viewer {
 
@@ -44,6 +51,7 @@ struct SkyRequest {
   AtmosphereParameters parameters;  // the model's (solar_irradiance 1 in physical units)
   HillaireSettings hillaire;        // model hillaire
   ElekSettings elek;                // model elek
+  Source4dModelSettings source4d;   // model source4d
   ModelOptions reference_options;   // model reference (CreateModel's options; seed included)
   std::uint64_t reference_spp = 0;  // reference: paths per pixel to stop at (0: the model's samples)
   int reference_divisor = 4;        // reference: the frame is the window's size / this (at least 1 pixel)
@@ -78,6 +86,8 @@ class Sky {
   virtual std::string Status() const { return ""; }
   // Whether the shown estimate is final (reference: reference_spp reached); true for the others.
   virtual bool Converged() const { return true; }
+  // Model hillaire's GL sky (the viewer's fused frame-and-display pass runs its frame code), else null.
+  virtual const gl::HillaireGl* hillaire_gl() const { return nullptr; }
 };
 
 std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& request);

@@ -29,6 +29,8 @@
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "gl/program.h"
+#include "gl/shader_sources.h"
 #include "models/reference_model.h"
 #include "skies.h"
 #include "physics/shared_parameters.h"
@@ -169,6 +171,9 @@ float DifferenceCoordinate(float a, float b) {
   if (abs(d) < 1e-3) return 0.0;
   return sign(d) * clamp((log(abs(d)) / log(10.0) + 3.0) / 3.0, 0.0, 1.0);
 }
+)glsl";
+
+constexpr const char* kDisplayMain = R"glsl(
 void main() {
   ivec2 texel = Texel(frame_size);
 #if VIEW == 2
@@ -193,6 +198,19 @@ void main() {
   colour = vec4(ToneMap(rgb), 1.0);
 #endif
 #endif
+}
+)glsl";
+
+// The fused pass (DisplayPass::DrawFused): hillaire's frame pass per pixel in the fragment shader
+// (gl::HillaireGl::FrameFunctionSource's GetFrameTexel at the pixel's centre, row 0 at the top, as
+// the frame pass's invocation of the same pixel computes it), then the display's tone mapping of
+// one batch: the frame texture is neither written nor read.
+constexpr const char* kFusedMain = R"glsl(
+void main() {
+  vec2 frag_coord = vec2(gl_FragCoord.x, float(window_size.y) - gl_FragCoord.y);
+  vec3 rgb = vec3(0.0);
+  rgb += weights[0] * GetFrameTexel(frag_coord).rgb;
+  colour = vec4(ToneMap(rgb), 1.0);
 }
 )glsl";
 
@@ -237,6 +255,29 @@ class DisplayPass {
     bool split_line = false;
   };
 
+  // Hillaire's frame and the tone mapping in one pass, straight into the window (one batch of
+  // three channels, one sky, no false colour): the pixels of RenderFrame then Draw, without the
+  // frame texture's write and read (the display pass costs about a third of the frame pass on
+  // llvmpipe, docs/performance.md).
+  void DrawFused(const gl::HillaireGl& sky, const shared::CameraParameters& camera, const RadianceTerms& terms,
+                 const std::vector<glm::mat3>& weights, const ToneMapping& mapping, int width, int height) const {
+    glViewport(0, 0, width, height);
+    const gl::ComputeProgram& program =
+        FusedProgram(sky, static_cast<int>(mapping.op), mapping.per_channel, sky.uses_sky_view());
+    sky.SetFrameUniforms(program, camera, terms, 0);
+    program.Use();
+    const GLuint id = program.id();
+    glUniformMatrix3fv(glGetUniformLocation(id, "weights"), 1, GL_FALSE, &weights[0][0][0]);
+    glUniform1f(glGetUniformLocation(id, "exposure"), static_cast<float>(mapping.exposure));
+    if (mapping.transfer != encoded_transfer_ || mapping.gamma != encoded_gamma_) FillEncodeTable(mapping);
+    glBindTextureUnit(8, encode_table_);
+    glUniform2i(glGetUniformLocation(id, "window_size"), width, height);
+    glBindVertexArray(vao_);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glUseProgram(0);
+  }
+
   void Draw(const Sky& sky, const Sky* compared, const View& view, const std::vector<glm::mat3>& weights,
             const ToneMapping& mapping, int width, int height) const {
     glViewport(0, 0, width, height);
@@ -268,6 +309,21 @@ class DisplayPass {
   }
 
  private:
+  // The fused program for a tone curve and the frame's sky function (sky-view table or march).
+  const gl::ComputeProgram& FusedProgram(const gl::HillaireGl& sky, int tone_op, bool per_channel,
+                                         bool sky_view) const {
+    const int key = (sky_view ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
+    const auto found = fused_programs_.find(key);
+    if (found != fused_programs_.end()) return *found->second;
+    const std::string main = sky.FrameFunctionSource() + "\n#define TONE_OP " + std::to_string(tone_op) +
+                             "\n#define PER_CHANNEL " + std::to_string(per_channel ? 1 : 0) +
+                             "\n#define SKY_A_SUM\n#define SKY_B_SUM\n" + kDisplayFragmentShader + kFusedMain;
+    const std::span<const std::string_view> files = gl::HillaireGl::FrameSharedFiles();
+    auto program = std::make_unique<gl::ComputeProgram>(kDisplayVertexShader,
+                                                        gl::BuildComputeShaderSource(files, main), "fused display",
+                                                        gl::DescribeSourceStrings(files));
+    return *fused_programs_.emplace(key, std::move(program)).first->second;
+  }
   // The program for a batch count, tone curve and mode, compiled on first use.
   GLuint Program(int batches, int tone_op, bool per_channel, int mode, bool false_colour) const {
     const int key = batches * 10000 + mode * 1000 + (false_colour ? 100 : 0) + tone_op * 10 + (per_channel ? 1 : 0);
@@ -285,7 +341,7 @@ class DisplayPass {
                                std::to_string(per_channel ? 1 : 0) + "\n#define VIEW " + std::to_string(mode) +
                                "\n#define FALSE_COLOUR " + std::to_string(false_colour ? 1 : 0) +
                                "\n#define SKY_A_SUM " + sum_a + "\n#define SKY_B_SUM " + sum_b + "\n" +
-                               kDisplayFragmentShader;
+                               kDisplayFragmentShader + kDisplayMain;
     const GLuint vs = CompileShader(GL_VERTEX_SHADER, kDisplayVertexShader);
     const GLuint fs = CompileShader(GL_FRAGMENT_SHADER, source.c_str());
     const GLuint program = glCreateProgram();
@@ -315,6 +371,7 @@ class DisplayPass {
   }
 
   mutable std::map<int, GLuint> programs_;
+  mutable std::map<int, std::unique_ptr<gl::ComputeProgram>> fused_programs_;
   GLuint vao_ = 0;
   GLuint encode_table_ = 0;
   mutable std::optional<DisplayTransfer> encoded_transfer_;
@@ -412,7 +469,24 @@ void CopyKnobs(const ViewState& from, ViewState& to) {
   to.ground_radius_m = from.ground_radius_m;
 }
 
-// Elek's table steps per frame run until this much time went on them (then the frame is drawn).
+// The options of model source4d (Source4dModelSettings::FromOptions's keys) for `settings`: the
+// panel's edits and a screenshot's atmo:modelOptions.
+ModelOptions Source4dOptions(const Source4dModelSettings& settings) {
+  const cpu::Source4dSettings& t = settings.tables;
+  ModelOptions options;
+  options["table"] = cli::Format("%dx%dx%dx%d", t.r_size, t.mu_size, t.mu_s_size, t.phi_size);
+  options["gather"] = cli::Format("%dx%d", t.gather_zeniths, t.gather_azimuths);
+  options["gather_samples"] = std::to_string(t.gather_samples);
+  options["orders"] = std::to_string(t.orders);
+  options["tail"] = t.tail ? "on" : "off";
+  options["samples"] = std::to_string(settings.samples);
+  options["transmittance_lut"] = cli::Format("%dx%d", t.transmittance_lut.x, t.transmittance_lut.y);
+  options["transmittance_samples"] = std::to_string(t.transmittance_samples);
+  return options;
+}
+
+// Elek's (and source4d's) table steps per frame run until this much time went on them (then the
+// frame is drawn).
 constexpr double kBuildBudgetMs = 25.0;
 // The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
 // 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
@@ -465,6 +539,8 @@ class Viewer {
   bool settings_changed_ = false;  // the panel's hillaire options moved
   HillaireSettings settings_;
   ElekSettings elek_settings_;     // --option of --model elek, else elek's defaults
+  Source4dModelSettings source4d_settings_;        // --option of --model source4d, then the panel's
+  Source4dModelSettings shown_source4d_settings_;  // of the shown sky (to go back to on an error)
   ModelOptions reference_options_;  // --option and --seed of --model reference
   std::string shown_model_;        // the model of sky_
   ViewState state_;
@@ -536,8 +612,8 @@ class Viewer {
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   const std::vector<std::string>& models = ViewerModelNames();
   if (std::find(models.begin(), models.end(), options_.common.model) == models.end()) {
-    throw Error("atmo-viewer shows models hillaire, elek, simple and reference (got --model " + options_.common.model +
-                ")");
+    throw Error("atmo-viewer shows models hillaire, elek, simple, reference and source4d (got --model " +
+                options_.common.model + ")");
   }
   if (options_.common.backend != "cpu" && options_.common.backend != "gl") {
     throw Error("unknown backend '" + options_.common.backend + "'");
@@ -572,6 +648,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   defaults.options.clear();
   settings_ = cli::GlHillaireSettings(model == "hillaire" ? options_.common : defaults);
   elek_settings_ = cli::GlElekSettings(model == "elek" ? options_.common : defaults);
+  source4d_settings_ = cli::GlSource4dSettings(model == "source4d" ? options_.common : defaults);
+  shown_source4d_settings_ = source4d_settings_;
   if (model == "reference") {
     reference_options_ = cli::ParseModelOptions(options_.common.options);
     ReferenceSettings::FromOptions(reference_options_);  // a bad option is refused now
@@ -611,7 +689,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   current_ = base_;
   compare_model_ = options_.compare;
   if (!compare_model_.empty() && std::find(models.begin(), models.end(), compare_model_) == models.end()) {
-    throw Error("--compare takes hillaire, elek, simple or reference (got " + compare_model_ + ")");
+    throw Error("--compare takes hillaire, elek, simple, reference or source4d (got " + compare_model_ + ")");
   }
   if (options_.compare_view != "split" && options_.compare_view != "difference") {
     throw Error("--compare-view takes split or difference (got " + options_.compare_view + ")");
@@ -693,6 +771,7 @@ std::unique_ptr<Sky> Viewer::MakeSky(const std::string& model, const AtmosphereP
   }
   request.hillaire = settings_;
   request.elek = elek_settings_;
+  request.source4d = source4d_settings_;
   request.reference_options = reference_options_;
   request.reference_spp = options_.render.spp.value_or(0);
   request.reference_divisor = options_.reference_divisor;
@@ -761,6 +840,15 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
     }
     if (settings_.use_sky_view_lut != flags.use_sky_view_lut)
       set_option("sky_view", settings_.use_sky_view_lut ? "auto" : "off");
+  }
+  if (shown_model_ == "source4d") {
+    // The panel's source4d options where they differ from the flags'.
+    const ModelOptions flags = Source4dOptions(cli::GlSource4dSettings(common));
+    for (const auto& [key, value] : Source4dOptions(shown_source4d_settings_)) {
+      if (flags.at(key) == value) continue;
+      std::erase_if(common.options, [&](const std::string& o) { return o.rfind(key + "=", 0) == 0; });
+      common.options.push_back(key + "=" + value);
+    }
   }
   command.width = image.width;
   command.height = image.height;
@@ -841,6 +929,7 @@ void Viewer::UpdateSky() {
     current_loaded_ = loaded_;
     current_preset_index_ = preset_index_;
     shown_settings_ = settings_;
+    shown_source4d_settings_ = source4d_settings_;
     settings_changed_ = false;
     shown_knobs_ = state_;
     UpdateDisplayWeights();
@@ -858,6 +947,7 @@ void Viewer::UpdateSky() {
     loaded_ = current_loaded_;
     preset_index_ = current_preset_index_;
     settings_ = shown_settings_;
+    source4d_settings_ = shown_source4d_settings_;
     settings_changed_ = false;
     state_.model = shown_model_;
     requested_model_ = shown_model_;
@@ -1022,7 +1112,7 @@ void Viewer::DrawPanels() {
     // The model: a new one is built while the last one stays on screen (elek: a progress bar).
     const std::vector<std::string>& models = ViewerModelNames();
     int index = static_cast<int>(std::find(models.begin(), models.end(), state_.model) - models.begin());
-    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0")) state_.model = models[index];
+    if (ImGui::Combo("model", &index, "hillaire\0elek\0simple\0reference\0source4d\0")) state_.model = models[index];
     if (pending_ != nullptr) {
       const std::string label = "building " + pending_model_;
       ImGui::ProgressBar(static_cast<float>(pending_->progress()), ImVec2(-1.0f, 0.0f), label.c_str());
@@ -1126,6 +1216,46 @@ void Viewer::DrawPanels() {
       ++settings_generation_;
     }
   }
+  if (state_.model == "source4d" && ImGui::CollapsingHeader("source4d options")) {
+    // Applied on Enter (a typed value) or a +/- click; every table again, the last sky shown
+    // until they are built. Values the model refuses are shown as the error and not applied.
+    const cpu::Source4dSettings& t = source4d_settings_.tables;
+    int table[4] = {t.r_size, t.mu_size, t.mu_s_size, t.phi_size};
+    int gather[2] = {t.gather_zeniths, t.gather_azimuths};
+    int gather_samples = t.gather_samples;
+    int orders = t.orders;
+    bool tail = t.tail;
+    int samples = source4d_settings_.samples;
+    constexpr ImGuiInputTextFlags kEnter = ImGuiInputTextFlags_EnterReturnsTrue;
+    bool changed = ImGui::InputInt4("table r mu mu_s phi", table, kEnter);
+    changed |= ImGui::InputInt2("gather zeniths azimuths", gather, kEnter);
+    changed |= ImGui::InputInt("gather_samples", &gather_samples, 1, 8, kEnter);
+    changed |= ImGui::InputInt("orders", &orders, 1, 1, kEnter);
+    changed |= ImGui::Checkbox("tail", &tail);
+    changed |= ImGui::InputInt("samples (per pixel)", &samples, 1, 8, kEnter);
+    if (changed) {
+      ModelOptions options = Source4dOptions(source4d_settings_);
+      options["table"] = cli::Format("%dx%dx%dx%d", table[0], table[1], table[2], table[3]);
+      options["gather"] = cli::Format("%dx%d", gather[0], gather[1]);
+      options["gather_samples"] = std::to_string(gather_samples);
+      options["orders"] = std::to_string(orders);
+      options["tail"] = tail ? "on" : "off";
+      options["samples"] = std::to_string(samples);
+      try {
+        const Source4dModelSettings next = Source4dModelSettings::FromOptions(options);
+        if (Source4dOptions(next) != Source4dOptions(source4d_settings_)) {
+          source4d_settings_ = next;
+          settings_changed_ = true;
+          ++settings_generation_;
+        }
+      } catch (const Error& error) {
+        status_ = error.what();
+      }
+    }
+    if (pending_ != nullptr && pending_model_ == "source4d") {
+      ImGui::Text("building the tables: %.0f %%", 100.0 * pending_->progress());
+    }
+  }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Checkbox("auto-exposure", &state_.auto_exposure);
     float ev = static_cast<float>(state_.auto_exposure ? metered_ev100_ : state_.ev100);
@@ -1140,12 +1270,12 @@ void Viewer::DrawPanels() {
   }
   if (ImGui::CollapsingHeader("Compare", ImGuiTreeNodeFlags_DefaultOpen)) {
     // Model B beside or against the shown model A, on the same atmosphere and view.
-    const char* names[] = {"none", "hillaire", "elek", "simple", "reference"};
+    const char* names[] = {"none", "hillaire", "elek", "simple", "reference", "source4d"};
     int index = 0;
-    for (int i = 1; i < 5; ++i) {
+    for (int i = 1; i < 6; ++i) {
       if (compare_model_ == names[i]) index = i;
     }
-    if (ImGui::Combo("compare with", &index, names, 5)) compare_model_ = index == 0 ? "" : names[index];
+    if (ImGui::Combo("compare with", &index, names, 6)) compare_model_ = index == 0 ? "" : names[index];
     ImGui::RadioButton("split", &compare_view_, 1);
     ImGui::SameLine();
     ImGui::RadioButton("difference (B - A) / A", &compare_view_, 2);
@@ -1293,13 +1423,19 @@ int Viewer::Run() {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
+      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
+      const bool meter = state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame();
+      // Hillaire alone in RGB, tone-mapped, not metered in this frame: its frame pass runs in the
+      // display's fragment shader (DrawFused), no frame texture.
+      const gl::HillaireGl* fused = compare_sky_ == nullptr && !false_colour_ && !meter && sky_->batch_count() == 1
+                                        ? sky_->hillaire_gl()
+                                        : nullptr;
+      if (fused == nullptr) sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       if (compare_sky_ != nullptr) {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       }
-      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
-      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
-      if (state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame()) {
+      if (meter) {
         const Image frame = sky_->ReadFrame();
         metered_ = true;
         const Image srgb =
@@ -1309,7 +1445,13 @@ int Viewer::Run() {
         metered_ev100_ = AutoExposureEv100(srgb);
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
-      {
+      if (fused != nullptr) {
+        std::optional<ScopedPassTimer> timer;
+        if (timed) timer.emplace(timings_, "frame_and_display");
+        display_->DrawFused(*fused, ToSharedCamera(ViewCamera(state_, width, height)), terms, weights_, mapping_,
+                            width, height);
+        if (timed) glFinish();
+      } else {
         std::optional<ScopedPassTimer> timer;
         if (timed) timer.emplace(timings_, "display");
         DisplayPass::View view;

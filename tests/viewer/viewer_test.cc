@@ -35,9 +35,10 @@ TEST(ViewerScript, AtSetsFromItsFrameAndRampInterpolates) {
       "at 0 camera fisheye\n"
       "ramp 10 20 sun-elevation 30 -2   # 3.2 degrees per frame\n"
       "at 15 altitude 400000\n"
+      "at 18 model source4d\n"
       "screenshot 20 low.exr\n",
       "test.txt");
-  ASSERT_EQ(script.commands.size(), 4u);
+  ASSERT_EQ(script.commands.size(), 5u);
   EXPECT_EQ(script.LastFrame(), 20);
   ViewState state;
   EXPECT_TRUE(ApplyScript(script, 0, state).empty());
@@ -49,6 +50,9 @@ TEST(ViewerScript, AtSetsFromItsFrameAndRampInterpolates) {
   ApplyScript(script, 15, state);
   EXPECT_DOUBLE_EQ(state.sun_elevation_deg, 14.0);
   EXPECT_DOUBLE_EQ(state.altitude_m, 400000.0);
+  EXPECT_EQ(state.model, ViewState{}.model);
+  ApplyScript(script, 18, state);
+  EXPECT_EQ(state.model, "source4d");
   const std::vector<std::string> shots = ApplyScript(script, 20, state);
   EXPECT_DOUBLE_EQ(state.sun_elevation_deg, -2.0);
   ASSERT_EQ(shots.size(), 1u);
@@ -212,6 +216,9 @@ TEST_F(Viewer, WindowShowsWhatThePngShows) {
     const std::string flags = std::string(kSameFlags) + " " + display + " --no-sun-disc --no-dither";
     const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot window.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;
+    // At a fixed EV100 hillaire's frame pass runs in the display's fragment shader (one pass,
+    // DrawFused): what is compared below is that pass's window.
+    EXPECT_NE(v.out.find("frame_and_display"), std::string::npos) << v.out;
     const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     int vw = 0, vh = 0, rw = 0, rh = 0;
@@ -459,6 +466,97 @@ TEST_F(Viewer, ElekBuildsWithoutFreezingTheWindow) {
   EXPECT_EQ(Metadata(vm, "atmo:modelOptions"), Metadata(rm, "atmo:modelOptions"));
 }
 
+// Switching to source4d: its tables (gl::Source4dTablesBuilder) are built a few steps per frame
+// while hillaire stays on screen, as elek's; the finished frame is `atmo render --backend gl
+// --model source4d`'s, and compare mode splits it against hillaire.
+constexpr const char* kSmallSource4d =
+    "--option table=8x16x24x6 --option gather=25x7 --option gather_samples=24 --option orders=3 --option samples=32";
+
+TEST_F(Viewer, Source4dBuildsWithoutFreezingTheWindow) {
+  WriteFile(dir_ / "switch.txt",
+            "at 0 model hillaire\n"
+            "at 3 model source4d\n");
+  const std::string source4d = kSmallSource4d;
+  const RunResult v = RunViewer(std::string(kSameFlags) + " --model source4d " + source4d +
+                                " --frames 5 --script switch.txt --frame-log frames.txt --screenshot viewer.exr");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const std::vector<LoggedFrame> log = ReadFrameLog(dir_ / "frames.txt");
+  ASSERT_GE(log.size(), 5u);
+  double sum = 0.0;
+  double worst = 0.0;
+  double last_progress = 0.0;
+  int building = 0;
+  for (const LoggedFrame& f : log) {
+    if (f.frame < 3) {
+      EXPECT_EQ(f.shown, "hillaire") << f.frame;
+      continue;
+    }
+    if (f.pending != "source4d") continue;
+    EXPECT_EQ(f.shown, "hillaire") << f.frame;  // the last finished sky stays while source4d builds
+    EXPECT_GE(f.progress, last_progress) << f.frame;
+    last_progress = f.progress;
+    // A frame's logged time is from the swap before it to its own start, the work of the frame
+    // before: frame 4's is frame 3's, which compiles source4d's programs.
+    if (f.frame > 4) {
+      sum += f.ms;
+      worst = std::max(worst, f.ms);
+      ++building;
+    }
+  }
+  EXPECT_EQ(log.back().shown, "source4d");
+  EXPECT_EQ(log.back().progress, 1.0);
+  ASSERT_GT(building, 4) << "the tables were built in too few frames to be steps";
+  const double mean = sum / building;
+  std::printf("[ figures ] source4d built over %d frames: mean frame %.1f ms, longest %.1f ms, last progress %.3f\n",
+              building, mean, worst, last_progress);
+  // Each frame runs table steps for 25 ms, then at most one more step (16 work groups of the
+  // gathering or the products, or the CPU's transmittance table) and the frame. Generous against
+  // a loaded machine: 5x the mean.
+  EXPECT_LT(worst, 5.0 * mean);
+  const RunResult r =
+      Run("render --backend gl --model source4d " + source4d + " " + kSameFlags + " --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ImageMetadata vm;
+  ImageMetadata rm;
+  const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
+  const Image render_image = ReadExr(dir_ / "render.exr", &rm);
+  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());
+  // The same kernels on the same inputs in steps or whole (GlSource4d.SteppedBuilderEqualsWholePasses).
+  const double difference = MaxRelativeDifference(viewer_image, render_image, 1.0);
+  std::printf("[ figures ] source4d: max relative difference viewer vs atmo render --backend gl: %.3g\n", difference);
+  EXPECT_LT(difference, 1e-5);
+  EXPECT_EQ(Metadata(vm, "atmo:model"), "source4d");
+  EXPECT_EQ(Metadata(vm, "atmo:modelOptions"), Metadata(rm, "atmo:modelOptions"));
+
+  // Compare mode: source4d left of the split, hillaire right of it, each its own window.
+  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3 --model source4d " + source4d;
+  RunResult c = RunViewer(flags + " --compare hillaire --split 0.4 --window-screenshot split.png");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  c = RunViewer(flags + " --window-screenshot a.png");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  c = RunViewer(std::string(kSameFlags) + " --ev 9 --no-panels --frames 3 --window-screenshot b.png");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  int width = 0, height = 0;
+  const std::vector<unsigned char> split = ReadPngRgb(dir_ / "split.png", width, height);
+  const std::vector<unsigned char> a = ReadPngRgb(dir_ / "a.png", width, height);
+  const std::vector<unsigned char> b = ReadPngRgb(dir_ / "b.png", width, height);
+  const int column = static_cast<int>(std::lround(0.4 * width));
+  int differ_a = 0, differ_b = 0, differ_ab = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3 + k;
+        if (x < column) differ_a += split[i] != a[i] ? 1 : 0;
+        if (x >= column) differ_b += split[i] != b[i] ? 1 : 0;
+        differ_ab += a[i] != b[i] ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(differ_a, 0);
+  EXPECT_EQ(differ_b, 0);
+  EXPECT_GT(differ_ab, 100);  // source4d and hillaire do differ
+}
+
 // Model simple on the GPU (simple.glsl in float, the disc on the host) against the CPU's double.
 TEST_F(Viewer, SimpleOnTheGpuEqualsTheCpu) {
   const std::string flags = "--preset simple --width 160 --height 90 --sun-elevation 12 --sun-azimuth 200 --yaw 185";
@@ -593,7 +691,11 @@ TEST_F(Viewer, BadInputIsOneLineAndNonZero) {
   EXPECT_NE(r.err.find("needs --frames N"), std::string::npos) << r.err;
   r = RunViewer("--frames 1 --model bruneton");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("models hillaire, elek, simple and reference"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("models hillaire, elek, simple, reference and source4d"), std::string::npos) << r.err;
+  r = RunViewer("--frames 1 --model source4d --option orders=40");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("orders"), std::string::npos) << r.err;
+  EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
   r = RunViewer("--frames 1 --model elek --spp 4");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("takes no --spp"), std::string::npos) << r.err;

@@ -396,28 +396,18 @@ void HillaireGl::SetSkyUniforms(const ComputeProgram& program, const Batch& batc
 }
 
 
-void HillaireGl::RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
-                             PassTimings* timings) {
-  if (!view_set_) throw Error("GL hillaire: RenderFrame before SetView");
-  if (terms.ground && uses_sky_view_ && !has_ground_view_) {
-    throw Error("GL hillaire: a frame with the ground term needs SetView(..., ground = true)");
-  }
-  context_.MakeCurrent();
-  const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
-layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
-)glsl" + SkyRadianceSource(uses_sky_view_) + R"glsl(
+std::span<const std::string_view> HillaireGl::FrameSharedFiles() { return kSkyFiles; }
+
+std::string HillaireGl::FrameFunctionSource() const {
+  return SkyRadianceSource(uses_sky_view_) + R"glsl(
 uniform CameraParameters camera;
 uniform bool sun_disc;
 uniform bool ground;  // per pixel where the ray is marched; the sky-view table has it otherwise
 uniform vec3 solar_irradiance;
 
-void main() {
-  ivec2 size = imageSize(output_image);
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  if (pixel.x >= size.x || pixel.y >= size.y) return;
+vec4 GetFrameTexel(vec2 frag_coord) {
   vec3 direction;
-  bool seen = GetCameraRayDirection(camera, vec2(pixel) + vec2(0.5), direction);
+  bool seen = GetCameraRayDirection(camera, frag_coord, direction);
   vec3 radiance = vec3(0.0);
   if (seen) {
     radiance = GetSkyRadianceAlong(direction);
@@ -430,7 +420,46 @@ void main() {
           mu_s, nu);
     }
   }
-  imageStore(output_image, pixel, vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0));
+  return vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0);
+}
+)glsl";
+}
+
+void HillaireGl::SetFrameUniforms(const ComputeProgram& program, const shared::CameraParameters& camera,
+                                  const RadianceTerms& terms, std::size_t batch_index) const {
+  if (!view_set_) throw Error("GL hillaire: a frame before SetView");
+  if (terms.ground && uses_sky_view_ && !has_ground_view_) {
+    throw Error("GL hillaire: a frame with the ground term needs SetView(..., ground = true)");
+  }
+  const Batch& batch = batches_.at(batch_index);
+  SetCameraUniforms(program, "camera", camera);
+  program.SetInt("sun_disc", terms.sun_disc ? 1 : 0);
+  program.SetInt("ground", terms.ground ? 1 : 0);
+  SetSkyUniforms(program, batch);
+  program.SetVec3("solar_irradiance", batch.solar_irradiance);
+  const GpuTexture& sky_view = terms.ground ? batch.sky_and_ground_view : batch.sky_view;
+  BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
+                         {"multiple_scattering_texture", &batch.multiple_scattering},
+                         {"ground_irradiance_texture", &batch.ground_irradiance},
+                         {"sky_view_texture", &sky_view}});
+}
+
+void HillaireGl::RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
+                             PassTimings* timings) {
+  if (!view_set_) throw Error("GL hillaire: RenderFrame before SetView");
+  if (terms.ground && uses_sky_view_ && !has_ground_view_) {
+    throw Error("GL hillaire: a frame with the ground term needs SetView(..., ground = true)");
+  }
+  context_.MakeCurrent();
+  const ComputeProgram& program = context_.Program(kSkyFiles, R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
+)glsl" + FrameFunctionSource() + R"glsl(
+void main() {
+  ivec2 size = imageSize(output_image);
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (pixel.x >= size.x || pixel.y >= size.y) return;
+  imageStore(output_image, pixel, GetFrameTexel(vec2(pixel) + vec2(0.5)));
 }
 )glsl", "frame");
   for (Batch& batch : batches_) {
@@ -439,20 +468,11 @@ void main() {
     }
   }
   frame_has_alpha_ = camera.kind == shared::kCameraFisheye;
-  SetCameraUniforms(program, "camera", camera);
-  program.SetInt("sun_disc", terms.sun_disc ? 1 : 0);
-  program.SetInt("ground", terms.ground ? 1 : 0);
   GpuPassTimer timer(timings);
-  for (const Batch& batch : batches_) {
-    SetSkyUniforms(program, batch);
-    program.SetVec3("solar_irradiance", batch.solar_irradiance);
-    const GpuTexture& sky_view = terms.ground ? batch.sky_and_ground_view : batch.sky_view;
-    BindSamplers(program, {{"transmittance_texture", &batch.transmittance},
-                           {"multiple_scattering_texture", &batch.multiple_scattering},
-                           {"ground_irradiance_texture", &batch.ground_irradiance},
-                           {"sky_view_texture", &sky_view}});
-    batch.frame.BindImage(0);
-    DispatchCompute2D(program, batch.frame.size2());
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    SetFrameUniforms(program, camera, terms, b);
+    batches_[b].frame.BindImage(0);
+    DispatchCompute2D(program, batches_[b].frame.size2());
   }
   timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
   CheckGlError("frame");

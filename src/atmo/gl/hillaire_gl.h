@@ -34,6 +34,8 @@
 
 #include <cstddef>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -102,6 +104,17 @@ class HillaireGl {
   // batch.
   void RenderFrame(const shared::CameraParameters& camera, const RadianceTerms& terms,
                    PassTimings* timings = nullptr);
+  // The frame pass's per-pixel work for a program of the caller's (atmo-viewer's display pass,
+  // which tone-maps it in the same fragment shader instead of reading a frame back): the shared
+  // files to build it from (BuildComputeShaderSource's list) and, to put in its main source,
+  // the declarations and `vec4 GetFrameTexel(vec2 frag_coord)`, what RenderFrame stores at the
+  // pixel centre frag_coord (row 0 at the top) of batch b once SetFrameUniforms(program, ..., b)
+  // set its uniforms and bound its tables to texture units 0..3. RenderFrame itself runs this
+  // code. SetFrameUniforms throws as RenderFrame does before SetView.
+  static std::span<const std::string_view> FrameSharedFiles();
+  std::string FrameFunctionSource() const;
+  void SetFrameUniforms(const ComputeProgram& program, const shared::CameraParameters& camera,
+                        const RadianceTerms& terms, std::size_t batch) const;
   // The last frame, one channel per wavelength (the batches' frames read back and interleaved),
   // with alpha (0 outside the circle) for a fisheye camera.
   Image ReadFrame() const;

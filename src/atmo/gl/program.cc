@@ -52,6 +52,39 @@ ComputeProgram::ComputeProgram(const std::string& source, std::string_view name,
   }
 }
 
+ComputeProgram::ComputeProgram(const std::string& vertex_source, const std::string& fragment_source,
+                               std::string_view name, std::string_view source_strings) {
+  GLuint shaders[2] = {glCreateShader(GL_VERTEX_SHADER), glCreateShader(GL_FRAGMENT_SHADER)};
+  const std::string* sources[2] = {&vertex_source, &fragment_source};
+  for (int i = 0; i < 2; ++i) {
+    const char* text = sources[i]->c_str();
+    glShaderSource(shaders[i], 1, &text, nullptr);
+    glCompileShader(shaders[i]);
+    GLint ok = GL_FALSE;
+    glGetShaderiv(shaders[i], GL_COMPILE_STATUS, &ok);
+    if (ok != GL_TRUE) {
+      const std::string log = InfoLog(shaders[i], false);
+      glDeleteShader(shaders[0]);
+      glDeleteShader(shaders[1]);
+      throw Error("GL " + std::string(name) + (i == 0 ? " vertex" : " fragment") + " shader does not compile (" +
+                  std::string(source_strings) + "): " + log);
+    }
+  }
+  program_ = glCreateProgram();
+  glAttachShader(program_, shaders[0]);
+  glAttachShader(program_, shaders[1]);
+  glLinkProgram(program_);
+  glDeleteShader(shaders[0]);  // deleted with the program
+  glDeleteShader(shaders[1]);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    const std::string log = InfoLog(program_, true);
+    glDeleteProgram(program_);
+    throw Error("GL " + std::string(name) + " program does not link: " + log);
+  }
+}
+
 ComputeProgram::~ComputeProgram() { glDeleteProgram(program_); }
 
 void ComputeProgram::Use() const { glUseProgram(program_); }

@@ -16,6 +16,10 @@ class ComputeProgram {
  public:
   // `name` names the pass in error messages; `source_strings` describes the #line numbering.
   ComputeProgram(const std::string& source, std::string_view name, std::string_view source_strings = "");
+  // A vertex + fragment program with the same uniform setters (atmo-viewer's display pass, which
+  // runs a frame pass's per-pixel code in its fragment shader: HillaireGl::SetFrameUniforms).
+  ComputeProgram(const std::string& vertex_source, const std::string& fragment_source, std::string_view name,
+                 std::string_view source_strings);
   ~ComputeProgram();
   ComputeProgram(const ComputeProgram&) = delete;
   ComputeProgram& operator=(const ComputeProgram&) = delete;

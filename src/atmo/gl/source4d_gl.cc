@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <future>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -209,9 +212,10 @@ uniform sampler3D mie_texture;
 uniform sampler2D irradiance_texture;
 uniform int gather_samples;
 uniform int order;
+uniform int id_offset;  // the first invocation of this dispatch (Source4dTablesBuilder's steps)
 
 void main() {
-  int id = int(gl_GlobalInvocationID.x);
+  int id = int(gl_GlobalInvocationID.x) + id_offset;
   int nodes = r_size * mu_s_size;
   if (id >= nodes * gather_zeniths * gather_azimuths) return;
   int node = id % nodes;
@@ -266,9 +270,10 @@ layout(std430, binding = 2) writeonly buffer GBuffer { float g[]; };
 layout(std430, binding = 3) buffer SumBuffer { float sum[]; };
 uniform int in_count;
 const int kBlock = 8;  // kSource4dConvolveBlock
+uniform int id_offset;  // the first invocation of this dispatch (Source4dTablesBuilder's steps)
 
 void main() {
-  int id = int(gl_GlobalInvocationID.x);
+  int id = int(gl_GlobalInvocationID.x) + id_offset;
   int blocks = (out_count + kBlock - 1) / kBlock;
   if (id >= blocks * columns) return;
   int k = id % columns;
@@ -433,149 +438,334 @@ const ComputeProgram& BuilderProgram(const Context& context, const char* main_so
   return program;
 }
 
+
+int GroupCount1D(long long count) { return static_cast<int>((count + kGroupSize1D - 1) / kGroupSize1D); }
+
+// A matrix-product invocation (2 x 8 output directions times every gathering direction, 441 of
+// them by default) costs about 10x a gathering one (24 steps) on llvmpipe (atmo bench --backend
+// gl --model source4d: 1.7 s for 864 work groups against 1.15 s for 5292): its steps are 8x
+// fewer work groups, so that every step takes a few ms.
+constexpr int kConvolveStepDivisor = 8;
+
+// The builder's work on the CPU (the transmittance table, the quadrature matrices) and its times.
+struct Source4dHostParts {
+  shared::Texture2D transmittance;
+  cpu::Source4dQuadrature quadrature;
+  double transmittance_ms = 0.0;
+  double quadrature_ms = 0.0;
+};
+
+Source4dHostParts ComputeHostParts(const shared::AtmosphereParameters& km, const cpu::Source4dSettings& settings) {
+  Source4dHostParts parts;
+  auto start = std::chrono::steady_clock::now();
+  const auto since = [&start] {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - start).count();
+    start = now;
+    return ms;
+  };
+  parts.transmittance = shared::Texture2D(settings.transmittance_lut.x, settings.transmittance_lut.y);
+  cpu::ComputeTransmittanceTable(km, settings.transmittance_samples, parts.transmittance);
+  parts.transmittance_ms = since();
+  parts.quadrature = cpu::ComputeSource4dQuadrature(km, settings);
+  parts.quadrature_ms = since();
+  return parts;
+}
+
 }  // namespace
 
-Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
-                                         const cpu::Source4dSettings& s, PassTimings* timings) {
-  context.MakeCurrent();
-  const int nodes = s.r_size * s.mu_s_size;
+struct Source4dTablesBuilder::State {
+  State(const Context& c, const shared::AtmosphereParameters& k, const cpu::Source4dSettings& s)
+      : context(c), km(k), settings(s) {}
+  const Context& context;
+  shared::AtmosphereParameters km;
+  cpu::Source4dSettings settings;
+  const ComputeProgram* gather = nullptr;
+  const ComputeProgram* convolve = nullptr;
+  const ComputeProgram* ground = nullptr;
+  const ComputeProgram* tail = nullptr;
+  const ComputeProgram* ground_sum = nullptr;
+  const ComputeProgram* log_table = nullptr;
+  Source4dTablesGl tables;
+  // The CPU's part: on a thread of its own when the builder steps (the window keeps drawing), else
+  // run by the first step.
+  std::future<Source4dHostParts> host;
+  // Made by the CPU stage (the quadrature's sizes): the weights, the field of the order being
+  // gathered, G of this order and the one before, their sum, the ground irradiance per order.
+  int out_count = 0;
+  int in_count = 0;
+  std::unique_ptr<StorageBuffer> weights;
+  std::unique_ptr<StorageBuffer> irradiance_weights;
+  std::unique_ptr<StorageBuffer> field;
+  std::unique_ptr<StorageBuffer> g[2];
+  std::unique_ptr<StorageBuffer> sum;
+  std::unique_ptr<StorageBuffer> irradiance;
+  GpuTexture order_r;
+  GpuTexture order_m;
+  GpuTexture order_irradiance;
+  struct Stage {
+    std::string name;  // the pass it belongs to (timings)
+    int groups;        // work groups of its dispatch; 1 for a stage that runs whole
+    int groups_per_step;  // 0: all
+    // Runs the step; false when it could not yet (the CPU's part still running: tried again).
+    std::function<bool(int first_group, int group_count, PassTimings* timings)> run;
+    bool host = false;  // times itself (the CPU's part), instead of a GpuPassTimer
+  };
+  std::vector<Stage> stages;
+  std::size_t stage = 0;
+  int next_group = 0;
+  std::size_t steps_done = 0;
+  std::size_t steps_total = 0;
+};
+
+Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                                             const cpu::Source4dSettings& settings, int groups_per_step,
+                                             PassTimings* timings)
+    : state_(std::make_unique<State>(context, km_atmosphere, settings)) {
+  const cpu::Source4dSettings& t = settings;
+  const int nodes = t.r_size * t.mu_s_size;
   const int columns = nodes * 3;
-  const long long gather_count = static_cast<long long>(nodes) * s.gather_zeniths * s.gather_azimuths;
+  const long long gather_count = static_cast<long long>(nodes) * t.gather_zeniths * t.gather_azimuths;
   const long long convolve_count =
-      static_cast<long long>((s.mu_size * s.phi_size + kSource4dConvolveBlock - 1) / kSource4dConvolveBlock) * columns;
+      static_cast<long long>((t.mu_size * t.phi_size + kSource4dConvolveBlock - 1) / kSource4dConvolveBlock) * columns;
   if (std::max(gather_count, convolve_count) > 65535LL * kGroupSize1D) {
-    throw Error("GL source4d: table " + std::to_string(s.r_size) + "x" + std::to_string(s.mu_size) + "x" +
-                std::to_string(s.mu_s_size) + "x" + std::to_string(s.phi_size) + " with gather " +
-                std::to_string(s.gather_zeniths) + "x" + std::to_string(s.gather_azimuths) +
+    throw Error("GL source4d: table " + std::to_string(t.r_size) + "x" + std::to_string(t.mu_size) + "x" +
+                std::to_string(t.mu_s_size) + "x" + std::to_string(t.phi_size) + " with gather " +
+                std::to_string(t.gather_zeniths) + "x" + std::to_string(t.gather_azimuths) +
                 " needs more than 65535 work groups in one pass; use --backend cpu");
   }
+  context.MakeCurrent();
+  State& s = *state_;
   double compile_ms = 0.0;
-  const ComputeProgram& gather = BuilderProgram(context, kGatherMain, "source4d gather", compile_ms);
-  const ComputeProgram& convolve = BuilderProgram(context, kConvolveMain, "source4d convolve", compile_ms);
-  const ComputeProgram& ground = BuilderProgram(context, kGroundMain, "source4d ground", compile_ms);
-  const ComputeProgram& tail = BuilderProgram(context, kTailMain, "source4d tail", compile_ms);
-  const ComputeProgram& ground_sum = BuilderProgram(context, kGroundSumMain, "source4d ground sum", compile_ms);
-  const ComputeProgram& log_table = BuilderProgram(context, kLogMain, "source4d log table", compile_ms);
+  s.gather = &BuilderProgram(context, kGatherMain, "source4d gather", compile_ms);
+  s.convolve = &BuilderProgram(context, kConvolveMain, "source4d convolve", compile_ms);
+  s.ground = &BuilderProgram(context, kGroundMain, "source4d ground", compile_ms);
+  s.tail = &BuilderProgram(context, kTailMain, "source4d tail", compile_ms);
+  s.ground_sum = &BuilderProgram(context, kGroundSumMain, "source4d ground sum", compile_ms);
+  s.log_table = &BuilderProgram(context, kLogMain, "source4d log table", compile_ms);
   if (timings != nullptr) timings->Add("source4d_gl_compile", compile_ms);
+  s.tables.mu_s_size = t.mu_s_size;
+
+  // Every step sets all the uniforms and bindings it uses: between steps other passes (a viewer's
+  // frames, another builder) use the same programs and units.
+  const auto use = [&s, columns](const ComputeProgram& program) {
+    program.Use();
+    SetAtmosphereUniforms(program, "atmosphere", s.km);
+    program.SetInt("r_size", s.settings.r_size);
+    program.SetInt("mu_s_size", s.settings.mu_s_size);
+    program.SetInt("gather_zeniths", s.settings.gather_zeniths);
+    program.SetInt("gather_azimuths", s.settings.gather_azimuths);
+    program.SetInt("out_count", s.out_count);
+    program.SetInt("columns", columns);
+  };
+  // A stage of `groups` work groups, `per_step` of them a step (0: whole).
+  const auto add_part = [&s](std::string name, int groups, int per_step, std::function<void(int, int)> run) {
+    s.stages.push_back({std::move(name), groups, per_step, [run = std::move(run)](int first, int count, PassTimings*) {
+                          run(first, count);
+                          return true;
+                        }});
+  };
+  const auto add = [&add_part](std::string name, int groups, std::function<void(int, int)> run) {
+    add_part(std::move(name), groups, 0, std::move(run));
+  };
+  // A 1D pass over invocations [64 first, 64 (first + count)) of its whole dispatch.
+  const auto dispatch_part = [](const ComputeProgram& program, int first_group, int group_count) {
+    program.SetInt("id_offset", first_group * kGroupSize1D);
+    DispatchWorkGroups(program, {group_count, 1, 1});
+  };
 
   // On the CPU: the transmittance table and the quadrature matrices (which depend only on the
   // phase functions), uploaded.
-  auto start = std::chrono::steady_clock::now();
-  const auto note_cpu = [&](const char* pass) {
-    if (timings != nullptr) {
-      timings->Add(pass, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  s.host = std::async(groups_per_step > 0 ? std::launch::async : std::launch::deferred, ComputeHostParts, s.km,
+                      s.settings);
+  State::Stage host_stage;
+  host_stage.name = "cpu_source4d";
+  host_stage.groups = 1;
+  host_stage.groups_per_step = 0;
+  host_stage.host = true;
+  host_stage.run = [&s, nodes, columns, groups_per_step](int, int, PassTimings* timings) {
+    if (groups_per_step > 0 && s.host.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) {
+      return false;
     }
-    start = std::chrono::steady_clock::now();
+    const auto start = std::chrono::steady_clock::now();
+    const Source4dHostParts parts = s.host.get();
+    s.tables.transmittance = GpuTexture::Upload(parts.transmittance);
+    const double upload_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const cpu::Source4dQuadrature& q = parts.quadrature;
+    s.out_count = q.out_count;
+    s.in_count = q.in_count;
+    std::vector<float> weights = q.rayleigh;
+    weights.insert(weights.end(), q.mie.begin(), q.mie.end());
+    s.weights = std::make_unique<StorageBuffer>(weights);
+    s.irradiance_weights =
+        std::make_unique<StorageBuffer>(std::vector<float>(q.irradiance.begin(), q.irradiance.end()));
+    const std::size_t g_size = 2 * static_cast<std::size_t>(q.out_count) * columns;
+    s.field = std::make_unique<StorageBuffer>(static_cast<std::size_t>(q.in_count) * columns);
+    s.g[0] = std::make_unique<StorageBuffer>(g_size);
+    s.g[1] = std::make_unique<StorageBuffer>(g_size);
+    s.sum = std::make_unique<StorageBuffer>(g_size);
+    s.irradiance = std::make_unique<StorageBuffer>(3 * static_cast<std::size_t>(s.settings.mu_s_size) * 3);
+    const shared::ivec3 table_size(s.settings.phi_size, s.settings.mu_size, nodes);
+    s.order_r = GpuTexture::Make3D(table_size);
+    s.order_m = GpuTexture::Make3D(table_size);
+    s.order_irradiance = GpuTexture::Make2D({s.settings.mu_s_size, 1});
+    s.tables.rayleigh = GpuTexture::Make3D(table_size);
+    s.tables.mie = GpuTexture::Make3D(table_size);
+    s.tables.ground_irradiance = GpuTexture::Make2D({s.settings.mu_s_size, 1});
+    if (timings != nullptr) {
+      timings->Add("cpu_source4d_transmittance_lut", parts.transmittance_ms + upload_ms);
+      timings->Add("cpu_source4d_quadrature", parts.quadrature_ms);
+    }
+    return true;
   };
-  Source4dTablesGl tables;
-  tables.mu_s_size = s.mu_s_size;
-  {
-    shared::Texture2D transmittance(s.transmittance_lut.x, s.transmittance_lut.y);
-    cpu::ComputeTransmittanceTable(km_atmosphere, s.transmittance_samples, transmittance);
-    tables.transmittance = GpuTexture::Upload(transmittance);
-  }
-  note_cpu("cpu_source4d_transmittance_lut");
-  const cpu::Source4dQuadrature q = cpu::ComputeSource4dQuadrature(km_atmosphere, s);
-  std::vector<float> weights = q.rayleigh;
-  weights.insert(weights.end(), q.mie.begin(), q.mie.end());
-  const StorageBuffer weight_buffer(weights);
-  const StorageBuffer irradiance_weights(std::vector<float>(q.irradiance.begin(), q.irradiance.end()));
-  note_cpu("cpu_source4d_quadrature");
+  s.stages.push_back(std::move(host_stage));
 
-  const std::size_t g_size = 2 * static_cast<std::size_t>(q.out_count) * columns;
-  const StorageBuffer field(static_cast<std::size_t>(q.in_count) * columns);
-  const StorageBuffer g_a(g_size), g_b(g_size), sum(g_size);
-  const StorageBuffer irradiance(3 * static_cast<std::size_t>(s.mu_s_size) * 3);
-  const shared::ivec3 table_size(s.phi_size, s.mu_size, nodes);
-  GpuTexture order_r = GpuTexture::Make3D(table_size);
-  GpuTexture order_m = GpuTexture::Make3D(table_size);
-  const GpuTexture order_irradiance = GpuTexture::Make2D({s.mu_s_size, 1});
-  tables.rayleigh = GpuTexture::Make3D(table_size);
-  tables.mie = GpuTexture::Make3D(table_size);
-  tables.ground_irradiance = GpuTexture::Make2D({s.mu_s_size, 1});
-
-  for (const ComputeProgram* program : {&gather, &convolve, &ground, &tail, &ground_sum, &log_table}) {
-    SetAtmosphereUniforms(*program, "atmosphere", km_atmosphere);
-    program->SetInt("r_size", s.r_size);
-    program->SetInt("mu_s_size", s.mu_s_size);
-    program->SetInt("gather_zeniths", s.gather_zeniths);
-    program->SetInt("gather_azimuths", s.gather_azimuths);
-    program->SetInt("out_count", q.out_count);
-    program->SetInt("columns", columns);
-  }
-  gather.SetInt("gather_samples", s.gather_samples);
-  convolve.SetInt("in_count", q.in_count);
-  ground.SetInt("in_count", q.in_count);
-  tail.SetFloat("max_ratio", cpu::kSource4dMaxTailRatio);
-  ground_sum.SetFloat("max_ratio", cpu::kSource4dMaxTailRatio);
-  log_table.SetInt("phi_size", s.phi_size);
-  log_table.SetInt("mu_size", s.mu_size);
-
-  const auto run_gather = [&](int order) {
-    gather.SetInt("order", order);
-    BindSamplers(gather, {{"transmittance_texture", &tables.transmittance},
-                          {"rayleigh_texture", &order_r},
-                          {"mie_texture", &order_m},
-                          {"irradiance_texture", &order_irradiance}});
-    field.Bind(0);
-    DispatchCompute1D(gather, static_cast<int>(gather_count));
+  const int gather_groups = GroupCount1D(gather_count);
+  const int convolve_groups = GroupCount1D(convolve_count);
+  const int convolve_per_step = groups_per_step <= 0 ? 0 : std::max(1, groups_per_step / kConvolveStepDivisor);
+  const auto add_gather = [&](int order) {
+    add_part("source4d_gather_" + std::to_string(order), gather_groups, groups_per_step,
+        [&s, use, dispatch_part, order](int first, int count) {
+          const ComputeProgram& p = *s.gather;
+          use(p);
+          p.SetInt("gather_samples", s.settings.gather_samples);
+          p.SetInt("order", order);
+          BindSamplers(p, {{"transmittance_texture", &s.tables.transmittance},
+                           {"rayleigh_texture", &s.order_r},
+                           {"mie_texture", &s.order_m},
+                           {"irradiance_texture", &s.order_irradiance}});
+          s.field->Bind(0);
+          dispatch_part(p, first, count);
+        });
   };
-  const auto write_log = [&](const StorageBuffer& g, const GpuTexture& rayleigh, const GpuTexture& mie) {
-    log_table.Use();
-    g.Bind(0);
-    rayleigh.BindImage(0);
-    mie.BindImage(1);
-    DispatchCompute3D(log_table, table_size);
+  // ln G of buffer `g` (an index into s.g, or -1: the sum) into this order's tables or (final)
+  // the model's.
+  const auto write_log = [&s, use](int g, bool final) {
+    const ComputeProgram& p = *s.log_table;
+    use(p);
+    p.SetInt("phi_size", s.settings.phi_size);
+    p.SetInt("mu_size", s.settings.mu_size);
+    (g < 0 ? *s.sum : *s.g[g]).Bind(0);
+    (final ? s.tables.rayleigh : s.order_r).BindImage(0);
+    (final ? s.tables.mie : s.order_m).BindImage(1);
+    DispatchCompute3D(p, {s.settings.phi_size, s.settings.mu_size, s.settings.r_size * s.settings.mu_s_size});
   };
 
-  const StorageBuffer* g = &g_a;         // this order's G
-  const StorageBuffer* previous = &g_b;  // the order before
-  int slot = 0;                          // of this order's ground irradiance
-  GpuPassTimer timer(timings);
-  if (s.orders >= 2) {
-    run_gather(1);
-    timer.Stop("source4d_gather_1");
-  }
-  for (int n = 2; n <= s.orders; ++n) {
-    std::swap(g, previous);
+  // The orders, as ComputeSource4dTables: g[gi] is this order's G, g[1 - gi] the one before.
+  int gi = 0;
+  int slot = 0;  // of this order's ground irradiance
+  if (t.orders >= 2) add_gather(1);
+  for (int n = 2; n <= t.orders; ++n) {
+    gi = 1 - gi;
     slot = 1 - slot;
-    convolve.Use();
-    field.Bind(0);
-    weight_buffer.Bind(1);
-    g->Bind(2);
-    sum.Bind(3);
-    DispatchCompute1D(convolve, static_cast<int>(convolve_count));
-    ground.Use();
-    ground.SetInt("slot", slot);
-    field.Bind(0);
-    irradiance_weights.Bind(1);
-    irradiance.Bind(2);
-    order_irradiance.BindImage(0);
-    DispatchCompute1D(ground, s.mu_s_size);
-    timer.Stop("source4d_convolve_" + std::to_string(n));
-    if (n == s.orders) break;
-    write_log(*g, order_r, order_m);
-    run_gather(n);
-    timer.Stop("source4d_gather_" + std::to_string(n));
+    const std::string name = "source4d_convolve_" + std::to_string(n);
+    add_part(name, convolve_groups, convolve_per_step, [&s, use, dispatch_part, gi](int first, int count) {
+      const ComputeProgram& p = *s.convolve;
+      use(p);
+      p.SetInt("in_count", s.in_count);
+      s.field->Bind(0);
+      s.weights->Bind(1);
+      s.g[gi]->Bind(2);
+      s.sum->Bind(3);
+      dispatch_part(p, first, count);
+    });
+    add(name, 1, [&s, use, slot](int, int) {
+      const ComputeProgram& p = *s.ground;
+      use(p);
+      p.SetInt("in_count", s.in_count);
+      p.SetInt("slot", slot);
+      s.field->Bind(0);
+      s.irradiance_weights->Bind(1);
+      s.irradiance->Bind(2);
+      s.order_irradiance.BindImage(0);
+      DispatchCompute1D(p, s.settings.mu_s_size);
+    });
+    if (n == t.orders) break;
+    add("source4d_gather_" + std::to_string(n), 1, [write_log, gi](int, int) { write_log(gi, false); });
+    add_gather(n);
   }
-  const bool with_tail = s.tail && s.orders >= 3;
-  if (with_tail) {
-    tail.Use();
-    g->Bind(0);
-    previous->Bind(1);
-    sum.Bind(2);
-    DispatchCompute1D(tail, columns);
+  const bool with_tail = t.tail && t.orders >= 3;
+  add("source4d_sum", 1, [&s, use, write_log, gi, slot, with_tail, columns](int, int) {
+    if (with_tail) {
+      const ComputeProgram& p = *s.tail;
+      use(p);
+      p.SetFloat("max_ratio", cpu::kSource4dMaxTailRatio);
+      s.g[gi]->Bind(0);
+      s.g[1 - gi]->Bind(1);
+      s.sum->Bind(2);
+      DispatchCompute1D(p, columns);
+    }
+    write_log(-1, true);
+    const ComputeProgram& p = *s.ground_sum;
+    use(p);
+    p.SetFloat("max_ratio", cpu::kSource4dMaxTailRatio);
+    p.SetInt("slot", slot);
+    p.SetInt("tail", with_tail ? 1 : 0);
+    s.irradiance->Bind(2);
+    s.tables.ground_irradiance.BindImage(0);
+    DispatchCompute1D(p, s.settings.mu_s_size);
+  });
+  for (const State::Stage& stage : s.stages) {
+    const int per_step = stage.groups_per_step <= 0 ? stage.groups : std::min(stage.groups_per_step, stage.groups);
+    s.steps_total += static_cast<std::size_t>((stage.groups + per_step - 1) / per_step);
   }
-  write_log(sum, tables.rayleigh, tables.mie);
-  ground_sum.Use();
-  ground_sum.SetInt("slot", slot);
-  ground_sum.SetInt("tail", with_tail ? 1 : 0);
-  irradiance.Bind(2);
-  tables.ground_irradiance.BindImage(0);
-  DispatchCompute1D(ground_sum, s.mu_s_size);
-  timer.Stop("source4d_sum");
-  CheckGlError("source4d tables");
-  return tables;
+}
+
+Source4dTablesBuilder::~Source4dTablesBuilder() = default;
+
+bool Source4dTablesBuilder::done() const { return state_->stage >= state_->stages.size(); }
+
+double Source4dTablesBuilder::progress() const {
+  return static_cast<double>(state_->steps_done) / static_cast<double>(state_->steps_total);
+}
+
+void Source4dTablesBuilder::Step(PassTimings* timings) {
+  State& s = *state_;
+  if (done()) return;
+  s.context.MakeCurrent();
+  const State::Stage& stage = s.stages[s.stage];
+  const int per_step = stage.groups_per_step <= 0 ? stage.groups : std::min(stage.groups_per_step, stage.groups);
+  const int count = std::min(per_step, stage.groups - s.next_group);
+  if (stage.host) {
+    if (!stage.run(s.next_group, count, timings)) return;  // the CPU's part is still running
+  } else {
+    GpuPassTimer timer(timings);
+    stage.run(s.next_group, count, timings);
+    timer.Stop(stage.name);
+  }
+  s.next_group += count;
+  ++s.steps_done;
+  if (s.next_group >= stage.groups) {
+    ++s.stage;
+    s.next_group = 0;
+  }
+  if (done()) {
+    // The temporaries are no longer read.
+    s.weights.reset();
+    s.irradiance_weights.reset();
+    s.field.reset();
+    s.g[0].reset();
+    s.g[1].reset();
+    s.sum.reset();
+    s.irradiance.reset();
+    s.order_r = {};
+    s.order_m = {};
+    s.order_irradiance = {};
+    CheckGlError("source4d tables");
+  }
+}
+
+Source4dTablesGl Source4dTablesBuilder::Take() {
+  if (!done()) throw Error("GL source4d: the tables are not complete");
+  return std::move(state_->tables);
+}
+
+Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                                         const cpu::Source4dSettings& settings, PassTimings* timings) {
+  Source4dTablesBuilder builder(context, km_atmosphere, settings, /*groups_per_step=*/0, timings);
+  while (!builder.done()) builder.Step(timings);
+  return builder.Take();
 }
 
 void PrecomputeSource4dGl(const Context& context, Source4dModel& model, PassTimings* timings) {

@@ -18,6 +18,8 @@
 // or, per batch, UploadSource4dTables / ComputeSource4dTablesGl and RunSource4dFramePass.
 #pragma once
 
+#include <memory>
+
 #include <glm/glm.hpp>
 
 #include "atmo/image.h"
@@ -52,6 +54,35 @@ Source4dTablesGl UploadSource4dTables(const cpu::Source4dTables& tables);
 // atmo::Error for a table whose passes would need more than 65535 work groups.
 Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                                          const cpu::Source4dSettings& settings, PassTimings* timings = nullptr);
+
+// The same tables built a step at a time, for a program that must keep drawing while they are
+// computed (atmo-viewer): every pass of ComputeSource4dTablesGl, in the same order and with the
+// same results, but the gathering and the matrix products (the passes that take the time) in
+// steps of `groups_per_step` work groups of 64 invocations for the gathering and 1/8 of that for
+// the products, whose invocations cost ~10x more (0: whole passes, what ComputeSource4dTablesGl
+// does). The CPU's transmittance table and quadrature matrices (~0.1 s) run on a thread of their
+// own from the constructor on (with groups_per_step 0: in the first step); the first step uploads
+// them once ready and returns at once (nothing done, progress unchanged) while they are not.
+// Each Step() runs one step (its time under the pass's name into `timings`); after the last,
+// done() and Take() gives the tables. Between steps the caller may run other passes on the
+// context: every step sets the uniforms and binds what it uses. Throws as ComputeSource4dTablesGl.
+class Source4dTablesBuilder {
+ public:
+  Source4dTablesBuilder(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                        const cpu::Source4dSettings& settings, int groups_per_step, PassTimings* timings = nullptr);
+  ~Source4dTablesBuilder();
+  Source4dTablesBuilder(const Source4dTablesBuilder&) = delete;
+  Source4dTablesBuilder& operator=(const Source4dTablesBuilder&) = delete;
+
+  bool done() const;
+  double progress() const;  // steps done / steps in all: 0 .. 1, rising
+  void Step(PassTimings* timings = nullptr);
+  Source4dTablesGl Take();  // once done()
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 // Fills every batch of `model` with tables computed on GL (ComputeSource4dTablesGl) and
 // downloaded (Source4dModel::SetComputedTables), so that its SkyView answers from them on the CPU.
