@@ -220,6 +220,7 @@ class Source4dSky final : public Sky {
       if (builder_->done()) {
         tables_.push_back(builder_->Take());
         builder_.reset();
+        sky_view_stale_ = true;
       }
       if (MillisecondsSince(start) >= budget_ms) break;
     }
@@ -234,10 +235,12 @@ class Source4dSky final : public Sky {
     tables_.clear();
     for (const shared::AtmosphereParameters& km : km_)
       tables_.push_back(gl::ComputeSource4dTablesGl(context_, km, model_.settings().tables, timings));
+    sky_view_stale_ = true;
   }
   void SetView(double altitude_m, double elevation_deg, double azimuth_deg, bool, PassTimings*) override {
     const glm::dvec3 sun = glm::normalize(SunDirection(elevation_deg, azimuth_deg));
     model_.View(altitude_m, sun);  // what the CPU model refuses (below the ground), as atmo render
+    if (r_km_ != (parameters_.ground_radius_m + altitude_m) / 1000.0 || sun_ != sun) sky_view_stale_ = true;
     r_km_ = (parameters_.ground_radius_m + altitude_m) / 1000.0;
     sun_ = sun;
   }
@@ -245,11 +248,24 @@ class Source4dSky final : public Sky {
     const shared::CameraParameters shared_camera = ToSharedCamera(camera);
     SizeFrames(frames_, km_.size(), shared_camera);
     has_alpha_ = camera.kind == CameraKind::kFisheye;
+    // The sky-view tables (inside the atmosphere), remade when the observer, the sun or the
+    // tables change: the frame pass then reads them instead of marching every pixel.
+    const bool use_sky_view = gl::Source4dSkyViewServes(model_.settings(), km_[0], r_km_);
+    if (use_sky_view && (sky_view_stale_ || sky_views_.size() != km_.size())) {
+      sky_views_.resize(km_.size());
+      gl::GpuPassTimer sky_view_timer(timings);
+      for (std::size_t b = 0; b < km_.size(); ++b) {
+        gl::RunSource4dSkyViewPass(context_, km_[b], tables_.at(b), model_.settings().samples,
+                                   model_.settings().sky_view_lut, r_km_, sun_, sky_views_[b]);
+      }
+      sky_view_timer.Stop("sky_view_lut");
+      sky_view_stale_ = false;
+    }
     gl::GpuPassTimer timer(timings);
     for (std::size_t b = 0; b < km_.size(); ++b) {
       gl::RunSource4dFramePass(context_, km_[b], tables_.at(b), model_.settings().samples, shared_camera, r_km_, sun_,
                                terms.ground, terms.sun_disc, BatchValues(parameters_.solar_irradiance, b),
-                               frames_[b]);
+                               frames_[b], use_sky_view ? &sky_views_[b] : nullptr);
     }
     timer.Stop(FrameName(shared_camera));
   }
@@ -277,6 +293,8 @@ class Source4dSky final : public Sky {
   std::unique_ptr<gl::Source4dTablesBuilder> builder_;  // of batch tables_.size()
   std::vector<gl::Source4dTablesGl> tables_;
   std::vector<gl::GpuTexture> frames_;
+  std::vector<gl::Source4dSkyViewGl> sky_views_;  // per batch, for r_km_ and sun_
+  bool sky_view_stale_ = true;
   double r_km_ = 6360.0;
   glm::dvec3 sun_{0.0, 0.0, 1.0};
   bool has_alpha_ = false;

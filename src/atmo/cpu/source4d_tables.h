@@ -35,7 +35,7 @@ struct Source4dSettings {
   int phi_size = 8;
   // The gathering grid of incident directions (zenith nodes over [0, pi], azimuth nodes over
   // [0, pi]) and the steps of each gathering ray.
-  int gather_zeniths = 49;
+  int gather_zeniths = 97;
   int gather_azimuths = 9;
   int gather_samples = 24;
   // Orders computed explicitly (>= 2; the geometric tail adds the rest). 1: single scattering

@@ -40,6 +40,10 @@ uniform vec3 sun_direction;  // unit, local frame (x east, y north, z up)
 uniform bool ground;
 uniform bool sun_disc;
 uniform vec3 solar_irradiance;
+#if USE_SKY_VIEW
+uniform sampler2D sky_view_texture;  // the sky alone, or with the lit ground (as `ground` asks)
+uniform float horizon_nadir_angle;
+#endif
 
 void main() {
   ivec2 size = imageSize(output_image);
@@ -51,20 +55,87 @@ void main() {
   if (seen) {
     float mu = ClampCosine(direction.z);
     float nu = ClampCosine(dot(direction, sun_direction));
+#if USE_SKY_VIEW
+    vec2 uv = GetSkyViewTextureUvFromBeta(textureSize(sky_view_texture, 0), horizon_nadir_angle, mu,
+        GetAzimuthFromSun(direction, sun_direction));
+    radiance = texture(sky_view_texture, uv).rgb;
+#else
     vec3 ground_radiance;
     radiance = GetSource4dRadiance(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
         irradiance_texture, mu_s_size, r, mu, ClampCosine(sun_direction.z), nu, sample_count, ground_radiance);
     if (ground) radiance += ground_radiance;
+#endif
     if (sun_disc) radiance += GetSunDiscRadiance(atmosphere, transmittance_texture, r, mu, nu);
   }
   imageStore(output_image, pixel, vec4(radiance * solar_irradiance, seen ? 1.0 : 0.0));
 }
 )glsl";
 
-const ComputeProgram& Source4dFrameProgram(const Context& context, double* compile_ms = nullptr) {
-  return context.Program({"definitions.glsl", "geometry.glsl", "medium.glsl", "phase.glsl", "transmittance.glsl",
-                          "multiple_scattering.glsl", "sun.glsl", "sky.glsl", "camera.glsl", "source4d.glsl"},
-                         kSource4dFrameMain, "source4d frame", compile_ms);
+// The sky-view tables' texels (ComputeSource4dSkyViewTexel): the sky into image 0, the sky with
+// the lit ground into image 1. Texel x and width - x are mirror images: the invocations march
+// columns 0 .. width / 2 and write both.
+constexpr const char* kSource4dSkyViewMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D sky_image;
+layout(rgba32f, binding = 1) uniform writeonly image2D sky_and_ground_image;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform sampler3D rayleigh_texture;
+uniform sampler3D mie_texture;
+uniform sampler2D irradiance_texture;
+uniform int mu_s_size;
+uniform int sample_count;
+uniform float r;     // km
+uniform float mu_s;
+
+void main() {
+  ivec2 size = imageSize(sky_image);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x > size.x / 2 || texel.y >= size.y) return;
+  vec3 ground_radiance;
+  vec3 radiance = ComputeSource4dSkyViewTexel(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
+      irradiance_texture, mu_s_size, size, vec2(texel) + vec2(0.5), r, mu_s, sample_count, ground_radiance);
+  ivec2 mirror = ivec2((size.x - texel.x) % size.x, texel.y);
+  imageStore(sky_image, texel, vec4(radiance, 1.0));
+  imageStore(sky_image, mirror, vec4(radiance, 1.0));
+  imageStore(sky_and_ground_image, texel, vec4(radiance + ground_radiance, 1.0));
+  imageStore(sky_and_ground_image, mirror, vec4(radiance + ground_radiance, 1.0));
+}
+)glsl";
+
+constexpr std::string_view kSource4dFiles[] = {"definitions.glsl",         "geometry.glsl", "medium.glsl",
+                                               "phase.glsl",               "transmittance.glsl",
+                                               "multiple_scattering.glsl", "sun.glsl",      "sky.glsl",
+                                               "camera.glsl",              "source4d.glsl"};
+
+const ComputeProgram& Source4dFrameProgram(const Context& context, bool use_sky_view, double* compile_ms = nullptr) {
+  // Two programs, not a uniform branch (llvmpipe runs a frame with a runtime branch between
+  // whole code paths far slower: docs/performance.md).
+  static const std::string march = std::string("#define USE_SKY_VIEW 0\n") + kSource4dFrameMain;
+  static const std::string table = std::string("#define USE_SKY_VIEW 1\n") + kSource4dFrameMain;
+  return context.Program(kSource4dFiles, use_sky_view ? table : march,
+                         use_sky_view ? "source4d frame (sky view)" : "source4d frame", compile_ms);
+}
+
+// The tables' uniforms and samplers, and `sky_view` (a sky-view table) as sampler
+// sky_view_texture where not null.
+void BindSource4dTables(const ComputeProgram& program, const shared::AtmosphereParameters& km_atmosphere,
+                        const Source4dTablesGl& tables, int samples, const GpuTexture* sky_view = nullptr) {
+  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
+  program.SetInt("mu_s_size", tables.mu_s_size);
+  program.SetInt("sample_count", samples);
+  if (sky_view != nullptr) {
+    BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
+                           {"rayleigh_texture", &tables.rayleigh},
+                           {"mie_texture", &tables.mie},
+                           {"irradiance_texture", &tables.ground_irradiance},
+                           {"sky_view_texture", sky_view}});
+  } else {
+    BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
+                           {"rayleigh_texture", &tables.rayleigh},
+                           {"mie_texture", &tables.mie},
+                           {"irradiance_texture", &tables.ground_irradiance}});
+  }
 }
 
 }  // namespace
@@ -82,25 +153,49 @@ Source4dTablesGl UploadSource4dTables(const cpu::Source4dTables& tables) {
   return gl;
 }
 
+bool Source4dSkyViewServes(const Source4dModelSettings& settings, const shared::AtmosphereParameters& km_atmosphere,
+                           double r_km) {
+  return settings.sky_view != Source4dModelSettings::SkyViewMode::kOff && r_km <= km_atmosphere.top_radius;
+}
+
+void RunSource4dSkyViewPass(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                            const Source4dTablesGl& tables, int samples, glm::ivec2 size, double r_km,
+                            const glm::dvec3& sun_direction, Source4dSkyViewGl& out) {
+  if (size.x < 4 || size.y < 4 || size.x % 2 != 0 || size.y % 2 != 0) {
+    throw Error("GL source4d sky-view table: the width and the height must be even and >= 4");
+  }
+  context.MakeCurrent();
+  if (out.sky.empty() || out.sky.size2() != shared::ivec2(size.x, size.y)) {
+    out.sky = GpuTexture::Make2D({size.x, size.y}, /*repeat_u=*/true);
+    out.sky_and_ground = GpuTexture::Make2D({size.x, size.y}, /*repeat_u=*/true);
+  }
+  const ComputeProgram& program = context.Program(kSource4dFiles, kSource4dSkyViewMain, "source4d sky view");
+  BindSource4dTables(program, km_atmosphere, tables, samples);
+  program.SetFloat("r", r_km);
+  program.SetFloat("mu_s", shared::ClampCosine(glm::normalize(sun_direction).z));
+  out.sky.BindImage(0);
+  out.sky_and_ground.BindImage(1);
+  DispatchCompute2D(program, {size.x / 2 + 1, size.y});
+  CheckGlError("source4d sky view");
+  out.horizon_nadir_angle = shared::GetHorizonNadirAngle(km_atmosphere, r_km);
+}
+
 void RunSource4dFramePass(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                           const Source4dTablesGl& tables, int samples, const shared::CameraParameters& camera,
                           double r_km, const glm::dvec3& sun_direction, bool ground, bool sun_disc,
-                          const shared::vec3& solar_irradiance, const GpuTexture& out) {
+                          const shared::vec3& solar_irradiance, const GpuTexture& out,
+                          const Source4dSkyViewGl* sky_view) {
   context.MakeCurrent();
-  const ComputeProgram& program = Source4dFrameProgram(context);
-  SetAtmosphereUniforms(program, "atmosphere", km_atmosphere);
+  const ComputeProgram& program = Source4dFrameProgram(context, sky_view != nullptr);
+  const GpuTexture* table = sky_view == nullptr ? nullptr : ground ? &sky_view->sky_and_ground : &sky_view->sky;
+  BindSource4dTables(program, km_atmosphere, tables, samples, table);
   SetCameraUniforms(program, "camera", camera);
-  program.SetInt("mu_s_size", tables.mu_s_size);
-  program.SetInt("sample_count", samples);
   program.SetFloat("r", r_km);
   program.SetVec3("sun_direction", glm::normalize(sun_direction));
   program.SetInt("ground", ground ? 1 : 0);
   program.SetInt("sun_disc", sun_disc ? 1 : 0);
   program.SetVec3("solar_irradiance", solar_irradiance);
-  BindSamplers(program, {{"transmittance_texture", &tables.transmittance},
-                         {"rayleigh_texture", &tables.rayleigh},
-                         {"mie_texture", &tables.mie},
-                         {"irradiance_texture", &tables.ground_irradiance}});
+  if (sky_view != nullptr) program.SetFloat("horizon_nadir_angle", sky_view->horizon_nadir_angle);
   out.BindImage(0);
   DispatchCompute2D(program, out.size2());
   CheckGlError("source4d frame");
@@ -122,7 +217,9 @@ Image RenderFrames(const Context& context, const Source4dModel& model, const Ren
   const AtmosphereParameters& parameters = model.parameters();
   context.MakeCurrent();
   double compile_ms = 0.0;
-  Source4dFrameProgram(context, &compile_ms);  // compiled before any pass is timed
+  const double r_km = (parameters.ground_radius_m + render.altitude_m) / 1000.0;
+  const bool use_sky_view = Source4dSkyViewServes(model.settings(), ToSharedParameters(parameters, 0, 1000.0), r_km);
+  Source4dFrameProgram(context, use_sky_view, &compile_ms);  // compiled before any pass is timed
   if (timings != nullptr) timings->Add("source4d_gl_compile", compile_ms);
 
   const shared::CameraParameters camera = ToSharedCamera(render.camera);
@@ -132,15 +229,22 @@ Image RenderFrames(const Context& context, const Source4dModel& model, const Ren
   const bool has_alpha = camera.kind == shared::kCameraFisheye;
   if (has_alpha) image.alpha.assign(n, 0.0f);
   const GpuTexture frame = GpuTexture::Make2D({camera.width, camera.height});
-  const double r_km = (parameters.ground_radius_m + render.altitude_m) / 1000.0;
   std::vector<shared::Texture2D> transmittance;  // per batch, for the host's sun disc
   for (std::size_t b = 0; b < model.batches().size(); ++b) {
     const Source4dTablesGl tables = make_tables(b);
+    const shared::AtmosphereParameters km = ToSharedParameters(parameters, b, 1000.0);
+    Source4dSkyViewGl sky_view;
+    if (use_sky_view) {
+      GpuPassTimer timer(timings);
+      RunSource4dSkyViewPass(context, km, tables, model.settings().samples, model.settings().sky_view_lut, r_km, sun,
+                             sky_view);
+      timer.Stop("sky_view_lut");
+    }
     {
       GpuPassTimer timer(timings);
-      RunSource4dFramePass(context, ToSharedParameters(parameters, b, 1000.0), tables, model.settings().samples,
-                           camera, r_km, sun, render.terms.ground, /*sun_disc=*/false,
-                           BatchValues(parameters.solar_irradiance, b), frame);
+      RunSource4dFramePass(context, km, tables, model.settings().samples, camera, r_km, sun, render.terms.ground,
+                           /*sun_disc=*/false, BatchValues(parameters.solar_irradiance, b), frame,
+                           use_sky_view ? &sky_view : nullptr);
       timer.Stop("frame_" + std::to_string(camera.width) + "x" + std::to_string(camera.height));
     }
     const std::vector<float> rgba = frame.DownloadRgba();

@@ -88,15 +88,36 @@ class Source4dTablesBuilder {
 // downloaded (Source4dModel::SetComputedTables), so that its SkyView answers from them on the CPU.
 void PrecomputeSource4dGl(const Context& context, Source4dModel& model, PassTimings* timings = nullptr);
 
+// The sky-view tables of one batch for one observer and sun (RunSource4dSkyViewPass): per texel
+// of sky.glsl's mapping the march of GetSource4dRadiance, without and with the lit ground.
+struct Source4dSkyViewGl {
+  GpuTexture sky;
+  GpuTexture sky_and_ground;
+  double horizon_nadir_angle = 0.0;  // shared::GetHorizonNadirAngle of the observer
+};
+
+// Whether `settings` read a sky-view table for an observer at `r_km` (sky_view auto or on, inside
+// the atmosphere): on the GPU every frame pass does then (auto and on alike).
+bool Source4dSkyViewServes(const Source4dModelSettings& settings, const shared::AtmosphereParameters& km_atmosphere,
+                           double r_km);
+
+// Fills `out` (made or remade at `size`, even x even) for an observer at `r_km` and the unit
+// `sun_direction`, with `samples` steps per texel: the march of columns 0 .. width / 2, mirrored.
+void RunSource4dSkyViewPass(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
+                            const Source4dTablesGl& tables, int samples, glm::ivec2 size, double r_km,
+                            const glm::dvec3& sun_direction, Source4dSkyViewGl& out);
+
 // Per pixel of `out` (rgba32f, the camera's size): the camera ray (GetCameraRayDirection),
 // GetSource4dRadiance with `samples` steps for an observer at `r_km` (km from the planet's centre)
 // and the unit `sun_direction`, plus its ground term where `ground` and the per-pixel sun disc
 // (GetSunDiscRadiance) where `sun_disc`, times `solar_irradiance`; alpha 0 outside a fisheye's
-// circle. `km_atmosphere` = ToSharedParameters(parameters, batch, 1000).
+// circle. `km_atmosphere` = ToSharedParameters(parameters, batch, 1000). With `sky_view` (made by
+// RunSource4dSkyViewPass for the same observer and sun) each pixel reads it instead of marching.
 void RunSource4dFramePass(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                           const Source4dTablesGl& tables, int samples, const shared::CameraParameters& camera,
                           double r_km, const glm::dvec3& sun_direction, bool ground, bool sun_disc,
-                          const shared::vec3& solar_irradiance, const GpuTexture& out);
+                          const shared::vec3& solar_irradiance, const GpuTexture& out,
+                          const Source4dSkyViewGl* sky_view = nullptr);
 
 // One frame of a precomputed `model` (its CPU tables uploaded batch by batch, then the frame
 // pass): what atmo::Render gives for the model, one channel per wavelength, the sun disc added on

@@ -100,7 +100,7 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
   if (rays > 64.0 * 1024 * 1024) {
     throw Error("options table and gather: " + std::to_string(static_cast<long long>(rays)) +
                 " gathering rays per order (r layers x sun zeniths x gathering directions) is more than 2^26 "
-                "(the limit; the default is 225792)");
+                "(the limit; the default is 670464)");
   }
   return s;
 }

@@ -4,7 +4,7 @@
 //
 // Options (`--option key=value`):
 //   table=16x24x48x8       r layers x view zeniths x sun zeniths x azimuths of the 4D table
-//   gather=49x9            zenith x azimuth nodes of the incident-direction grid (each 3..512;
+//   gather=97x9            zenith x azimuth nodes of the incident-direction grid (each 3..512;
 //                          at most 2^26 gathering rays: r layers x sun zeniths x directions)
 //   gather_samples=24      steps of each gathering ray (2..1000)
 //   orders=5               orders computed explicitly (2..32); a geometric tail adds the rest;
