@@ -52,6 +52,16 @@ constexpr double kProposalFloor = 1e-4;
 // 66 deg, which covers where a shadowed vertex finds lit air in twilight (towards the sun,
 // 5-20 deg above its direction).
 constexpr double kGuideG = 0.8;
+// The horizon lobe of shadow guiding, in the local frame of the vertex x (up = x / |x|): azimuth
+// about the sun's azimuth and elevation about e0 = -acos((R_ground + h / 2) / |x|) (the ray that
+// grazes half the vertex's altitude h), each a two-sided exponential of the given scale truncated
+// to its range. In deep twilight (sun 100-108 deg) a vertex near the ground finds lit air only
+// along near-horizontal rays towards the sun's azimuth that travel 500-1500 km and cross the
+// terminator above 20-60 km (docs/models/reference.md): a band a few degrees high and some tens of
+// degrees wide, which the lobe about the sun (whose axis is 10-18 deg below the horizontal there)
+// reaches with a few per cent of its draws.
+constexpr double kHorizonAzimuthScale = 0.35;   // rad
+constexpr double kHorizonElevationScale = 0.035;  // rad
 // Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
 // collisions per walk): see ResidualSunTransmittance.
 constexpr double kResidualRate = 0.25;
@@ -92,6 +102,21 @@ glm::dvec3 DirectionAbout(const glm::dvec3& n, double mu, double phi) {
   const glm::dvec3 t2(b, sign + n.y * n.y * a, -n.y);
   const double sin_theta = std::sqrt(std::max(0.0, 1.0 - mu * mu));
   return glm::normalize(mu * n + sin_theta * (std::cos(phi) * t1 + std::sin(phi) * t2));
+}
+
+// A two-sided exponential density exp(-|x - centre| / scale) truncated to [lo, hi] (lo <= centre
+// <= hi): a sample from a uniform u, and the normalised density.
+double SampleTruncatedLaplace(double centre, double scale, double lo, double hi, double u) {
+  const double left = -std::expm1(-(centre - lo) / scale);
+  const double right = -std::expm1(-(hi - centre) / scale);
+  const double s = u * (left + right);
+  const double x = s < left ? centre + scale * std::log1p(-s) : centre - scale * std::log1p(-(s - left));
+  return std::clamp(x, lo, hi);
+}
+double TruncatedLaplacePdf(double centre, double scale, double lo, double hi, double x) {
+  if (x < lo || x > hi) return 0.0;
+  const double mass = -std::expm1(-(centre - lo) / scale) - std::expm1(-(hi - centre) / scale);
+  return std::exp(-std::abs(x - centre) / scale) / (scale * mass);
 }
 
 // 8-point Gauss-Legendre rule on [-1, 1] (Abramowitz & Stegun table 25.4), nodes ascending.
@@ -186,6 +211,10 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   if (!(settings_.shadow_guiding >= 0.0 && settings_.shadow_guiding < 1.0)) {
     throw Error("the shadow guiding probability must be in [0, 1)");
   }
+  if (!(settings_.horizon_lobe >= 0.0 && settings_.horizon_lobe <= 1.0)) {
+    throw Error("the horizon lobe fraction must be in [0, 1]");
+  }
+  if (settings_.shadow_splits < 1) throw Error("shadow splitting needs at least 1 direction");
   if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
     const double rg = atmosphere_.bottom_radius;
@@ -595,6 +624,62 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
   return estimate;
 }
 
+glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind,
+                                       double g, Rng& rng, double& mis_weight) const {
+  const double guide = settings_.shadow_guiding;
+  const double horizon = guide * settings_.horizon_lobe;
+  const double sun_lobe = guide - horizon;
+  // The horizon lobe's frame: up, towards the sun's azimuth, and across.
+  const double r = glm::length(x);
+  const glm::dvec3 up = x / r;
+  glm::dvec3 towards = sun - glm::dot(sun, up) * up;
+  if (glm::dot(towards, towards) < 1e-24) towards = DirectionAbout(up, 0.0, 0.0);
+  towards = glm::normalize(towards);
+  const glm::dvec3 across = glm::cross(up, towards);
+  const double rg = atmosphere_.bottom_radius;
+  const double e0 = -std::acos(std::clamp((rg + 0.5 * std::max(r - rg, 0.0)) / r, -1.0, 1.0));
+  constexpr double kHalfPi = 0.5 * kPi;
+
+  glm::dvec3 next;
+  const double u = rng.Uniform();
+  if (u < sun_lobe) {
+    const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
+    next = DirectionAbout(sun, mu, 2.0 * kPi * rng.Uniform());
+  } else if (u < guide) {
+    const double azimuth = SampleTruncatedLaplace(0.0, kHorizonAzimuthScale, -kPi, kPi, rng.Uniform());
+    const double elevation = SampleTruncatedLaplace(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, rng.Uniform());
+    next = glm::normalize(std::cos(elevation) * (std::cos(azimuth) * towards + std::sin(azimuth) * across) +
+                          std::sin(elevation) * up);
+  } else {
+    const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+    next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+  }
+  const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
+  double mixture = (1.0 - guide) * phase;
+  if (sun_lobe > 0.0) {
+    mixture += sun_lobe * shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(sun, next));
+  }
+  if (horizon > 0.0) {
+    // Solid-angle density: p(azimuth) p(elevation) / cos(elevation).
+    const double sin_elevation = std::clamp(glm::dot(next, up), -1.0, 1.0);
+    const double cos_elevation = std::sqrt(std::max(0.0, 1.0 - sin_elevation * sin_elevation));
+    if (cos_elevation > 1e-12) {
+      const double azimuth = std::atan2(glm::dot(next, across), glm::dot(next, towards));
+      const double elevation = std::asin(sin_elevation);
+      mixture += horizon * TruncatedLaplacePdf(0.0, kHorizonAzimuthScale, -kPi, kPi, azimuth) *
+                 TruncatedLaplacePdf(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, elevation) / cos_elevation;
+    }
+  }
+  mis_weight = mixture > 0.0 ? phase / mixture : 0.0;
+  return next;
+}
+
+glm::dvec3 PathTracer::SampleShadowDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, bool mie,
+                                             std::uint64_t seed, double& weight) const {
+  Rng rng(Mix64(seed ^ 0x5D1Eull));
+  return GuidedDirection(x, d, sun, mie ? mie_phase_ : rayleigh_phase_, mie ? mie_g_ : rayleigh_g_, rng, weight);
+}
+
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
   glm::dvec3 p = query.origin;
@@ -603,6 +688,14 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
   double weight = 1.0;
   int order = 0;  // scattering events (and ground reflections) so far
   const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
+  // Shadow splitting happens once per path; the continued direction's segment estimate is one of
+  // the N and carries 1/N of the weight (segment_scale).
+  bool split = false;
+  double segment_scale = 1.0;
+  // Whether a segment of this path has started in the shadow: nee=auto then takes the segment
+  // estimate on the rest of the path (its later vertices are few and heavy: a guided path that
+  // reached lit air scores the sun's forward peak there).
+  bool been_shadowed = false;
   while (true) {
     double length;
     bool ground;
@@ -622,11 +715,13 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     if (!half_space_ && !cross_to_ground && length < kInfinity &&
         settings_.next_event != NextEventEstimation::kVertex) {
       segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
-      if (!segment_nee) segment_nee = InShadow(p, query.sun);
+      if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
       if (segment_nee) {
-        orders[std::min(order + 1, kOrderBins) - 1] += weight * SegmentSunlight(p, d, length, query.sun, c, rng);
+        orders[std::min(order + 1, kOrderBins) - 1] +=
+            segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
       }
     }
+    segment_scale = 1.0;
 
     // Delta tracking against the segment's majorant, the first tentative collision forced into
     // the segment where allowed.
@@ -670,22 +765,45 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       if (sun_transmittance != 0.0) {
         add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
       }
-      const double guide = settings_.shadow_guiding;
-      if (guide > 0.0 && !half_space_ && InShadow(p, query.sun)) {
-        // One-sample MIS of the phase function and a lobe about the sun (the lit air of a
-        // shadowed vertex lies towards the sun): weight p_phase / q, q their mixture, <= 1 / (1 - guide).
-        glm::dvec3 next;
-        if (rng.Uniform() < guide) {
-          const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
-          next = DirectionAbout(query.sun, mu, 2.0 * kPi * rng.Uniform());
-        } else {
-          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-          next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+      const bool shadowed = !half_space_ && InShadow(p, query.sun);
+      // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
+      // (nee=auto or segment): N directions from the same distribution; directions 1..N-1 score
+      // their segment estimates now, each with 1/N of the weight, in the next collision's bin,
+      // and direction 0 goes on with the full weight, its segment estimate scaled by 1/N. The
+      // mean of N unbiased estimates of the next segment's expected vertex estimate is one, and
+      // the continued path is a draw of the unsplit one (docs/models/reference.md).
+      const int splits = settings_.shadow_splits;
+      const bool do_split = shadowed && !split && splits > 1 && settings_.next_event != NextEventEstimation::kVertex;
+      if (do_split) split = true;
+      const auto draw = [&](double& direction_weight) {
+        if (shadowed && settings_.shadow_guiding > 0.0) {
+          return GuidedDirection(p, d, query.sun, kind, g, rng, direction_weight);
         }
-        const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
-        const double lobe = shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(query.sun, next));
-        weight *= phase / ((1.0 - guide) * phase + guide * lobe);
-        d = next;
+        direction_weight = 1.0;
+        const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+        return DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+      };
+      if (do_split) {
+        const double share = 1.0 / splits;
+        for (int i = 1; i < splits; ++i) {
+          double w_i;
+          const glm::dvec3 d_i = draw(w_i);
+          if (!(w_i > 0.0)) continue;
+          double length_i;
+          bool ground_i;
+          Segment(p, d_i, length_i, ground_i);
+          if (length_i < kInfinity) {
+            orders[std::min(order + 1, kOrderBins) - 1] +=
+                share * weight * w_i * SegmentSunlight(p, d_i, length_i, query.sun, c, rng);
+          }
+        }
+        segment_scale = share;
+      }
+      if (shadowed && settings_.shadow_guiding > 0.0) {
+        double w;
+        d = draw(w);
+        weight *= w;
+        if (!(weight > 0.0)) return;
       } else {
         const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
         d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());

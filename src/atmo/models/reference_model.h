@@ -17,6 +17,9 @@
 //   nee_samples=2           stratified points per segment integral
 //   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
 //                           new direction from a lobe about the sun (MIS with the phase function)
+//   horizon_lobe=0.5        the fraction of the guided draws from the lobe about the sun's
+//                           azimuth just below the local horizontal (the rest: about the sun)
+//   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -49,6 +52,8 @@ struct ReferenceSettings {
   cpu::NextEventEstimation next_event = cpu::NextEventEstimation::kAuto;
   int nee_samples = 2;
   double shadow_guiding = 0.5;
+  double horizon_lobe = 0.5;
+  int shadow_splits = 4;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
