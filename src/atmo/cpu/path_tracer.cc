@@ -65,6 +65,9 @@ constexpr double kHorizonElevationScale = 0.035;  // rad
 // Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
 // collisions per walk): see ResidualSunTransmittance.
 constexpr double kResidualRate = 0.25;
+// Importance splitting: at most this many copies at one vertex, and this many walks per path.
+constexpr int kMaxCopies = 8;
+constexpr int kMaxWalks = 32;
 
 // splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
 std::uint64_t Mix64(std::uint64_t z) {
@@ -624,20 +627,65 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
   return estimate;
 }
 
+void PathTracer::HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
+                              glm::dvec3& across, double& e0) const {
+  const double r = glm::length(x);
+  up = x / r;
+  towards = sun - glm::dot(sun, up) * up;
+  if (glm::dot(towards, towards) < 1e-24) towards = DirectionAbout(up, 0.0, 0.0);
+  towards = glm::normalize(towards);
+  across = glm::cross(up, towards);
+  const double rg = atmosphere_.bottom_radius;
+  e0 = -std::acos(std::clamp((rg + 0.5 * std::max(r - rg, 0.0)) / r, -1.0, 1.0));
+}
+
+// The importance of a shadowed vertex for importance splitting: the proxy of the segment
+// estimate (the integrand of SegmentSunlight with an isotropic phase function, both optical depths
+// by the trapezoidal rule on 17 nodes and the sun's from the proxy table) along the horizon lobe's
+// axis, the direction in which a deep-twilight vertex sees the most lit air. It only decides how
+// many copies a path is split into, never a weight's expectation.
+double PathTracer::ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c) const {
+  glm::dvec3 up, towards, across;
+  double e0;
+  HorizonFrame(x, sun, up, towards, across, e0);
+  const glm::dvec3 a = glm::normalize(std::cos(e0) * towards + std::sin(e0) * up);
+  double length;
+  bool ground;
+  Segment(x, a, length, ground);
+  if (!(length > 0.0 && length < kInfinity)) return 0.0;
+  double shadow_begin, shadow_end;
+  ShadowInterval(x, a, length, sun, shadow_begin, shadow_end);
+  const double t_low = std::clamp(-glm::dot(x, a), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  double tau = 0.0, sigma_previous = 0.0, g_previous = 0.0, t_previous = 0.0, integral = 0.0;
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    const double t = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+    const glm::dvec3 y = x + t * a;
+    const glm::dvec3 densities = Densities(y);
+    const double sigma = OpticalDepth(c, densities);
+    if (i > 0) tau += 0.5 * (sigma_previous + sigma) * (t - t_previous);
+    const bool lit = !(shadow_begin < shadow_end && t > shadow_begin && t < shadow_end);
+    const double g = lit ? (c.rayleigh_scattering * densities.x + c.mie_scattering * densities.y) *
+                               std::exp(-tau - OpticalDepth(c, SunDensityProxy(y, sun)))
+                         : 0.0;
+    if (i > 0) integral += 0.5 * (g_previous + g) * (t - t_previous);
+    sigma_previous = sigma;
+    g_previous = g;
+    t_previous = t;
+  }
+  return integral;
+}
+
 glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind,
                                        double g, Rng& rng, double& mis_weight) const {
   const double guide = settings_.shadow_guiding;
   const double horizon = guide * settings_.horizon_lobe;
   const double sun_lobe = guide - horizon;
-  // The horizon lobe's frame: up, towards the sun's azimuth, and across.
-  const double r = glm::length(x);
-  const glm::dvec3 up = x / r;
-  glm::dvec3 towards = sun - glm::dot(sun, up) * up;
-  if (glm::dot(towards, towards) < 1e-24) towards = DirectionAbout(up, 0.0, 0.0);
-  towards = glm::normalize(towards);
-  const glm::dvec3 across = glm::cross(up, towards);
-  const double rg = atmosphere_.bottom_radius;
-  const double e0 = -std::acos(std::clamp((rg + 0.5 * std::max(r - rg, 0.0)) / r, -1.0, 1.0));
+  glm::dvec3 up, towards, across;
+  double e0;
+  HorizonFrame(x, sun, up, towards, across, e0);
   constexpr double kHalfPi = 0.5 * kPi;
 
   glm::dvec3 next;
@@ -682,20 +730,32 @@ glm::dvec3 PathTracer::SampleShadowDirection(const glm::dvec3& x, const glm::dve
 
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
-  glm::dvec3 p = query.origin;
-  glm::dvec3 d = query.view;
-  if (!EnterAtmosphere(p, d)) return;
-  double weight = 1.0;
-  int order = 0;  // scattering events (and ground reflections) so far
-  const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
+  glm::dvec3 entry = query.origin;
+  if (!EnterAtmosphere(entry, query.view)) return;
+  // Importance splitting (settings_.importance_splitting): the walks that copies of the path
+  // still have to trace, and the weight times importance at the path's first shadowed vertex,
+  // which later shadowed vertices split towards (docs/models/reference.md).
+  struct Walk {
+    glm::dvec3 p, d;
+    double weight;
+    int order;
+    double target;  // the weight a walk is split down to; roulette is relative to min(target, 1)
+  };
+  std::array<Walk, kMaxWalks> pending;
+  int pending_count = 0;
+  int walks = 1;
+  double reference_importance = 0.0;
   // Shadow splitting happens once per path; the continued direction's segment estimate is one of
   // the N and carries 1/N of the weight (segment_scale).
   bool split = false;
+  const auto walk = [&](const Walk& start) {
+  glm::dvec3 p = start.p;
+  glm::dvec3 d = start.d;
+  double weight = start.weight;
+  int order = start.order;  // scattering events (and ground reflections) so far
+  double target = start.target;
+  const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
   double segment_scale = 1.0;
-  // Whether a segment of this path has started in the shadow: nee=auto then takes the segment
-  // estimate on the rest of the path (its later vertices are few and heavy: a guided path that
-  // reached lit air scores the sun's forward peak there).
-  bool been_shadowed = false;
   while (true) {
     double length;
     bool ground;
@@ -715,7 +775,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     if (!half_space_ && !cross_to_ground && length < kInfinity &&
         settings_.next_event != NextEventEstimation::kVertex) {
       segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
-      if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
+      if (!segment_nee) segment_nee = InShadow(p, query.sun);
       if (segment_nee) {
         orders[std::min(order + 1, kOrderBins) - 1] +=
             segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
@@ -799,6 +859,28 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
         }
         segment_scale = share;
       }
+      // Importance splitting at the later shadowed vertices: a path whose weight times the
+      // vertex's importance is n >= 2 times that at its first shadowed vertex goes on as n copies
+      // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
+      // n); at most kMaxCopies at a vertex and kMaxWalks per path.
+      if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
+        const double importance = ImportanceProxy(p, query.sun, c);
+        if (importance > 0.0) {
+          if (!(reference_importance > 0.0)) reference_importance = weight * importance;
+          target = reference_importance / importance;
+          const double ratio = std::min(weight / target, static_cast<double>(kMaxCopies));
+          const int n = std::min(static_cast<int>(ratio), kMaxWalks - walks + 1);
+          if (n >= 2) {
+            weight /= n;
+            for (int i = 1; i < n; ++i) {
+              double w_i;
+              const glm::dvec3 d_i = draw(w_i);
+              ++walks;
+              if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target};
+            }
+          }
+        }
+      }
       if (shadowed && settings_.shadow_guiding > 0.0) {
         double w;
         d = draw(w);
@@ -825,10 +907,16 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     }
 
     if (order >= settings_.roulette_start_order) {
-      const double survival = std::min(weight, 0.95);
+      const double survival = std::min(weight / std::min(target, 1.0), 0.95);
       if (!(rng.Uniform() < survival)) return;
       weight /= survival;
     }
+  }
+  };
+  walk(Walk{entry, query.view, 1.0, 0, kInfinity});
+  while (pending_count > 0) {
+    --pending_count;
+    walk(pending[pending_count]);
   }
 }
 

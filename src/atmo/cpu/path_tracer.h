@@ -112,6 +112,8 @@ struct PathTracerSettings {
   // At the first scattering vertex of a path in the planet's shadow, the number of directions
   // drawn (splitting): each takes its segment estimate with 1/N of the weight, one goes on; >= 1.
   int shadow_splits = 4;
+  // Importance splitting at the later shadowed vertices of a path (see TracePath).
+  bool importance_splitting = true;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -241,6 +243,11 @@ class PathTracer {
   // lobes; `mis_weight` is set to phase / mixture pdf (<= 1 / (1 - shadow_guiding)).
   glm::dvec3 GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind, double g,
                              Rng& rng, double& mis_weight) const;
+  // The horizon lobe's frame at x: up, towards the sun's azimuth, across, and the axis elevation.
+  void HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
+                    glm::dvec3& across, double& e0) const;
+  // A proxy of the light a shadowed vertex x can scatter (importance splitting only).
+  double ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c) const;
   // One path of one channel; adds its contributions per order bin to `orders`.
   void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].

@@ -19,7 +19,9 @@
 //                           new direction from a lobe about the sun (MIS with the phase function)
 //   horizon_lobe=0.5        the fraction of the guided draws from the lobe about the sun's
 //                           azimuth just below the local horizontal (the rest: about the sun)
-//   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting)
+//   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
+//   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
+//                           of the lit air they see (off: no splitting)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -54,6 +56,7 @@ struct ReferenceSettings {
   double shadow_guiding = 0.5;
   double horizon_lobe = 0.5;
   int shadow_splits = 4;
+  bool importance_splitting = true;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
