@@ -37,6 +37,11 @@
 //     weighted by phase / mixture pdf (one-sample MIS, weight <= 1 / (1 - shadow_guiding));
 //   - splitting at the first vertex of a path in the shadow: shadow_splits directions, each with
 //     its segment estimate at 1/N of the weight, one of them continued with the full weight;
+//   - importance splitting at the later shadowed vertices (importance_splitting): a proxy of the
+//     lit air a vertex sees (ImportanceProxy) times the path's weight, against the same product at
+//     the path's first shadowed vertex, says into how many copies (of 1/n of the weight) the path
+//     is split there, and Russian roulette is taken relative to that weight, so the rare paths
+//     that climb to the bright air above the shadow no longer carry most of the estimate alone;
 //   - the medium that scatters is Rayleigh or Mie with probability proportional to its scattering
 //     coefficient at the point; the new direction is sampled exactly from its phase function;
 //   - a Lambertian ground: next-event estimation albedo/pi * cos * T_sun and a cosine-weighted
