@@ -740,6 +740,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     double weight;
     int order;
     double target;  // the weight a walk is split down to; roulette is relative to min(target, 1)
+    bool been_shadowed;
   };
   std::array<Walk, kMaxWalks> pending;
   int pending_count = 0;
@@ -756,6 +757,10 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
   double target = start.target;
   const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
   double segment_scale = 1.0;
+  // Whether a segment of this walk has started in the shadow: nee=auto then takes the segment
+  // estimate on the rest of it (a guided path that reached lit air has vertex estimates there
+  // that are rare and large: the forward peak towards the sun).
+  bool been_shadowed = start.been_shadowed;
   while (true) {
     double length;
     bool ground;
@@ -774,8 +779,8 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     bool segment_nee = false;
     if (!half_space_ && !cross_to_ground && length < kInfinity &&
         settings_.next_event != NextEventEstimation::kVertex) {
-      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
-      if (!segment_nee) segment_nee = InShadow(p, query.sun);
+      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0 || been_shadowed;
+      if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
       if (segment_nee) {
         orders[std::min(order + 1, kOrderBins) - 1] +=
             segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
@@ -876,7 +881,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
               double w_i;
               const glm::dvec3 d_i = draw(w_i);
               ++walks;
-              if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target};
+              if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target, true};
             }
           }
         }
@@ -913,7 +918,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
     }
   }
   };
-  walk(Walk{entry, query.view, 1.0, 0, kInfinity});
+  walk(Walk{entry, query.view, 1.0, 0, kInfinity, false});
   while (pending_count > 0) {
     --pending_count;
     walk(pending[pending_count]);
