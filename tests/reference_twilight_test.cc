@@ -84,7 +84,8 @@ TEST(ReferenceSegmentEstimator, AgreesWithTheVertexEstimatorOrderByOrder) {
   auto segment = MakeReference(p, {{"seed", "3"}, {"nee", "segment"}, {"shadow_guiding", "0"}});
   auto guided = MakeReference(p, {{"seed", "4"}});  // the defaults: nee=auto, shadow guiding on
   // The horizon lobe alone and heavy splitting: the sampling of the defaults at its extremes.
-  auto horizon = MakeReference(p, {{"seed", "5"}, {"shadow_guiding", "0.9"}, {"horizon_lobe", "1"}, {"shadow_splits", "8"}});
+  auto horizon =
+      MakeReference(p, {{"seed", "5"}, {"shadow_guiding", "0.9"}, {"horizon_lobe", "1"}, {"shadow_splits", "8"}});
   struct Case {
     Query q;
     std::uint64_t vertex_paths, paths;
@@ -149,7 +150,8 @@ TEST(ReferenceSegmentEstimator, GuidedDirectionWeightsAreThePhaseFunctionOverThe
       for (bool mie : {false, true}) {
         const glm::dvec3 d = Direction(60.0, 150.0);
         const auto band = [&](const glm::dvec3& w) {
-          return std::abs(w.z) < std::sin(glm::radians(3.0)) && w.x > std::cos(glm::radians(15.0)) * std::hypot(w.x, w.y);
+          return std::abs(w.z) < std::sin(glm::radians(3.0)) &&
+                 w.x > std::cos(glm::radians(15.0)) * std::hypot(w.x, w.y);
         };
         double sum = 0.0, sum_sq = 0.0, up = 0.0, up_sq = 0.0, in_band = 0.0, in_band_sq = 0.0;
         for (int i = 0; i < kDraws; ++i) {
@@ -162,7 +164,9 @@ TEST(ReferenceSegmentEstimator, GuidedDirectionWeightsAreThePhaseFunctionOverThe
           if (next.z > 0.0) up += w, up_sq += w * w;
           if (band(next)) in_band += w, in_band_sq += w * w;
         }
-        const auto se = [&](double s1, double s2) { return std::sqrt((s2 / kDraws - std::pow(s1 / kDraws, 2)) / kDraws); };
+        const auto se = [&](double s1, double s2) {
+          return std::sqrt((s2 / kDraws - std::pow(s1 / kDraws, 2)) / kDraws);
+        };
         // The same fractions by phase sampling (guiding off: weight 1).
         cpu::PathTracerSettings plain;
         plain.shadow_guiding = 0.0;
@@ -176,7 +180,8 @@ TEST(ReferenceSegmentEstimator, GuidedDirectionWeightsAreThePhaseFunctionOverThe
         }
         up_phase /= kDraws;
         band_phase /= kDraws;
-        const std::string where = std::string("lobe ") + lobe + " altitude " + std::to_string(altitude) + (mie ? " mie" : " rayleigh");
+        const std::string where =
+            std::string("lobe ") + lobe + " altitude " + std::to_string(altitude) + (mie ? " mie" : " rayleigh");
         EXPECT_TRUE(WithinErrors(sum / kDraws, 1.0, se(sum, sum_sq), 4.0)) << where;
         const double up_se = std::hypot(se(up, up_sq), std::sqrt(up_phase * (1.0 - up_phase) / kDraws));
         EXPECT_TRUE(WithinErrors(up / kDraws, up_phase, up_se, 4.0)) << where;
@@ -246,7 +251,10 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
     ADD_FAILURE();
   } catch (const Error& e) {
     const std::string message = e.what();
-    for (const char* key : {"nee", "nee_samples", "shadow_guiding", "horizon_lobe", "shadow_splits", "importance_splitting"}) EXPECT_NE(message.find(key), std::string::npos);
+    for (const char* key :
+         {"nee", "nee_samples", "shadow_guiding", "horizon_lobe", "shadow_splits", "importance_splitting"}) {
+      EXPECT_NE(message.find(key), std::string::npos);
+    }
   }
   EXPECT_NO_THROW(CreateModel("reference", p, {{"nee", "vertex"}, {"nee_samples", "64"}, {"shadow_guiding", "0.95"},
                                                        {"horizon_lobe", "1"}, {"shadow_splits", "64"}}));

@@ -750,173 +750,173 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
   // the N and carries 1/N of the weight (segment_scale).
   bool split = false;
   const auto walk = [&](const Walk& start) {
-  glm::dvec3 p = start.p;
-  glm::dvec3 d = start.d;
-  double weight = start.weight;
-  int order = start.order;  // scattering events (and ground reflections) so far
-  double target = start.target;
-  const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
-  double segment_scale = 1.0;
-  // Whether a segment of this walk has started in the shadow: nee=auto then takes the segment
-  // estimate on the rest of it (a guided path that reached lit air has vertex estimates there
-  // that are rare and large: the forward peak towards the sun).
-  bool been_shadowed = start.been_shadowed;
-  while (true) {
-    double length;
-    bool ground;
-    Segment(p, d, length, ground);
-    const bool end_scores = ground && c.albedo > 0.0 &&
-                            (order > 0 || query.include_first_ground_hit || query.ground_only);
-    // Ground term only: cross the view segment to the ground, weighted by its transmittance.
-    const bool cross_to_ground = query.ground_only && order == 0;
-    if (cross_to_ground) {
-      if (!end_scores) return;
-      weight *= RatioTracking(p, d, length, c, rng);
-    }
-
-    // Next-event estimation on the segment: the expected vertex estimate of the next collision,
-    // scored in that collision's order bin; the vertex itself then takes none.
-    bool segment_nee = false;
-    if (!half_space_ && !cross_to_ground && length < kInfinity &&
-        settings_.next_event != NextEventEstimation::kVertex) {
-      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0 || been_shadowed;
-      if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
-      if (segment_nee) {
-        orders[std::min(order + 1, kOrderBins) - 1] +=
-            segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
+    glm::dvec3 p = start.p;
+    glm::dvec3 d = start.d;
+    double weight = start.weight;
+    int order = start.order;  // scattering events (and ground reflections) so far
+    double target = start.target;
+    const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
+    double segment_scale = 1.0;
+    // Whether a segment of this walk has started in the shadow: nee=auto then takes the segment
+    // estimate on the rest of it (a guided path that reached lit air has vertex estimates there
+    // that are rare and large: the forward peak towards the sun).
+    bool been_shadowed = start.been_shadowed;
+    while (true) {
+      double length;
+      bool ground;
+      Segment(p, d, length, ground);
+      const bool end_scores = ground && c.albedo > 0.0 &&
+                              (order > 0 || query.include_first_ground_hit || query.ground_only);
+      // Ground term only: cross the view segment to the ground, weighted by its transmittance.
+      const bool cross_to_ground = query.ground_only && order == 0;
+      if (cross_to_ground) {
+        if (!end_scores) return;
+        weight *= RatioTracking(p, d, length, c, rng);
       }
-    }
-    segment_scale = 1.0;
 
-    // Delta tracking against the segment's majorant, the first tentative collision forced into
-    // the segment where allowed.
-    bool collided = false;
-    glm::dvec3 densities(0.0);
-    const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
-    if (majorant > 0.0) {
-      const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
-      double t = 0.0;
-      bool first = true;
-      for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
-        if (first && force) {
-          const double p_collide = -std::expm1(-majorant * length);
-          weight *= p_collide;
-          t -= std::log1p(-rng.Uniform() * p_collide) / majorant;
-        } else {
-          t -= std::log1p(-rng.Uniform()) / majorant;
-        }
-        first = false;
-        if (!(t < length)) break;
-        const glm::dvec3 x = p + t * d;
-        densities = Densities(x);
-        if (rng.Uniform() * majorant < OpticalDepth(c, densities)) {
-          p = x;
-          collided = true;
-          break;
+      // Next-event estimation on the segment: the expected vertex estimate of the next collision,
+      // scored in that collision's order bin; the vertex itself then takes none.
+      bool segment_nee = false;
+      if (!half_space_ && !cross_to_ground && length < kInfinity &&
+          settings_.next_event != NextEventEstimation::kVertex) {
+        segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0 || been_shadowed;
+        if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
+        if (segment_nee) {
+          orders[std::min(order + 1, kOrderBins) - 1] +=
+              segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
         }
       }
-    }
+      segment_scale = 1.0;
 
-    if (collided) {
-      const double rayleigh = c.rayleigh_scattering * densities.x;
-      const double mie = c.mie_scattering * densities.y;
-      weight *= (rayleigh + mie) / OpticalDepth(c, densities);
-      if (weight <= 0.0) return;
-      ++order;
-      const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
-      const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
-      const double g = is_mie ? mie_g_ : rayleigh_g_;
-      const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
-      if (sun_transmittance != 0.0) {
-        add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
-      }
-      const bool shadowed = !half_space_ && InShadow(p, query.sun);
-      // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
-      // (nee=auto or segment): N directions from the same distribution; directions 1..N-1 score
-      // their segment estimates now, each with 1/N of the weight, in the next collision's bin,
-      // and direction 0 goes on with the full weight, its segment estimate scaled by 1/N. The
-      // mean of N unbiased estimates of the next segment's expected vertex estimate is one, and
-      // the continued path is a draw of the unsplit one (docs/models/reference.md).
-      const int splits = settings_.shadow_splits;
-      const bool do_split = shadowed && !split && splits > 1 && settings_.next_event != NextEventEstimation::kVertex;
-      if (do_split) split = true;
-      const auto draw = [&](double& direction_weight) {
-        if (shadowed && settings_.shadow_guiding > 0.0) {
-          return GuidedDirection(p, d, query.sun, kind, g, rng, direction_weight);
-        }
-        direction_weight = 1.0;
-        const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-        return DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
-      };
-      if (do_split) {
-        const double share = 1.0 / splits;
-        for (int i = 1; i < splits; ++i) {
-          double w_i;
-          const glm::dvec3 d_i = draw(w_i);
-          if (!(w_i > 0.0)) continue;
-          double length_i;
-          bool ground_i;
-          Segment(p, d_i, length_i, ground_i);
-          if (length_i < kInfinity) {
-            orders[std::min(order + 1, kOrderBins) - 1] +=
-                share * weight * w_i * SegmentSunlight(p, d_i, length_i, query.sun, c, rng);
+      // Delta tracking against the segment's majorant, the first tentative collision forced into
+      // the segment where allowed.
+      bool collided = false;
+      glm::dvec3 densities(0.0);
+      const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
+      if (majorant > 0.0) {
+        const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
+        double t = 0.0;
+        bool first = true;
+        for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
+          if (first && force) {
+            const double p_collide = -std::expm1(-majorant * length);
+            weight *= p_collide;
+            t -= std::log1p(-rng.Uniform() * p_collide) / majorant;
+          } else {
+            t -= std::log1p(-rng.Uniform()) / majorant;
+          }
+          first = false;
+          if (!(t < length)) break;
+          const glm::dvec3 x = p + t * d;
+          densities = Densities(x);
+          if (rng.Uniform() * majorant < OpticalDepth(c, densities)) {
+            p = x;
+            collided = true;
+            break;
           }
         }
-        segment_scale = share;
       }
-      // Importance splitting at the later shadowed vertices: a path whose weight times the
-      // vertex's importance is n >= 2 times that at its first shadowed vertex goes on as n copies
-      // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
-      // n); at most kMaxCopies at a vertex and kMaxWalks per path.
-      if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
-        const double importance = ImportanceProxy(p, query.sun, c);
-        if (importance > 0.0) {
-          if (!(reference_importance > 0.0)) reference_importance = weight * importance;
-          target = reference_importance / importance;
-          const double ratio = std::min(weight / target, static_cast<double>(kMaxCopies));
-          const int n = std::min(static_cast<int>(ratio), kMaxWalks - walks + 1);
-          if (n >= 2) {
-            weight /= n;
-            for (int i = 1; i < n; ++i) {
-              double w_i;
-              const glm::dvec3 d_i = draw(w_i);
-              ++walks;
-              if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target, true};
+
+      if (collided) {
+        const double rayleigh = c.rayleigh_scattering * densities.x;
+        const double mie = c.mie_scattering * densities.y;
+        weight *= (rayleigh + mie) / OpticalDepth(c, densities);
+        if (weight <= 0.0) return;
+        ++order;
+        const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
+        const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
+        const double g = is_mie ? mie_g_ : rayleigh_g_;
+        const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
+        if (sun_transmittance != 0.0) {
+          add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
+        }
+        const bool shadowed = !half_space_ && InShadow(p, query.sun);
+        // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
+        // (nee=auto or segment): N directions from the same distribution; directions 1..N-1 score
+        // their segment estimates now, each with 1/N of the weight, in the next collision's bin,
+        // and direction 0 goes on with the full weight, its segment estimate scaled by 1/N. The
+        // mean of N unbiased estimates of the next segment's expected vertex estimate is one, and
+        // the continued path is a draw of the unsplit one (docs/models/reference.md).
+        const int splits = settings_.shadow_splits;
+        const bool do_split = shadowed && !split && splits > 1 && settings_.next_event != NextEventEstimation::kVertex;
+        if (do_split) split = true;
+        const auto draw = [&](double& direction_weight) {
+          if (shadowed && settings_.shadow_guiding > 0.0) {
+            return GuidedDirection(p, d, query.sun, kind, g, rng, direction_weight);
+          }
+          direction_weight = 1.0;
+          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          return DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        };
+        if (do_split) {
+          const double share = 1.0 / splits;
+          for (int i = 1; i < splits; ++i) {
+            double w_i;
+            const glm::dvec3 d_i = draw(w_i);
+            if (!(w_i > 0.0)) continue;
+            double length_i;
+            bool ground_i;
+            Segment(p, d_i, length_i, ground_i);
+            if (length_i < kInfinity) {
+              orders[std::min(order + 1, kOrderBins) - 1] +=
+                  share * weight * w_i * SegmentSunlight(p, d_i, length_i, query.sun, c, rng);
+            }
+          }
+          segment_scale = share;
+        }
+        // Importance splitting at the later shadowed vertices: a path whose weight times the
+        // vertex's importance is n >= 2 times that at its first shadowed vertex goes on as n copies
+        // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
+        // n); at most kMaxCopies at a vertex and kMaxWalks per path.
+        if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
+          const double importance = ImportanceProxy(p, query.sun, c);
+          if (importance > 0.0) {
+            if (!(reference_importance > 0.0)) reference_importance = weight * importance;
+            target = reference_importance / importance;
+            const double ratio = std::min(weight / target, static_cast<double>(kMaxCopies));
+            const int n = std::min(static_cast<int>(ratio), kMaxWalks - walks + 1);
+            if (n >= 2) {
+              weight /= n;
+              for (int i = 1; i < n; ++i) {
+                double w_i;
+                const glm::dvec3 d_i = draw(w_i);
+                ++walks;
+                if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target, true};
+              }
             }
           }
         }
-      }
-      if (shadowed && settings_.shadow_guiding > 0.0) {
-        double w;
-        d = draw(w);
-        weight *= w;
-        if (!(weight > 0.0)) return;
+        if (shadowed && settings_.shadow_guiding > 0.0) {
+          double w;
+          d = draw(w);
+          weight *= w;
+          if (!(weight > 0.0)) return;
+        } else {
+          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        }
+      } else if (end_scores) {
+        const glm::dvec3 n = glm::normalize(p + length * d);
+        p = n * atmosphere_.bottom_radius;
+        ++order;
+        const double cos_sun = glm::dot(n, query.sun);
+        if (cos_sun > 0.0) {
+          add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
+        }
+        weight *= c.albedo;
+        if (weight <= 0.0) return;
+        // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
+        d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
       } else {
-        const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-        d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        return;  // escaped, or the view ray's own ground hit
       }
-    } else if (end_scores) {
-      const glm::dvec3 n = glm::normalize(p + length * d);
-      p = n * atmosphere_.bottom_radius;
-      ++order;
-      const double cos_sun = glm::dot(n, query.sun);
-      if (cos_sun > 0.0) {
-        add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
-      }
-      weight *= c.albedo;
-      if (weight <= 0.0) return;
-      // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
-      d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
-    } else {
-      return;  // escaped, or the view ray's own ground hit
-    }
 
-    if (order >= settings_.roulette_start_order) {
-      const double survival = std::min(weight / std::min(target, 1.0), 0.95);
-      if (!(rng.Uniform() < survival)) return;
-      weight /= survival;
+      if (order >= settings_.roulette_start_order) {
+        const double survival = std::min(weight / std::min(target, 1.0), 0.95);
+        if (!(rng.Uniform() < survival)) return;
+        weight /= survival;
+      }
     }
-  }
   };
   walk(Walk{entry, query.view, 1.0, 0, kInfinity, false});
   while (pending_count > 0) {
