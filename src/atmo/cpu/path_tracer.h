@@ -29,7 +29,8 @@
 //     The default (kAuto) takes the segment estimate on the view ray (order 1: the forward
 //     peak towards the sun makes vertex estimates there noisy) and on the segments that start in
 //     the planet's shadow, where vertex estimates are mostly 0 and rarely large (twilight), and
-//     the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
+//     on the rest of a path once one of its segments started there (its lit vertices are rare and
+//     heavy), and the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
 //   - at a vertex in the planet's shadow the new direction comes, with probability
 //     shadow_guiding, from a guiding lobe instead of the phase function: a Henyey-Greenstein lobe
 //     (g 0.8) about the sun, or (fraction horizon_lobe of the guided draws) a lobe about the sun's
@@ -99,8 +100,8 @@ struct PathTally {
 enum class NextEventEstimation {
   kVertex,   // at each real collision vertex
   kSegment,  // on every segment, as the integral over the lit part of the segment
-  kAuto,     // kSegment on the view ray and on the segments that start in the planet's shadow,
-             // kVertex on the others
+  kAuto,     // kSegment on the view ray, on the segments that start in the planet's shadow and on
+             // every later segment of such a path, kVertex on the others
 };
 
 struct PathTracerSettings {

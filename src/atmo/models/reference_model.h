@@ -12,8 +12,8 @@
 //   forced_collisions=on    force the first tentative collision of segments whose end scores 0
 //   nee=auto                next-event estimation to the sun: vertex (at each collision), segment
 //                           (the integral over each segment's lit part), auto (segment on the
-//                           view ray and on segments that start in the planet's shadow, vertex
-//                           elsewhere)
+//                           view ray, on segments that start in the planet's shadow and on the
+//                           rest of such a path, vertex elsewhere)
 //   nee_samples=2           stratified points per segment integral
 //   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
 //                           new direction from a lobe about the sun (MIS with the phase function)
