@@ -52,9 +52,22 @@ constexpr double kProposalFloor = 1e-4;
 // 66 deg, which covers where a shadowed vertex finds lit air in twilight (towards the sun,
 // 5-20 deg above its direction).
 constexpr double kGuideG = 0.8;
+// The horizon lobe of shadow guiding, in the local frame of the vertex x (up = x / |x|): azimuth
+// about the sun's azimuth and elevation about e0 = -acos((R_ground + h / 2) / |x|) (the ray that
+// grazes half the vertex's altitude h), each a two-sided exponential of the given scale truncated
+// to its range. In deep twilight (sun 100-108 deg) a vertex near the ground finds lit air only
+// along near-horizontal rays towards the sun's azimuth that travel 500-1500 km and cross the
+// terminator above 20-60 km (docs/models/reference.md): a band a few degrees high and some tens of
+// degrees wide, which the lobe about the sun (whose axis is 10-18 deg below the horizontal there)
+// reaches with a few per cent of its draws.
+constexpr double kHorizonAzimuthScale = 0.35;   // rad
+constexpr double kHorizonElevationScale = 0.035;  // rad
 // Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
 // collisions per walk): see ResidualSunTransmittance.
 constexpr double kResidualRate = 0.25;
+// Importance splitting: at most this many copies at one vertex, and this many walks per path.
+constexpr int kMaxCopies = 8;
+constexpr int kMaxWalks = 32;
 
 // splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
 std::uint64_t Mix64(std::uint64_t z) {
@@ -92,6 +105,21 @@ glm::dvec3 DirectionAbout(const glm::dvec3& n, double mu, double phi) {
   const glm::dvec3 t2(b, sign + n.y * n.y * a, -n.y);
   const double sin_theta = std::sqrt(std::max(0.0, 1.0 - mu * mu));
   return glm::normalize(mu * n + sin_theta * (std::cos(phi) * t1 + std::sin(phi) * t2));
+}
+
+// A two-sided exponential density exp(-|x - centre| / scale) truncated to [lo, hi] (lo <= centre
+// <= hi): a sample from a uniform u, and the normalised density.
+double SampleTruncatedLaplace(double centre, double scale, double lo, double hi, double u) {
+  const double left = -std::expm1(-(centre - lo) / scale);
+  const double right = -std::expm1(-(hi - centre) / scale);
+  const double s = u * (left + right);
+  const double x = s < left ? centre + scale * std::log1p(-s) : centre - scale * std::log1p(-(s - left));
+  return std::clamp(x, lo, hi);
+}
+double TruncatedLaplacePdf(double centre, double scale, double lo, double hi, double x) {
+  if (x < lo || x > hi) return 0.0;
+  const double mass = -std::expm1(-(centre - lo) / scale) - std::expm1(-(hi - centre) / scale);
+  return std::exp(-std::abs(x - centre) / scale) / (scale * mass);
 }
 
 // 8-point Gauss-Legendre rule on [-1, 1] (Abramowitz & Stegun table 25.4), nodes ascending.
@@ -186,6 +214,10 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   if (!(settings_.shadow_guiding >= 0.0 && settings_.shadow_guiding < 1.0)) {
     throw Error("the shadow guiding probability must be in [0, 1)");
   }
+  if (!(settings_.horizon_lobe >= 0.0 && settings_.horizon_lobe <= 1.0)) {
+    throw Error("the horizon lobe fraction must be in [0, 1]");
+  }
+  if (settings_.shadow_splits < 1) throw Error("shadow splitting needs at least 1 direction");
   if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
     const double rg = atmosphere_.bottom_radius;
@@ -595,122 +627,301 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
   return estimate;
 }
 
+void PathTracer::HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
+                              glm::dvec3& across, double& e0) const {
+  const double r = glm::length(x);
+  up = x / r;
+  towards = sun - glm::dot(sun, up) * up;
+  if (glm::dot(towards, towards) < 1e-24) towards = DirectionAbout(up, 0.0, 0.0);
+  towards = glm::normalize(towards);
+  across = glm::cross(up, towards);
+  const double rg = atmosphere_.bottom_radius;
+  e0 = -std::acos(std::clamp((rg + 0.5 * std::max(r - rg, 0.0)) / r, -1.0, 1.0));
+}
+
+// The importance of a shadowed vertex for importance splitting: the proxy of the segment
+// estimate (the integrand of SegmentSunlight with an isotropic phase function, both optical depths
+// by the trapezoidal rule on 17 nodes and the sun's from the proxy table) along the horizon lobe's
+// axis, the direction in which a deep-twilight vertex sees the most lit air. It only decides how
+// many copies a path is split into, never a weight's expectation.
+double PathTracer::ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c) const {
+  glm::dvec3 up, towards, across;
+  double e0;
+  HorizonFrame(x, sun, up, towards, across, e0);
+  const glm::dvec3 a = glm::normalize(std::cos(e0) * towards + std::sin(e0) * up);
+  double length;
+  bool ground;
+  Segment(x, a, length, ground);
+  if (!(length > 0.0 && length < kInfinity)) return 0.0;
+  double shadow_begin, shadow_end;
+  ShadowInterval(x, a, length, sun, shadow_begin, shadow_end);
+  const double t_low = std::clamp(-glm::dot(x, a), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  double tau = 0.0, sigma_previous = 0.0, g_previous = 0.0, t_previous = 0.0, integral = 0.0;
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    const double t = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+    const glm::dvec3 y = x + t * a;
+    const glm::dvec3 densities = Densities(y);
+    const double sigma = OpticalDepth(c, densities);
+    if (i > 0) tau += 0.5 * (sigma_previous + sigma) * (t - t_previous);
+    const bool lit = !(shadow_begin < shadow_end && t > shadow_begin && t < shadow_end);
+    const double g = lit ? (c.rayleigh_scattering * densities.x + c.mie_scattering * densities.y) *
+                               std::exp(-tau - OpticalDepth(c, SunDensityProxy(y, sun)))
+                         : 0.0;
+    if (i > 0) integral += 0.5 * (g_previous + g) * (t - t_previous);
+    sigma_previous = sigma;
+    g_previous = g;
+    t_previous = t;
+  }
+  return integral;
+}
+
+glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind,
+                                       double g, Rng& rng, double& mis_weight) const {
+  const double guide = settings_.shadow_guiding;
+  const double horizon = guide * settings_.horizon_lobe;
+  const double sun_lobe = guide - horizon;
+  glm::dvec3 up, towards, across;
+  double e0;
+  HorizonFrame(x, sun, up, towards, across, e0);
+  constexpr double kHalfPi = 0.5 * kPi;
+
+  glm::dvec3 next;
+  const double u = rng.Uniform();
+  if (u < sun_lobe) {
+    const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
+    next = DirectionAbout(sun, mu, 2.0 * kPi * rng.Uniform());
+  } else if (u < guide) {
+    const double azimuth = SampleTruncatedLaplace(0.0, kHorizonAzimuthScale, -kPi, kPi, rng.Uniform());
+    const double elevation = SampleTruncatedLaplace(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, rng.Uniform());
+    next = glm::normalize(std::cos(elevation) * (std::cos(azimuth) * towards + std::sin(azimuth) * across) +
+                          std::sin(elevation) * up);
+  } else {
+    const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+    next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+  }
+  const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
+  double mixture = (1.0 - guide) * phase;
+  if (sun_lobe > 0.0) {
+    mixture += sun_lobe * shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(sun, next));
+  }
+  if (horizon > 0.0) {
+    // Solid-angle density: p(azimuth) p(elevation) / cos(elevation).
+    const double sin_elevation = std::clamp(glm::dot(next, up), -1.0, 1.0);
+    const double cos_elevation = std::sqrt(std::max(0.0, 1.0 - sin_elevation * sin_elevation));
+    if (cos_elevation > 1e-12) {
+      const double azimuth = std::atan2(glm::dot(next, across), glm::dot(next, towards));
+      const double elevation = std::asin(sin_elevation);
+      mixture += horizon * TruncatedLaplacePdf(0.0, kHorizonAzimuthScale, -kPi, kPi, azimuth) *
+                 TruncatedLaplacePdf(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, elevation) / cos_elevation;
+    }
+  }
+  mis_weight = mixture > 0.0 ? phase / mixture : 0.0;
+  return next;
+}
+
+glm::dvec3 PathTracer::SampleShadowDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, bool mie,
+                                             std::uint64_t seed, double& weight) const {
+  Rng rng(Mix64(seed ^ 0x5D1Eull));
+  return GuidedDirection(x, d, sun, mie ? mie_phase_ : rayleigh_phase_, mie ? mie_g_ : rayleigh_g_, rng, weight);
+}
+
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
-  glm::dvec3 p = query.origin;
-  glm::dvec3 d = query.view;
-  if (!EnterAtmosphere(p, d)) return;
-  double weight = 1.0;
-  int order = 0;  // scattering events (and ground reflections) so far
-  const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
-  while (true) {
-    double length;
-    bool ground;
-    Segment(p, d, length, ground);
-    const bool end_scores = ground && c.albedo > 0.0 &&
-                            (order > 0 || query.include_first_ground_hit || query.ground_only);
-    // Ground term only: cross the view segment to the ground, weighted by its transmittance.
-    const bool cross_to_ground = query.ground_only && order == 0;
-    if (cross_to_ground) {
-      if (!end_scores) return;
-      weight *= RatioTracking(p, d, length, c, rng);
-    }
-
-    // Next-event estimation on the segment: the expected vertex estimate of the next collision,
-    // scored in that collision's order bin; the vertex itself then takes none.
-    bool segment_nee = false;
-    if (!half_space_ && !cross_to_ground && length < kInfinity &&
-        settings_.next_event != NextEventEstimation::kVertex) {
-      segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0;
-      if (!segment_nee) segment_nee = InShadow(p, query.sun);
-      if (segment_nee) {
-        orders[std::min(order + 1, kOrderBins) - 1] += weight * SegmentSunlight(p, d, length, query.sun, c, rng);
+  glm::dvec3 entry = query.origin;
+  if (!EnterAtmosphere(entry, query.view)) return;
+  // Importance splitting (settings_.importance_splitting): the walks that copies of the path
+  // still have to trace, and the weight times importance at the path's first shadowed vertex,
+  // which later shadowed vertices split towards (docs/models/reference.md).
+  struct Walk {
+    glm::dvec3 p, d;
+    double weight;
+    int order;
+    double target;  // the weight a walk is split down to; roulette is relative to min(target, 1)
+    bool been_shadowed;
+  };
+  std::array<Walk, kMaxWalks> pending;
+  int pending_count = 0;
+  int walks = 1;
+  double reference_importance = 0.0;
+  // Shadow splitting happens once per path; the continued direction's segment estimate is one of
+  // the N and carries 1/N of the weight (segment_scale).
+  bool split = false;
+  const auto walk = [&](const Walk& start) {
+    glm::dvec3 p = start.p;
+    glm::dvec3 d = start.d;
+    double weight = start.weight;
+    int order = start.order;  // scattering events (and ground reflections) so far
+    double target = start.target;
+    const auto add = [&](double value) { orders[std::min(order, kOrderBins) - 1] += value; };
+    double segment_scale = 1.0;
+    // Whether a segment of this walk has started in the shadow: nee=auto then takes the segment
+    // estimate on the rest of it (a guided path that reached lit air has vertex estimates there
+    // that are rare and large: the forward peak towards the sun).
+    bool been_shadowed = start.been_shadowed;
+    while (true) {
+      double length;
+      bool ground;
+      Segment(p, d, length, ground);
+      const bool end_scores = ground && c.albedo > 0.0 &&
+                              (order > 0 || query.include_first_ground_hit || query.ground_only);
+      // Ground term only: cross the view segment to the ground, weighted by its transmittance.
+      const bool cross_to_ground = query.ground_only && order == 0;
+      if (cross_to_ground) {
+        if (!end_scores) return;
+        weight *= RatioTracking(p, d, length, c, rng);
       }
-    }
 
-    // Delta tracking against the segment's majorant, the first tentative collision forced into
-    // the segment where allowed.
-    bool collided = false;
-    glm::dvec3 densities(0.0);
-    const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
-    if (majorant > 0.0) {
-      const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
-      double t = 0.0;
-      bool first = true;
-      for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
-        if (first && force) {
-          const double p_collide = -std::expm1(-majorant * length);
-          weight *= p_collide;
-          t -= std::log1p(-rng.Uniform() * p_collide) / majorant;
-        } else {
-          t -= std::log1p(-rng.Uniform()) / majorant;
-        }
-        first = false;
-        if (!(t < length)) break;
-        const glm::dvec3 x = p + t * d;
-        densities = Densities(x);
-        if (rng.Uniform() * majorant < OpticalDepth(c, densities)) {
-          p = x;
-          collided = true;
-          break;
+      // Next-event estimation on the segment: the expected vertex estimate of the next collision,
+      // scored in that collision's order bin; the vertex itself then takes none.
+      bool segment_nee = false;
+      if (!half_space_ && !cross_to_ground && length < kInfinity &&
+          settings_.next_event != NextEventEstimation::kVertex) {
+        segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0 || been_shadowed;
+        if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
+        if (segment_nee) {
+          orders[std::min(order + 1, kOrderBins) - 1] +=
+              segment_scale * weight * SegmentSunlight(p, d, length, query.sun, c, rng);
         }
       }
-    }
+      segment_scale = 1.0;
 
-    if (collided) {
-      const double rayleigh = c.rayleigh_scattering * densities.x;
-      const double mie = c.mie_scattering * densities.y;
-      weight *= (rayleigh + mie) / OpticalDepth(c, densities);
-      if (weight <= 0.0) return;
-      ++order;
-      const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
-      const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
-      const double g = is_mie ? mie_g_ : rayleigh_g_;
-      const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
-      if (sun_transmittance != 0.0) {
-        add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
+      // Delta tracking against the segment's majorant, the first tentative collision forced into
+      // the segment where allowed.
+      bool collided = false;
+      glm::dvec3 densities(0.0);
+      const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
+      if (majorant > 0.0) {
+        const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
+        double t = 0.0;
+        bool first = true;
+        for (std::uint64_t step = 0; step < kMaxTrackingSteps; ++step) {
+          if (first && force) {
+            const double p_collide = -std::expm1(-majorant * length);
+            weight *= p_collide;
+            t -= std::log1p(-rng.Uniform() * p_collide) / majorant;
+          } else {
+            t -= std::log1p(-rng.Uniform()) / majorant;
+          }
+          first = false;
+          if (!(t < length)) break;
+          const glm::dvec3 x = p + t * d;
+          densities = Densities(x);
+          if (rng.Uniform() * majorant < OpticalDepth(c, densities)) {
+            p = x;
+            collided = true;
+            break;
+          }
+        }
       }
-      const double guide = settings_.shadow_guiding;
-      if (guide > 0.0 && !half_space_ && InShadow(p, query.sun)) {
-        // One-sample MIS of the phase function and a lobe about the sun (the lit air of a
-        // shadowed vertex lies towards the sun): weight p_phase / q, q their mixture, <= 1 / (1 - guide).
-        glm::dvec3 next;
-        if (rng.Uniform() < guide) {
-          const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
-          next = DirectionAbout(query.sun, mu, 2.0 * kPi * rng.Uniform());
+
+      if (collided) {
+        const double rayleigh = c.rayleigh_scattering * densities.x;
+        const double mie = c.mie_scattering * densities.y;
+        weight *= (rayleigh + mie) / OpticalDepth(c, densities);
+        if (weight <= 0.0) return;
+        ++order;
+        const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
+        const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
+        const double g = is_mie ? mie_g_ : rayleigh_g_;
+        const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
+        if (sun_transmittance != 0.0) {
+          add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
+        }
+        const bool shadowed = !half_space_ && InShadow(p, query.sun);
+        // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
+        // (nee=auto or segment): N directions from the same distribution; directions 1..N-1 score
+        // their segment estimates now, each with 1/N of the weight, in the next collision's bin,
+        // and direction 0 goes on with the full weight, its segment estimate scaled by 1/N. The
+        // mean of N unbiased estimates of the next segment's expected vertex estimate is one, and
+        // the continued path is a draw of the unsplit one (docs/models/reference.md).
+        const int splits = settings_.shadow_splits;
+        const bool do_split = shadowed && !split && splits > 1 && settings_.next_event != NextEventEstimation::kVertex;
+        if (do_split) split = true;
+        const auto draw = [&](double& direction_weight) {
+          if (shadowed && settings_.shadow_guiding > 0.0) {
+            return GuidedDirection(p, d, query.sun, kind, g, rng, direction_weight);
+          }
+          direction_weight = 1.0;
+          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          return DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        };
+        if (do_split) {
+          const double share = 1.0 / splits;
+          for (int i = 1; i < splits; ++i) {
+            double w_i;
+            const glm::dvec3 d_i = draw(w_i);
+            if (!(w_i > 0.0)) continue;
+            double length_i;
+            bool ground_i;
+            Segment(p, d_i, length_i, ground_i);
+            if (length_i < kInfinity) {
+              orders[std::min(order + 1, kOrderBins) - 1] +=
+                  share * weight * w_i * SegmentSunlight(p, d_i, length_i, query.sun, c, rng);
+            }
+          }
+          segment_scale = share;
+        }
+        // Importance splitting at the later shadowed vertices: a path whose weight times the
+        // vertex's importance is n >= 2 times that at its first shadowed vertex goes on as n copies
+        // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
+        // n); at most kMaxCopies at a vertex and kMaxWalks per path.
+        if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
+          const double importance = ImportanceProxy(p, query.sun, c);
+          if (importance > 0.0) {
+            if (!(reference_importance > 0.0)) reference_importance = weight * importance;
+            target = reference_importance / importance;
+            const double ratio = std::min(weight / target, static_cast<double>(kMaxCopies));
+            const int n = std::min(static_cast<int>(ratio), kMaxWalks - walks + 1);
+            if (n >= 2) {
+              weight /= n;
+              for (int i = 1; i < n; ++i) {
+                double w_i;
+                const glm::dvec3 d_i = draw(w_i);
+                ++walks;
+                if (w_i > 0.0) pending[pending_count++] = Walk{p, d_i, weight * w_i, order, target, true};
+              }
+            }
+          }
+        }
+        if (shadowed && settings_.shadow_guiding > 0.0) {
+          double w;
+          d = draw(w);
+          weight *= w;
+          if (!(weight > 0.0)) return;
         } else {
           const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-          next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+          d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
         }
-        const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
-        const double lobe = shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(query.sun, next));
-        weight *= phase / ((1.0 - guide) * phase + guide * lobe);
-        d = next;
+      } else if (end_scores) {
+        const glm::dvec3 n = glm::normalize(p + length * d);
+        p = n * atmosphere_.bottom_radius;
+        ++order;
+        const double cos_sun = glm::dot(n, query.sun);
+        if (cos_sun > 0.0) {
+          add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
+        }
+        weight *= c.albedo;
+        if (weight <= 0.0) return;
+        // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
+        d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
       } else {
-        const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-        d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
+        return;  // escaped, or the view ray's own ground hit
       }
-    } else if (end_scores) {
-      const glm::dvec3 n = glm::normalize(p + length * d);
-      p = n * atmosphere_.bottom_radius;
-      ++order;
-      const double cos_sun = glm::dot(n, query.sun);
-      if (cos_sun > 0.0) {
-        add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
-      }
-      weight *= c.albedo;
-      if (weight <= 0.0) return;
-      // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
-      d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
-    } else {
-      return;  // escaped, or the view ray's own ground hit
-    }
 
-    if (order >= settings_.roulette_start_order) {
-      const double survival = std::min(weight, 0.95);
-      if (!(rng.Uniform() < survival)) return;
-      weight /= survival;
+      if (order >= settings_.roulette_start_order) {
+        const double survival = std::min(weight / std::min(target, 1.0), 0.95);
+        if (!(rng.Uniform() < survival)) return;
+        weight /= survival;
+      }
     }
+  };
+  walk(Walk{entry, query.view, 1.0, 0, kInfinity, false});
+  while (pending_count > 0) {
+    --pending_count;
+    walk(pending[pending_count]);
   }
 }
 

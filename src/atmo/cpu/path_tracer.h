@@ -29,10 +29,20 @@
 //     The default (kAuto) takes the segment estimate on the view ray (order 1: the forward
 //     peak towards the sun makes vertex estimates there noisy) and on the segments that start in
 //     the planet's shadow, where vertex estimates are mostly 0 and rarely large (twilight), and
-//     the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
+//     on the rest of a path once one of its segments started there (its lit vertices are rare and
+//     heavy), and the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
 //   - at a vertex in the planet's shadow the new direction comes, with probability
-//     shadow_guiding, from a Henyey-Greenstein lobe (g 0.8) about the sun instead of the phase
-//     function, weighted by phase / mixture pdf (one-sample MIS, weight <= 1 / (1 - shadow_guiding));
+//     shadow_guiding, from a guiding lobe instead of the phase function: a Henyey-Greenstein lobe
+//     (g 0.8) about the sun, or (fraction horizon_lobe of the guided draws) a lobe about the sun's
+//     azimuth just below the local horizontal, where the lit air of a deep-twilight vertex lies;
+//     weighted by phase / mixture pdf (one-sample MIS, weight <= 1 / (1 - shadow_guiding));
+//   - splitting at the first vertex of a path in the shadow: shadow_splits directions, each with
+//     its segment estimate at 1/N of the weight, one of them continued with the full weight;
+//   - importance splitting at the later shadowed vertices (importance_splitting): a proxy of the
+//     lit air a vertex sees (ImportanceProxy) times the path's weight, against the same product at
+//     the path's first shadowed vertex, says into how many copies (of 1/n of the weight) the path
+//     is split there, and Russian roulette is taken relative to that weight, so the rare paths
+//     that climb to the bright air above the shadow no longer carry most of the estimate alone;
 //   - the medium that scatters is Rayleigh or Mie with probability proportional to its scattering
 //     coefficient at the point; the new direction is sampled exactly from its phase function;
 //   - a Lambertian ground: next-event estimation albedo/pi * cos * T_sun and a cosine-weighted
@@ -90,8 +100,8 @@ struct PathTally {
 enum class NextEventEstimation {
   kVertex,   // at each real collision vertex
   kSegment,  // on every segment, as the integral over the lit part of the segment
-  kAuto,     // kSegment on the view ray and on the segments that start in the planet's shadow,
-             // kVertex on the others
+  kAuto,     // kSegment on the view ray, on the segments that start in the planet's shadow and on
+             // every later segment of such a path, kVertex on the others
 };
 
 struct PathTracerSettings {
@@ -100,8 +110,16 @@ struct PathTracerSettings {
   NextEventEstimation next_event = NextEventEstimation::kAuto;
   int segment_samples = 2;  // stratified points per segment integral, >= 1
   // At a scattering vertex in the planet's shadow, the probability of drawing the new direction
-  // from a lobe about the sun instead of the phase function (one-sample MIS); 0: off.
+  // from a guiding lobe instead of the phase function (one-sample MIS); 0: off.
   double shadow_guiding = 0.5;
+  // The fraction of those guided draws taken from the horizon lobe (about the sun's azimuth, just
+  // below the local horizontal) rather than from the lobe about the sun, in [0, 1].
+  double horizon_lobe = 0.5;
+  // At the first scattering vertex of a path in the planet's shadow, the number of directions
+  // drawn (splitting): each takes its segment estimate with 1/N of the weight, one goes on; >= 1.
+  int shadow_splits = 4;
+  // Importance splitting at the later shadowed vertices of a path (see TracePath).
+  bool importance_splitting = true;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -167,6 +185,14 @@ class PathTracer {
   // 2 pi b T(b) db, by quadrature.
   std::vector<double> DirectTransmittedPower() const;
 
+  // The direction sampling of a scattering vertex at x in the planet's shadow (exposed for tests):
+  // a direction from the mixture of shadow guiding for a path that reached x along d and
+  // scatters off Rayleigh (mie false) or Mie, from the stream `seed`; `weight` is set to
+  // phase / mixture pdf, so its mean over draws is 1 and weight * f(direction) is unbiased for
+  // the phase-weighted mean of f.
+  glm::dvec3 SampleShadowDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, bool mie,
+                                   std::uint64_t seed, double& weight) const;
+
   // Phase-function sampling (exposed for tests): a cosine nu distributed with the normalised phase
   // function `kind` (shared::kPhase*) of asymmetry g, from two uniform numbers in [0, 1) and a
   // source of more for rejection.
@@ -218,6 +244,16 @@ class PathTracer {
   glm::dvec3 SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const;
   // The same by the trapezoidal rule along (r, mu) (the table's entries).
   glm::dvec3 DensityIntegralToTop(double r, double mu) const;
+  // The new direction at a scattering vertex x in the planet's shadow, reached along d, scattered
+  // by the phase function (kind, g): drawn from the mixture of the phase function and the guiding
+  // lobes; `mis_weight` is set to phase / mixture pdf (<= 1 / (1 - shadow_guiding)).
+  glm::dvec3 GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind, double g,
+                             Rng& rng, double& mis_weight) const;
+  // The horizon lobe's frame at x: up, towards the sun's azimuth, across, and the axis elevation.
+  void HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
+                    glm::dvec3& across, double& e0) const;
+  // A proxy of the light a shadowed vertex x can scatter (importance splitting only).
+  double ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c) const;
   // One path of one channel; adds its contributions per order bin to `orders`.
   void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].

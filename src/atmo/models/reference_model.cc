@@ -53,13 +53,21 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
       s.nee_samples = static_cast<int>(ParseCount(key, value, 1, 64));
     } else if (key == "shadow_guiding") {
       s.shadow_guiding = ParseDoubleOption(key, value, 0.0, 0.95);
+    } else if (key == "horizon_lobe") {
+      s.horizon_lobe = ParseDoubleOption(key, value, 0.0, 1.0);
+    } else if (key == "shadow_splits") {
+      s.shadow_splits = static_cast<int>(ParseCount(key, value, 1, 64));
+    } else if (key == "importance_splitting") {
+      if (value != "on" && value != "off") throw Error("option importance_splitting=" + value + ": expected on or off");
+      s.importance_splitting = value == "on";
     } else if (key == "quadrature_tolerance") {
       s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
     } else if (key == "seed") {
       s.seed = ParseCount(key, value, 0, ~std::uint64_t{0});
     } else {
       throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
-                  "max_samples, estimator, forced_collisions, nee, nee_samples, shadow_guiding, quadrature_tolerance, seed)");
+                  "max_samples, estimator, forced_collisions, nee, nee_samples, shadow_guiding, horizon_lobe, shadow_splits, "
+                  "importance_splitting, quadrature_tolerance, seed)");
     }
   }
   if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
@@ -74,7 +82,8 @@ ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const Ref
     : Model(parameters),
       settings_(settings),
       tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3, settings.next_event, settings.nee_samples,
-                                      settings.shadow_guiding}) {}
+                                      settings.shadow_guiding, settings.horizon_lobe, settings.shadow_splits,
+                                      settings.importance_splitting}) {}
 
 std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {

@@ -12,11 +12,16 @@
 //   forced_collisions=on    force the first tentative collision of segments whose end scores 0
 //   nee=auto                next-event estimation to the sun: vertex (at each collision), segment
 //                           (the integral over each segment's lit part), auto (segment on the
-//                           view ray and on segments that start in the planet's shadow, vertex
-//                           elsewhere)
+//                           view ray, on segments that start in the planet's shadow and on the
+//                           rest of such a path, vertex elsewhere)
 //   nee_samples=2           stratified points per segment integral
 //   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
 //                           new direction from a lobe about the sun (MIS with the phase function)
+//   horizon_lobe=0.5        the fraction of the guided draws from the lobe about the sun's
+//                           azimuth just below the local horizontal (the rest: about the sun)
+//   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
+//   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
+//                           of the lit air they see (off: no splitting)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -49,6 +54,9 @@ struct ReferenceSettings {
   cpu::NextEventEstimation next_event = cpu::NextEventEstimation::kAuto;
   int nee_samples = 2;
   double shadow_guiding = 0.5;
+  double horizon_lobe = 0.5;
+  int shadow_splits = 4;
+  bool importance_splitting = true;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
