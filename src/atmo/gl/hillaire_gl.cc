@@ -236,13 +236,16 @@ uniform float r;     // km
 uniform float mu_s;
 uniform int sample_count;
 
+// Column x and column width - x see azimuths phi and 2 pi - phi, the same nu: the invocations
+// march columns 0 .. width / 2 and write both (as cpu::ComputeSkyViewTable).
 void main() {
   ivec2 size = imageSize(output_table);
   ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
+  if (2 * texel.x > size.x || texel.y >= size.y) return;
   vec3 radiance = ComputeSkyViewTexel(atmosphere, transmittance_texture, multiple_scattering_texture, size,
       vec2(texel) + vec2(0.5), r, mu_s, sample_count);
   imageStore(output_table, texel, vec4(radiance, 1.0));
+  imageStore(output_table, ivec2((size.x - texel.x) % size.x, texel.y), vec4(radiance, 1.0));
 }
 )glsl"), "sky-view table");
   SetAtmosphereUniforms(program, "atmosphere", km);
@@ -252,7 +255,7 @@ void main() {
   BindSamplers(program,
                {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   out.BindImage(0);
-  DispatchCompute2D(program, out.size2());
+  DispatchCompute2D(program, {out.size().x / 2 + 1, out.size().y});
 }
 
 void RunGroundViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,

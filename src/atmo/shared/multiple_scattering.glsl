@@ -173,18 +173,28 @@ vec3 GetMultiScatteringFromMeans(IN(vec3) second_order, IN(vec3) f_ms) {
 // The sums of IntegrateMultiScatteringRay's luminance and transfer over the directions k = first,
 // first + stride, ... < direction_count: all of them with (0, 1); a GPU work group gives each of
 // its invocations a share (first = invocation, stride = group size) and adds the partial sums.
+// With the sun in the plane y = 0 (GetMultiScatteringTexelPoint), direction k + count / 2, the
+// mirror image of direction k, has the same mu and nu and so the same integrals: the first half
+// is marched and counted twice (the seed's pair, count 2, is not mirrored), as
+// cpu::ComputeMultipleScatteringTable does.
 void SumMultiScatteringRays(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     Number r, IN(vec3) sun_direction, int first, int stride, int direction_count, int sample_count, bool media_phase,
     IN(vec3) ground_transfer, OUT(vec3) luminance_sum, OUT(vec3) transfer_sum) {
   luminance_sum = vec3(0.0);
   transfer_sum = vec3(0.0);
-  for (int k = first; k < direction_count; k += stride) {
+  bool mirrored = direction_count != 2;
+  int marched = mirrored ? direction_count / 2 : direction_count;
+  for (int k = first; k < marched; k += stride) {
     vec3 luminance;
     vec3 transfer;
     IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
         sun_direction, sample_count, media_phase, ground_transfer, luminance, transfer);
     luminance_sum += luminance;
     transfer_sum += transfer;
+  }
+  if (mirrored) {
+    luminance_sum *= 2.0;
+    transfer_sum *= 2.0;
   }
 }
 
