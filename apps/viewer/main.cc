@@ -52,6 +52,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-panels", options.no_panels, "the sky alone, without the panels");
   app.add_option("--window-screenshot", options.window_screenshot,
                  "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
+  app.add_option("--build-budget", options.build_budget_ms,
+                 "milliseconds of elek's and source4d's table steps per frame while they build (default 25)")
+      ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--frame-log", options.frame_log,
                  "write one line per frame: number, ms, model shown, model being built, its progress");
   app.add_option("--reference-divisor", options.reference_divisor,

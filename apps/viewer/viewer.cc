@@ -485,9 +485,6 @@ ModelOptions Source4dOptions(const Source4dModelSettings& settings) {
   return options;
 }
 
-// Elek's (and source4d's) table steps per frame run until this much time went on them (then the
-// frame is drawn).
-constexpr double kBuildBudgetMs = 25.0;
 // The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
 // 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
 constexpr int kTimedEvery = 4;
@@ -919,7 +916,7 @@ void Viewer::UpdateSky() {
       pending_parameters_ = next;
       pending_settings_generation_ = settings_generation_;
     }
-    if (!pending_->Build(kBuildBudgetMs, pass_timings_)) return;  // shown in a later frame
+    if (!pending_->Build(options_.build_budget_ms, pass_timings_)) return;  // shown in a later frame
     sky_ = std::move(pending_);
     shown_model_ = pending_model_;
     current_ = std::move(next);
@@ -973,7 +970,7 @@ void Viewer::UpdateCompareSky() {
       compare_pending_model_ = compare_model_;
       compare_pending_parameters_ = current_;
     }
-    if (!compare_pending_->Build(kBuildBudgetMs, pass_timings_)) return;
+    if (!compare_pending_->Build(options_.build_budget_ms, pass_timings_)) return;
     compare_sky_ = std::move(compare_pending_);
     compare_shown_model_ = compare_pending_model_;
     compare_parameters_ = compare_pending_parameters_;

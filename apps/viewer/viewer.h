@@ -24,6 +24,7 @@ struct ViewerOptions {
   cli::RenderCommand render;           // camera, observer, sun, display flags (as `atmo render`); the EXR
                                        // and PNG paths are the screenshot of the last frame (empty: none)
   int frames = 0;                      // stop after this many frames (0: when the window is closed)
+  double build_budget_ms = 25.0;       // per frame, of elek's and source4d's table steps while they build
   std::string script_path;             // timed moves (script.h); empty: none
   std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
   bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)
