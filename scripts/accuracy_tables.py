@@ -58,6 +58,8 @@ MARKDOWN_TABLES = {
         "--model", "hillaire", "--option", "multiple_scattering_lut=256x128", "--option",
         "multiple_scattering_directions=1024", "--option", "multiple_scattering_samples=100",
         "--against-samples", "{samples:twilight}"],
+    "source4d-reference-deep-twilight": ["--model", "source4d", "--against-samples", "{samples:deep_twilight}"],
+    "hillaire-reference-deep-twilight": ["--model", "hillaire", "--against-samples", "{samples:deep_twilight}"],
     "source4d-reference-altitudes": ["--model", "source4d", "--against-samples", "{samples:altitudes}"],
     "hillaire-reference-altitudes": ["--model", "hillaire", "--against-samples", "{samples:altitudes}"],
     "source4d-reference-hazy": ["--model", "source4d", "--config", "{hazy}", "--against-samples", "{samples:hazy}"],
@@ -76,6 +78,9 @@ SAMPLED_REFERENCES = {
                       "nee=vertex", "--seed", "7"],
     # Sun 92 and 95 degrees to 1 % relative standard error per direction (the twilight estimator).
     "twilight": ["--grid", "docs/data/source4d_twilight_grid.csv", "--target-rel-error", "0.01", "--seed", "7"],
+    # Sun 98 and 100 degrees: 1 % per direction where the reference gets there within 2^20 paths.
+    "deep_twilight": ["--grid", "docs/data/source4d_deep_twilight_grid.csv", "--target-rel-error", "0.01",
+                      "--option", "max_samples=1048576", "--seed", "7"],
     # 2^16 paths: about 0.5 % with the sun up.
     "altitudes": ["--grid", "docs/data/source4d_altitude_grid.csv", "--samples", "65536", "--seed", "7"],
     "hazy": ["--config", "{hazy}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",
