@@ -5,6 +5,7 @@
 #include <string>
 
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "cpu/sky_view_lookup.h"
@@ -237,29 +238,35 @@ class Source4dSkyView final : public SkyView {
   }
 
  private:
-  // The sky-view tables of every batch and their float lookups, made once (thread-safe).
+  // The sky-view tables of every batch and their float lookups, made once (thread-safe). The
+  // build's parallel loop runs isolated: a thread waiting in it must not take another image row
+  // of the caller's parallel loop, whose RadianceBatch would enter this call_once again.
   void EnsureTables() const {
     std::call_once(tables_made_, [this] {
-      const auto& batches = model_.batches();
-      const auto start = std::chrono::steady_clock::now();
-      for (const auto& batch : batches) {
-        sky_view_.emplace_back();
-        sky_and_ground_view_.emplace_back();
-        ComputeTables(batch, sky_view_.back(), sky_and_ground_view_.back());
-      }
-      model_.RecordSkyViewPass(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-      if (batches.size() == 1) {  // three channels: the frame kernel's float copies
-        sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun_direction());
-        sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun_direction());
-      }
+      oneapi::tbb::this_task_arena::isolate([this] {
+        const auto& batches = model_.batches();
+        const auto start = std::chrono::steady_clock::now();
+        for (const auto& batch : batches) {
+          sky_view_.emplace_back();
+          sky_and_ground_view_.emplace_back();
+          ComputeTables(batch, sky_view_.back(), sky_and_ground_view_.back());
+        }
+        model_.RecordSkyViewPass(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+        if (batches.size() == 1) {  // three channels: the frame kernel's float copies
+          sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun_direction());
+          sky_and_ground_lookup_ =
+              cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun_direction());
+        }
+      });
     });
   }
 
   // The sky-view table of one batch: the scattered radiance of each texel's direction, and the
   // same with the lit ground added in the ground half. Texel x looks at azimuth 2 pi x / width
   // from the sun, so columns x and width - x are mirror images: half of them are marched.
-  void ComputeTables(const Source4dModel::Batch& batch, shared::Texture2D& sky, shared::Texture2D& sky_and_ground) const {
+  void ComputeTables(const Source4dModel::Batch& batch, shared::Texture2D& sky,
+                     shared::Texture2D& sky_and_ground) const {
     const glm::ivec2 size = model_.settings().sky_view_lut;
     sky = shared::Texture2D(size.x, size.y, /*repeat=*/true);
     sky_and_ground = shared::Texture2D(size.x, size.y, /*repeat=*/true);
