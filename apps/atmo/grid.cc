@@ -187,9 +187,13 @@ SampleTable ParseSamples(std::string_view text, const std::string& path, const s
       throw Error(where + "wavelength_nm " + Number(v[4]) + " where the atmosphere's channel " +
                   std::to_string(channel + 1) + " is " + Number(wavelengths_nm[channel]) + " nm");
     }
-    if (!(std::isfinite(v[5]) && v[5] >= 0.0)) throw Error(where + "radiance " + Number(v[5]) + " is not finite and >= 0");
+    if (!(std::isfinite(v[5]) && v[5] >= 0.0)) {
+      throw Error(where + "radiance " + Number(v[5]) + " is not finite and >= 0");
+    }
     if (!(v[6] >= 0.0 && v[6] <= 1.0)) throw Error(where + "transmittance " + Number(v[6]) + " is outside [0, 1]");
-    if (!(std::isfinite(v[7]) && v[7] >= 0.0)) throw Error(where + "stderr " + Number(v[7]) + " is not finite and >= 0");
+    if (!(std::isfinite(v[7]) && v[7] >= 0.0)) {
+      throw Error(where + "stderr " + Number(v[7]) + " is not finite and >= 0");
+    }
     table.radiance.push_back(v[5]);
     table.transmittance.push_back(v[6]);
     table.standard_error.push_back(v[7]);
