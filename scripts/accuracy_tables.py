@@ -60,6 +60,8 @@ MARKDOWN_TABLES = {
         "--against-samples", "{samples:twilight}"],
     "source4d-reference-deep-twilight": ["--model", "source4d", "--against-samples", "{samples:deep_twilight}"],
     "hillaire-reference-deep-twilight": ["--model", "hillaire", "--against-samples", "{samples:deep_twilight}"],
+    "source4d-reference-night": ["--model", "source4d", "--against-samples", "{samples:night}"],
+    "hillaire-reference-night": ["--model", "hillaire", "--against-samples", "{samples:night}"],
     "source4d-reference-altitudes": ["--model", "source4d", "--against-samples", "{samples:altitudes}"],
     "hillaire-reference-altitudes": ["--model", "hillaire", "--against-samples", "{samples:altitudes}"],
     "source4d-reference-hazy": ["--model", "source4d", "--config", "{hazy}", "--against-samples", "{samples:hazy}"],
@@ -81,6 +83,9 @@ SAMPLED_REFERENCES = {
     # Sun 98 and 100 degrees: 1 % per direction where the reference gets there within 2^20 paths.
     "deep_twilight": ["--grid", "docs/data/source4d_deep_twilight_grid.csv", "--target-rel-error", "0.01",
                       "--option", "max_samples=1048576", "--seed", "7"],
+    # Sun 104 and 108 degrees: 3 % per direction or 2^19 paths (enough for a 10 % target).
+    "night": ["--grid", "docs/data/source4d_night_grid.csv", "--target-rel-error", "0.03",
+              "--option", "max_samples=524288", "--seed", "7"],
     # 2^16 paths: about 0.5 % with the sun up.
     "altitudes": ["--grid", "docs/data/source4d_altitude_grid.csv", "--samples", "65536", "--seed", "7"],
     "hazy": ["--config", "{hazy}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",
