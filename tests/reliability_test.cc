@@ -303,6 +303,19 @@ const BadInput kBadInputs[] = {
     {"NegativeSppShownAsGiven", "render --model reference --spp -4" ATMO_TINY, "--spp: Value -4 not in range"},
     {"AerialDistanceBeyondTheBounds", "precompute --model hillaire --aerial-distance 1e300 --out sky",
      "--aerial-distance: 1e300 is outside [1, 1e+11]"},
+    // source4d's sky-view table and compare's samples file.
+    {"Source4dSkyViewMode", "render --model source4d --option sky_view=maybe" ATMO_TINY, "expected auto, on or off"},
+    {"Source4dSkyViewOddWidth", "render --model source4d --option sky_view_lut=5x4" ATMO_TINY, "must be even"},
+    {"Source4dSkyViewTooLarge", "render --model source4d --option sky_view_lut=8192x8192" ATMO_TINY,
+     "more than 2^24 texels"},
+    {"CompareSamplesMissing", "compare --model hillaire --against-samples missing.csv", "missing.csv"},
+    {"CompareSamplesFolder", "compare --model hillaire --against-samples folder", "folder"},
+    {"CompareSamplesFifo", "compare --model hillaire --against-samples fifo", "fifo"},
+    {"CompareSamplesTooLarge", "compare --model hillaire --against-samples large.json", "large.json"},
+    {"CompareSamplesGridHeader", "compare --model hillaire --against-samples far.csv",
+     "far.csv:1: expected the header 'altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm"},
+    {"CompareSamplesWithGrid", "compare --model hillaire --against-samples far.csv --grid far.csv",
+     "--grid excludes --against-samples"},
 };
 
 class BadInputTest : public ReliabilityCliTest, public ::testing::WithParamInterface<BadInput> {};
