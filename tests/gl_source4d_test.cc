@@ -271,7 +271,6 @@ TEST(GlSource4d, SkyViewImagesMatchCpu) {
   ATMO_REQUIRE_GL_CONTEXT(context);
   RenderSettings render;
   render.camera = {CameraKind::kEquirect, 64, 32};
-  render.sun_elevation_deg = 20.0;
   for (const double altitude : {0.0, 20e3}) {
     for (const double elevation : {20.0, -4.0}) {
       render.altitude_m = altitude;

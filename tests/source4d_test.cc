@@ -77,7 +77,9 @@ TEST(Source4dQuadrature, ReproducesThePhaseFunctionsFirstMomentAndTheCosineInteg
   for (int ab = 0; ab < q.in_count; ++ab) {
     e_1 += q.irradiance[ab];
     e_cos += q.irradiance[ab] * cosine[ab];
-    if (cosine[ab] < -1e-12) EXPECT_EQ(q.irradiance[ab], 0.0);
+    if (cosine[ab] < -1e-12) {
+      EXPECT_EQ(q.irradiance[ab], 0.0);
+    }
   }
   EXPECT_NEAR(e_1, kPi, 1e-9);
   EXPECT_NEAR(e_cos, 2.0 * kPi / 3.0, 2e-3);
@@ -228,9 +230,13 @@ TEST(Source4dModel, HazyAtmosphereAndWhiteGroundStayFiniteAndPositive) {
           for (int k = 0; k < 3; ++k) {
             EXPECT_TRUE(std::isfinite(l[k]) && l[k] >= 0.0) << altitude << " " << sun_zenith << " " << view_zenith;
             EXPECT_TRUE(std::isfinite(g[k]) && g[k] >= 0.0);
-            if (view_zenith < 90.0 && altitude < 100e3 && sun_zenith < 90.0) EXPECT_GT(l[k], 0.0);
+            if (view_zenith < 90.0 && altitude < 100e3 && sun_zenith < 90.0) {
+              EXPECT_GT(l[k], 0.0);
+            }
           }
-          if (view_zenith <= 90.0 && altitude == 0.0) EXPECT_EQ(g[0], 0.0);
+          if (view_zenith <= 90.0 && altitude == 0.0) {
+            EXPECT_EQ(g[0], 0.0);
+          }
         }
       }
     }
@@ -269,6 +275,8 @@ TEST(Source4dModel, SkyViewTableMatchesTheMarch) {
           EXPECT_NEAR(mirrored[k], t[k], 1e-5 * t[k]) << altitude << " " << sun_zenith << " " << i;
           if (!(m[k] > 1e-9)) continue;  // the black sky above 99 km in twilight
           errors.push_back(std::fabs(t[k] / m[k] - 1.0));
+          // The image path (float lookups, the lit ground from the table): measured up to 1.1 % in
+          // the air (10 km, sun 93 degrees, view 87), 4.6 % at 99 km.
           EXPECT_NEAR(batch[3 * i + k], m[k] + g[k], (altitude < 50e3 ? 0.02 : 0.1) * (m[k] + g[k]))
               << altitude << " " << sun_zenith << " " << i;
         }

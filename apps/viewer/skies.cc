@@ -66,6 +66,50 @@ Image ReadFrames(const std::vector<gl::GpuTexture>& frames, std::size_t channels
   return image;
 }
 
+// The stepped table build of elek and source4d: per batch a builder (made by make_builder(b)
+// when the batch before is done) stepped until `budget_ms` went on it, its tables appended to
+// `tables`. True once every batch's tables are built.
+template <typename Builder, typename Tables, typename MakeBuilder>
+bool StepBuilders(std::unique_ptr<Builder>& builder, std::vector<Tables>& tables, std::size_t batches,
+                  double budget_ms, PassTimings* timings, const MakeBuilder& make_builder) {
+  const auto start = Clock::now();
+  while (tables.size() < batches) {
+    if (builder == nullptr) builder = make_builder(tables.size());
+    builder->Step(timings);
+    if (builder->done()) {
+      tables.push_back(builder->Take());
+      builder.reset();
+    }
+    if (MillisecondsSince(start) >= budget_ms) break;
+  }
+  return tables.size() == batches;
+}
+
+// Batches built, and the part of the one being built, over all batches: 0 .. 1.
+template <typename Builder>
+double BuildProgress(const std::unique_ptr<Builder>& builder, std::size_t built, std::size_t batches) {
+  const double partial = builder != nullptr ? builder->progress() : 0.0;
+  return (static_cast<double>(built) + partial) / static_cast<double>(batches);
+}
+
+// A screenshot as `atmo render --backend gl` makes it for a model whose frame pass draws no disc:
+// the frame without it, read back, and the disc integrated over the pixels on the host from each
+// batch's transmittance table (tables[b].transmittance).
+template <typename SkyType, typename Tables>
+Image ScreenshotWithHostDisc(SkyType& sky, const std::vector<Tables>& tables, const AtmosphereParameters& parameters,
+                             const RenderSettings& render) {
+  RadianceTerms terms = render.terms;
+  terms.sun_disc = false;
+  sky.RenderFrame(render.camera, terms, nullptr);
+  Image image = sky.ReadFrame();
+  if (render.terms.sun_disc) {
+    std::vector<shared::Texture2D> transmittance;
+    for (const Tables& t : tables) transmittance.push_back(t.transmittance.Download2D());
+    gl::AddSunDiscOnHost(parameters, transmittance, render, image);
+  }
+  return image;
+}
+
 class HillaireSky final : public Sky {
  public:
   HillaireSky(const gl::Context& context, const SkyRequest& request)
@@ -123,24 +167,11 @@ class ElekSky final : public Sky {
   }
   std::size_t batch_count() const override { return km_.size(); }
   bool Build(double budget_ms, PassTimings* timings) override {
-    const auto start = Clock::now();
-    while (tables_.size() < km_.size()) {
-      if (builder_ == nullptr) {
-        builder_ = std::make_unique<gl::ElekTablesBuilder>(context_, km_[tables_.size()], settings_, kElekRowsPerStep);
-      }
-      builder_->Step(timings);
-      if (builder_->done()) {
-        tables_.push_back(builder_->Take());
-        builder_.reset();
-      }
-      if (MillisecondsSince(start) >= budget_ms) break;
-    }
-    return tables_.size() == km_.size();
+    return StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, [this](std::size_t b) {
+      return std::make_unique<gl::ElekTablesBuilder>(context_, km_[b], settings_, kElekRowsPerStep);
+    });
   }
-  double progress() const override {
-    const double partial = builder_ != nullptr ? builder_->progress() : 0.0;
-    return (static_cast<double>(tables_.size()) + partial) / static_cast<double>(km_.size());
-  }
+  double progress() const override { return BuildProgress(builder_, tables_.size(), km_.size()); }
   void Recompute(PassTimings* timings) override {
     builder_.reset();
     tables_.clear();
@@ -167,16 +198,7 @@ class ElekSky final : public Sky {
   Image ReadFrame() const override { return ReadFrames(frames_, parameters_.channel_count(), has_alpha_); }
   // As `atmo render --backend gl --model elek` (gl::RenderElekGl).
   Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
-    RadianceTerms terms = render.terms;
-    terms.sun_disc = false;
-    RenderFrame(render.camera, terms, nullptr);
-    Image image = ReadFrame();
-    if (render.terms.sun_disc) {
-      std::vector<shared::Texture2D> transmittance;
-      for (const gl::ElekTablesGl& t : tables_) transmittance.push_back(t.transmittance.Download2D());
-      gl::AddSunDiscOnHost(parameters_, transmittance, render, image);
-    }
-    return image;
+    return ScreenshotWithHostDisc(*this, tables_, parameters_, render);
   }
 
  private:
@@ -210,26 +232,15 @@ class Source4dSky final : public Sky {
   }
   std::size_t batch_count() const override { return km_.size(); }
   bool Build(double budget_ms, PassTimings* timings) override {
-    const auto start = Clock::now();
-    while (tables_.size() < km_.size()) {
-      if (builder_ == nullptr) {
-        builder_ = std::make_unique<gl::Source4dTablesBuilder>(context_, km_[tables_.size()],
-                                                               model_.settings().tables, kSource4dGroupsPerStep);
-      }
-      builder_->Step(timings);
-      if (builder_->done()) {
-        tables_.push_back(builder_->Take());
-        builder_.reset();
-        sky_view_stale_ = true;
-      }
-      if (MillisecondsSince(start) >= budget_ms) break;
-    }
-    return tables_.size() == km_.size();
+    const std::size_t built = tables_.size();
+    const bool done = StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, [this](std::size_t b) {
+      return std::make_unique<gl::Source4dTablesBuilder>(context_, km_[b], model_.settings().tables,
+                                                         kSource4dGroupsPerStep);
+    });
+    if (tables_.size() != built) sky_view_stale_ = true;
+    return done;
   }
-  double progress() const override {
-    const double partial = builder_ != nullptr ? builder_->progress() : 0.0;
-    return (static_cast<double>(tables_.size()) + partial) / static_cast<double>(km_.size());
-  }
+  double progress() const override { return BuildProgress(builder_, tables_.size(), km_.size()); }
   void Recompute(PassTimings* timings) override {
     builder_.reset();
     tables_.clear();
@@ -273,16 +284,7 @@ class Source4dSky final : public Sky {
   Image ReadFrame() const override { return ReadFrames(frames_, parameters_.channel_count(), has_alpha_); }
   // As `atmo render --backend gl --model source4d` (gl::RenderSource4dGl).
   Image Screenshot(const RenderSettings& render, Image*, std::uint64_t*) override {
-    RadianceTerms terms = render.terms;
-    terms.sun_disc = false;
-    RenderFrame(render.camera, terms, nullptr);
-    Image image = ReadFrame();
-    if (render.terms.sun_disc) {
-      std::vector<shared::Texture2D> transmittance;
-      for (const gl::Source4dTablesGl& t : tables_) transmittance.push_back(t.transmittance.Download2D());
-      gl::AddSunDiscOnHost(parameters_, transmittance, render, image);
-    }
-    return image;
+    return ScreenshotWithHostDisc(*this, tables_, parameters_, render);
   }
 
  private:

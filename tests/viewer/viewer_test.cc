@@ -138,6 +138,8 @@ class Viewer : public CliFixture {
     result.err = ReadFile(dir_ / "stderr.txt");
     return result;
   }
+  // Defined with the frame log's reader, below.
+  void ExpectBuildWithoutFreezing(const std::string& model, const std::string& options) const;
   std::string Metadata(const ImageMetadata& metadata, const std::string& key) const {
     for (const auto& [k, v] : metadata) {
       if (k == key) return v;
@@ -408,18 +410,18 @@ std::vector<LoggedFrame> ReadFrameLog(const fs::path& path) {
   return frames;
 }
 
-// Switching to elek: its tables are built a few steps per frame while hillaire stays on screen;
-// frames keep coming at a bounded time, the progress rises to 1, and the finished elek frame is
-// `atmo render --backend gl --model elek`'s.
-TEST_F(Viewer, ElekBuildsWithoutFreezingTheWindow) {
-  WriteFile(dir_ / "switch.txt",
-            "at 0 model hillaire\n"
-            "at 3 model elek\n");
-  const std::string elek = "--option size=16x128x16 --option gather_rows=32";
-  const RunResult v = RunViewer(std::string(kSameFlags) + " --model elek " + elek +
-                                " --frames 5 --script switch.txt --frame-log frames.txt --screenshot viewer.exr --build-budget 4");
+// Switches from hillaire to `model` (with `options`) at frame 3 of a script, its tables built 4 ms
+// per frame (--build-budget: many frames on any machine): hillaire stays on screen while they
+// build, frames keep coming at a bounded time, the progress rises to 1, and the finished frame's
+// screenshot is `atmo render --backend gl`'s with the same settings.
+void Viewer::ExpectBuildWithoutFreezing(const std::string& model, const std::string& options) const {
+  const fs::path& dir = dir_;
+  WriteFile(dir / "switch.txt", "at 0 model hillaire\nat 3 model " + model + "\n");
+  const RunResult v = RunViewer(std::string(kSameFlags) + " --model " + model + " " + options +
+                                 " --frames 5 --script switch.txt --frame-log frames.txt --screenshot viewer.exr"
+                                 " --build-budget 4");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  const std::vector<LoggedFrame> log = ReadFrameLog(dir_ / "frames.txt");
+  const std::vector<LoggedFrame> log = ReadFrameLog(dir / "frames.txt");
   ASSERT_GE(log.size(), 5u);
   double sum = 0.0;
   double worst = 0.0;
@@ -430,41 +432,49 @@ TEST_F(Viewer, ElekBuildsWithoutFreezingTheWindow) {
       EXPECT_EQ(f.shown, "hillaire") << f.frame;
       continue;
     }
-    if (f.pending != "elek") continue;
-    EXPECT_EQ(f.shown, "hillaire") << f.frame;  // the last finished sky stays while elek builds
+    if (f.pending != model) continue;
+    EXPECT_EQ(f.shown, "hillaire") << f.frame;  // the last finished sky stays while the model builds
     EXPECT_GE(f.progress, last_progress) << f.frame;
     last_progress = f.progress;
-    if (f.frame > 3) {  // frame 3 compiles elek's programs
+    // A frame's logged time is from the swap before it to its own start, the work of the frame
+    // before: frame 4's is frame 3's, which compiles the model's programs.
+    if (f.frame > 4) {
       sum += f.ms;
       worst = std::max(worst, f.ms);
       ++building;
     }
   }
-  EXPECT_EQ(log.back().shown, "elek");
+  EXPECT_EQ(log.back().shown, model);
   EXPECT_EQ(log.back().progress, 1.0);
   ASSERT_GT(building, 4) << "the tables were built in too few frames to be steps";
   const double mean = sum / building;
-  std::printf("[ figures ] elek built over %d frames: mean frame %.1f ms, longest %.1f ms, last progress %.3f\n",
-              building, mean, worst, last_progress);
-  // Each frame runs table steps for 4 ms (--build-budget: many frames on any machine), then at
-  // most one more step (the longest, the gather
-  // matrix, ~12 ms here) and the frame: a frame that ran a whole pass (~100 ms and more) would
+  std::printf("[ figures ] %s built over %d frames: mean frame %.1f ms, longest %.1f ms, last progress %.3f\n",
+              model.c_str(), building, mean, worst, last_progress);
+  // Each frame runs table steps for 4 ms, then at most one more step (elek's longest, the gather
+  // matrix, ~12 ms here; source4d's, 16 work groups of the gathering or the products, or the CPU's
+  // transmittance table) and the frame: a frame that ran a whole pass (~100 ms and more) would
   // stand out. Generous against a loaded machine: 5x the mean.
   EXPECT_LT(worst, 5.0 * mean);
-  const RunResult r = Run("render --backend gl --model elek " + elek + " " + kSameFlags + " --exr render.exr --no-png");
+  const RunResult r =
+      Run("render --backend gl --model " + model + " " + options + " " + kSameFlags + " --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   ImageMetadata rm;
-  const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
-  const Image render_image = ReadExr(dir_ / "render.exr", &rm);
+  const Image viewer_image = ReadExr(dir / "viewer.exr", &vm);
+  const Image render_image = ReadExr(dir / "render.exr", &rm);
   ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());
-  // The same kernels on the same inputs in steps or whole (GlElek.TablesBuiltInStepsEqualWholePasses):
-  // measured 0.
+  // The same kernels on the same inputs in steps or whole (GlElek.TablesBuiltInStepsEqualWholePasses,
+  // GlSource4d.SteppedBuilderEqualsWholePasses): measured 0.
   const double difference = MaxRelativeDifference(viewer_image, render_image, 1.0);
-  std::printf("[ figures ] elek: max relative difference viewer vs atmo render --backend gl: %.3g\n", difference);
+  std::printf("[ figures ] %s: max relative difference viewer vs atmo render --backend gl: %.3g\n", model.c_str(),
+              difference);
   EXPECT_LT(difference, 1e-5);
-  EXPECT_EQ(Metadata(vm, "atmo:model"), "elek");
+  EXPECT_EQ(Metadata(vm, "atmo:model"), model);
   EXPECT_EQ(Metadata(vm, "atmo:modelOptions"), Metadata(rm, "atmo:modelOptions"));
+}
+
+TEST_F(Viewer, ElekBuildsWithoutFreezingTheWindow) {
+  ExpectBuildWithoutFreezing("elek", "--option size=16x128x16 --option gather_rows=32");
 }
 
 // Switching to source4d: its tables (gl::Source4dTablesBuilder) are built a few steps per frame
@@ -474,60 +484,9 @@ constexpr const char* kSmallSource4d =
     "--option table=8x16x24x6 --option gather=25x7 --option gather_samples=24 --option orders=3 --option samples=32";
 
 TEST_F(Viewer, Source4dBuildsWithoutFreezingTheWindow) {
-  WriteFile(dir_ / "switch.txt",
-            "at 0 model hillaire\n"
-            "at 3 model source4d\n");
   const std::string source4d = kSmallSource4d;
-  const RunResult v = RunViewer(std::string(kSameFlags) + " --model source4d " + source4d +
-                                " --frames 5 --script switch.txt --frame-log frames.txt --screenshot viewer.exr --build-budget 4");
-  ASSERT_EQ(v.exit_code, 0) << v.err;
-  const std::vector<LoggedFrame> log = ReadFrameLog(dir_ / "frames.txt");
-  ASSERT_GE(log.size(), 5u);
-  double sum = 0.0;
-  double worst = 0.0;
-  double last_progress = 0.0;
-  int building = 0;
-  for (const LoggedFrame& f : log) {
-    if (f.frame < 3) {
-      EXPECT_EQ(f.shown, "hillaire") << f.frame;
-      continue;
-    }
-    if (f.pending != "source4d") continue;
-    EXPECT_EQ(f.shown, "hillaire") << f.frame;  // the last finished sky stays while source4d builds
-    EXPECT_GE(f.progress, last_progress) << f.frame;
-    last_progress = f.progress;
-    // A frame's logged time is from the swap before it to its own start, the work of the frame
-    // before: frame 4's is frame 3's, which compiles source4d's programs.
-    if (f.frame > 4) {
-      sum += f.ms;
-      worst = std::max(worst, f.ms);
-      ++building;
-    }
-  }
-  EXPECT_EQ(log.back().shown, "source4d");
-  EXPECT_EQ(log.back().progress, 1.0);
-  ASSERT_GT(building, 4) << "the tables were built in too few frames to be steps";
-  const double mean = sum / building;
-  std::printf("[ figures ] source4d built over %d frames: mean frame %.1f ms, longest %.1f ms, last progress %.3f\n",
-              building, mean, worst, last_progress);
-  // Each frame runs table steps for 4 ms (--build-budget), then at most one more step (16 work groups of the
-  // gathering or the products, or the CPU's transmittance table) and the frame. Generous against
-  // a loaded machine: 5x the mean.
-  EXPECT_LT(worst, 5.0 * mean);
-  const RunResult r =
-      Run("render --backend gl --model source4d " + source4d + " " + kSameFlags + " --exr render.exr --no-png");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  ImageMetadata vm;
-  ImageMetadata rm;
-  const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
-  const Image render_image = ReadExr(dir_ / "render.exr", &rm);
-  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());
-  // The same kernels on the same inputs in steps or whole (GlSource4d.SteppedBuilderEqualsWholePasses).
-  const double difference = MaxRelativeDifference(viewer_image, render_image, 1.0);
-  std::printf("[ figures ] source4d: max relative difference viewer vs atmo render --backend gl: %.3g\n", difference);
-  EXPECT_LT(difference, 1e-5);
-  EXPECT_EQ(Metadata(vm, "atmo:model"), "source4d");
-  EXPECT_EQ(Metadata(vm, "atmo:modelOptions"), Metadata(rm, "atmo:modelOptions"));
+  ExpectBuildWithoutFreezing("source4d", source4d);
+  if (HasFatalFailure()) return;
 
   // Compare mode: source4d left of the split, hillaire right of it, each its own window.
   const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3 --model source4d " + source4d;

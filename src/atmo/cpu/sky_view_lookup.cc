@@ -31,6 +31,8 @@
 #include <immintrin.h>
 #endif
 
+#include "shared/shared.h"
+
 namespace atmo::cpu {
 namespace {
 
@@ -275,16 +277,48 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
 
 void LookupSkyViewDirections(const SkyViewLookup& lookup, std::span<const glm::dvec3> views, std::span<float> out) {
   // Chunks in structure-of-arrays form, for the vectorised kernel.
-  constexpr std::size_t kChunk = 256;
   float x[kChunk], y[kChunk], z[kChunk];
   for (std::size_t first = 0; first < views.size(); first += kChunk) {
-    const std::size_t count = std::min(kChunk, views.size() - first);
+    const std::size_t count = std::min<std::size_t>(kChunk, views.size() - first);
     for (std::size_t i = 0; i < count; ++i) {
       x[i] = static_cast<float>(views[first + i].x);
       y[i] = static_cast<float>(views[first + i].y);
       z[i] = static_cast<float>(views[first + i].z);
     }
     LookupSkyViewRow(lookup, x, y, z, static_cast<int>(count), &out[3 * first]);
+  }
+}
+
+void LookupSkyViewBatch(const SkyView& sky, const SkyViewLookup& lookup, const std::vector<shared::Texture2D>& tables,
+                        double horizon_nadir_angle_rad, bool sun_disc, std::span<const glm::dvec3> views,
+                        std::span<float> out) {
+  const std::size_t n = sky.channel_count();
+  const glm::dvec3 sun = sky.sun_direction();
+  if (n == 3) {
+    LookupSkyViewDirections(lookup, views, out);
+  } else {
+    const shared::ivec2 size(tables.front().width, tables.front().height);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const double azimuth = shared::GetAzimuthFromSun(views[i], sun);
+      const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(size, horizon_nadir_angle_rad, views[i].z, azimuth);
+      for (std::size_t b = 0; b < tables.size(); ++b) {
+        const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
+        for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
+      }
+    }
+  }
+  const double cos_sun = std::cos(sky.sun_angular_radius_rad());
+  std::vector<double> disc(n);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const glm::dvec3& view = views[i];
+    if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+      for (std::size_t c = 0; c < n; ++c) out[i * n + c] = 0.0f;
+      continue;
+    }
+    if (sun_disc && glm::dot(view, sun) >= cos_sun) {
+      sky.SunDiscRadiance(view, disc);
+      for (std::size_t c = 0; c < n; ++c) out[i * n + c] += static_cast<float>(disc[c]);
+    }
   }
 }
 

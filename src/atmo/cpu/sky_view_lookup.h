@@ -19,6 +19,7 @@
 
 #include <glm/glm.hpp>
 
+#include "atmo/model.h"
 #include "shared/glsl_cpp.h"
 
 namespace atmo::cpu {
@@ -74,6 +75,16 @@ void LookupSkyViewRow(const SkyViewLookup& lookup, const float* x, const float* 
 // LookupSkyViewRow over any number of double-precision directions: three values per direction
 // into out[3 i + c].
 void LookupSkyViewDirections(const SkyViewLookup& lookup, std::span<const glm::dvec3> views, std::span<float> out);
+
+// An image row from sky-view tables (one per batch of three channels, as `sky` was made with;
+// `lookup` their float copy where there is one batch): out[i * channels + c] the tables' radiance
+// of direction i (LookupSkyViewDirections for three channels, shared::texture per direction
+// otherwise), 0 where a camera sees nothing (the direction (0, 0, 0)), and with `sun_disc`
+// sky.SunDiscRadiance added inside the disc. What the models that read sky-view tables
+// (hillaire, source4d) give for SkyView::RadianceBatch.
+void LookupSkyViewBatch(const SkyView& sky, const SkyViewLookup& lookup, const std::vector<shared::Texture2D>& tables,
+                        double horizon_nadir_angle_rad, bool sun_disc, std::span<const glm::dvec3> views,
+                        std::span<float> out);
 
 // The sampling positions of LookupSkyViewRow, for tests: texel coordinates s = u * width - 0.5
 // and t = v * height - 0.5 (texel i's centre at i), s[i] in [0, width] after the wrap in x,

@@ -21,12 +21,9 @@
 namespace atmo::gl {
 namespace {
 
-// The view ray of each pixel marched through the tables (GetSource4dRadiance: single scattering
-// exactly, orders >= 2 from ln G, the lit ground from the transmittance and the ground
-// irradiance), and the disc per pixel for interactive use.
-constexpr const char* kSource4dFrameMain = R"glsl(
-layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
+// The tables' uniforms of the frame and sky-view passes (set by BindSource4dTables), declared
+// before each pass's own main source.
+constexpr const char* kSource4dTableUniforms = R"glsl(
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
 uniform sampler3D rayleigh_texture;
@@ -34,6 +31,14 @@ uniform sampler3D mie_texture;
 uniform sampler2D irradiance_texture;
 uniform int mu_s_size;
 uniform int sample_count;
+)glsl";
+
+// The view ray of each pixel marched through the tables (GetSource4dRadiance: single scattering
+// exactly, orders >= 2 from ln G, the lit ground from the transmittance and the ground
+// irradiance), and the disc per pixel for interactive use.
+constexpr const char* kSource4dFrameMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2D output_image;
 uniform CameraParameters camera;
 uniform float r;             // km
 uniform vec3 sun_direction;  // unit, local frame (x east, y north, z up)
@@ -78,13 +83,6 @@ constexpr const char* kSource4dSkyViewMain = R"glsl(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D sky_image;
 layout(rgba32f, binding = 1) uniform writeonly image2D sky_and_ground_image;
-uniform AtmosphereParameters atmosphere;
-uniform sampler2D transmittance_texture;
-uniform sampler3D rayleigh_texture;
-uniform sampler3D mie_texture;
-uniform sampler2D irradiance_texture;
-uniform int mu_s_size;
-uniform int sample_count;
 uniform float r;     // km
 uniform float mu_s;
 
@@ -111,8 +109,10 @@ constexpr std::string_view kSource4dFiles[] = {"definitions.glsl",         "geom
 const ComputeProgram& Source4dFrameProgram(const Context& context, bool use_sky_view, double* compile_ms = nullptr) {
   // Two programs, not a uniform branch (llvmpipe runs a frame with a runtime branch between
   // whole code paths far slower: docs/performance.md).
-  static const std::string march = std::string("#define USE_SKY_VIEW 0\n") + kSource4dFrameMain;
-  static const std::string table = std::string("#define USE_SKY_VIEW 1\n") + kSource4dFrameMain;
+  static const std::string march =
+      std::string("#define USE_SKY_VIEW 0\n") + kSource4dTableUniforms + kSource4dFrameMain;
+  static const std::string table =
+      std::string("#define USE_SKY_VIEW 1\n") + kSource4dTableUniforms + kSource4dFrameMain;
   return context.Program(kSource4dFiles, use_sky_view ? table : march,
                          use_sky_view ? "source4d frame (sky view)" : "source4d frame", compile_ms);
 }
@@ -169,7 +169,8 @@ void RunSource4dSkyViewPass(const Context& context, const shared::AtmospherePara
     out.sky = GpuTexture::Make2D({size.x, size.y}, /*repeat_u=*/true);
     out.sky_and_ground = GpuTexture::Make2D({size.x, size.y}, /*repeat_u=*/true);
   }
-  const ComputeProgram& program = context.Program(kSource4dFiles, kSource4dSkyViewMain, "source4d sky view");
+  static const std::string main = std::string(kSource4dTableUniforms) + kSource4dSkyViewMain;
+  const ComputeProgram& program = context.Program(kSource4dFiles, main, "source4d sky view");
   BindSource4dTables(program, km_atmosphere, tables, samples);
   program.SetFloat("r", r_km);
   program.SetFloat("mu_s", shared::ClampCosine(glm::normalize(sun_direction).z));

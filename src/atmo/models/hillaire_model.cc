@@ -237,37 +237,9 @@ class HillaireSkyView final : public SkyView {
       SkyView::RadianceBatch(views, terms, out);
       return;
     }
-    const std::size_t n = channel_count();
-    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
-    std::vector<double> disc(n);
-    if (n == 3) {
-      // The vectorised float kernel, on chunks of directions in structure-of-arrays form.
-      const cpu::SkyViewLookup& lookup = terms.ground ? sky_and_ground_lookup_ : sky_lookup_;
-      cpu::LookupSkyViewDirections(lookup, views, out);
-    } else {
-      const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
-      for (std::size_t i = 0; i < views.size(); ++i) {
-        const glm::dvec3& view = views[i];
-        const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
-        const shared::vec2 uv =
-            shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut, horizon_nadir_angle_, view.z, azimuth);
-        for (std::size_t b = 0; b < tables.size(); ++b) {
-          const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
-          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
-        }
-      }
-    }
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      const glm::dvec3& view = views[i];
-      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
-        for (std::size_t c = 0; c < n; ++c) out[i * n + c] = 0.0f;
-        continue;
-      }
-      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
-        SunDiscRadiance(view, disc);
-        for (std::size_t c = 0; c < n; ++c) out[i * n + c] += static_cast<float>(disc[c]);
-      }
-    }
+    cpu::LookupSkyViewBatch(*this, terms.ground ? sky_and_ground_lookup_ : sky_lookup_,
+                            terms.ground ? sky_and_ground_view_ : sky_view_, horizon_nadir_angle_, terms.sun_disc, views,
+                            out);
   }
 
   // The sky-view tables of every batch folded into one three-channel table per weight set: a

@@ -218,7 +218,9 @@ class Source4dSkyView final : public SkyView {
     const std::size_t n = channel_count();
     if (table_serves_) {
       EnsureTables();
-      LookupBatch(views, terms, out);
+      cpu::LookupSkyViewBatch(*this, terms.ground ? sky_and_ground_lookup_ : sky_lookup_,
+                              terms.ground ? sky_and_ground_view_ : sky_view_, horizon_nadir_angle_, terms.sun_disc,
+                              views, out);
       return;
     }
     oneapi::tbb::parallel_for(std::size_t{0}, views.size(), [&](std::size_t i) {
@@ -284,37 +286,6 @@ class Source4dSkyView final : public SkyView {
         sky_and_ground.at(column, y) = glm::vec3(l + ground);
       }
     });
-  }
-
-  void LookupBatch(std::span<const glm::dvec3> views, const RadianceTerms& terms, std::span<float> out) const {
-    const std::size_t n = channel_count();
-    if (n == 3) {
-      cpu::LookupSkyViewDirections(terms.ground ? sky_and_ground_lookup_ : sky_lookup_, views, out);
-    } else {
-      const std::vector<shared::Texture2D>& tables = terms.ground ? sky_and_ground_view_ : sky_view_;
-      oneapi::tbb::parallel_for(std::size_t{0}, views.size(), [&](std::size_t i) {
-        const double azimuth = shared::GetAzimuthFromSun(views[i], sun_direction());
-        const shared::vec2 uv = shared::GetSkyViewTextureUvFromBeta(model_.settings().sky_view_lut,
-                                                                    horizon_nadir_angle_, views[i].z, azimuth);
-        for (std::size_t b = 0; b < tables.size(); ++b) {
-          const glm::vec3 l = glm::vec3(shared::texture(tables[b], uv));
-          for (std::size_t c = 0; c < 3 && 3 * b + c < n; ++c) out[i * n + 3 * b + c] = l[static_cast<int>(c)];
-        }
-      });
-    }
-    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
-    std::vector<double> disc(n);
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      const glm::dvec3& view = views[i];
-      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
-        for (std::size_t c = 0; c < n; ++c) out[i * n + c] = 0.0f;
-        continue;
-      }
-      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
-        SunDiscRadiance(view, disc);
-        for (std::size_t c = 0; c < n; ++c) out[i * n + c] += static_cast<float>(disc[c]);
-      }
-    }
   }
 
   shared::vec3 Evaluate(const Source4dModel::Batch& batch, const glm::dvec3& view, shared::vec3& ground) const {
