@@ -413,6 +413,7 @@ class Source4dSky final : public Sky {
     if (cpu_tables_) return cpu_build_ != nullptr ? cpu_build_->progress() : 1.0;
     return BuildProgress(builder_, tables_.size(), km_.size());
   }
+  bool BuildsOnItsOwnThread() const override { return cpu_build_ != nullptr; }
   std::string BuildStatus() const override {
     return cpu_build_ != nullptr ? cpu_build_->Status() : (cpu_tables_ ? "" : "tables on the GPU");
   }
@@ -623,6 +624,7 @@ class ReferenceSky final : public Sky {
     std::lock_guard<std::mutex> lock(mutex_);
     return shown_.samples_per_pixel >= spp_ || !error_.empty();
   }
+  bool SameInputsSameFrame() const override { return false; }
 
  private:
   static bool SameRender(const RenderSettings& a, const RenderSettings& b) {

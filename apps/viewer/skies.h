@@ -69,6 +69,12 @@ class Sky {
   // table is built and the sky can be drawn.
   virtual bool Build(double budget_ms, PassTimings* timings) = 0;
   virtual double progress() const { return 1.0; }  // of Build, 0 .. 1
+  // Whether Build's work runs on a thread of its own (source4d's CPU tables): the frames meanwhile
+  // had better leave the cores to it.
+  virtual bool BuildsOnItsOwnThread() const { return false; }
+  // Whether RenderFrame with the same camera, terms and view draws the same frame (not reference,
+  // whose frames are the passes of its background render).
+  virtual bool SameInputsSameFrame() const { return true; }
   // A line on what Build does (source4d: where its tables are built, the CPU's passes done), or empty.
   virtual std::string BuildStatus() const { return ""; }
   // Every table again, at once (--recompute-every-frame).

@@ -545,6 +545,12 @@ class Viewer {
   ViewState state_;
   ViewState loaded_;  // the knobs of base_
   ViewState built_;   // what the sky view was last made for
+  // The frame textures' contents: sky_generation_, camera and terms of the last RenderFrame of
+  // the shown sky (drawn_generation_ -1: unknown, e.g. after a screenshot or the fused pass).
+  int sky_generation_ = 0;
+  int drawn_generation_ = -1;
+  Camera drawn_camera_;
+  RadianceTerms drawn_terms_;
   ViewState shown_knobs_;  // the atmosphere knobs of what is shown
   std::unique_ptr<gl::Context> context_;
   std::unique_ptr<Sky> sky_;      // shown
@@ -813,6 +819,7 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   Image standard_error;
   std::uint64_t samples_per_pixel = 0;
   Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
+  drawn_generation_ = -1;  // the screenshot's frame (no disc) is in the frame textures now
   // Reference's estimate has its own (smaller) size.
   plan.settings.camera.width = image.width;
   plan.settings.camera.height = image.height;
@@ -930,6 +937,7 @@ void Viewer::UpdateSky() {
     }
     if (!pending_->Build(options_.build_budget_ms, pass_timings_)) return;  // shown in a later frame
     sky_ = std::move(pending_);
+    ++sky_generation_;
     shown_model_ = pending_model_;
     current_ = std::move(next);
     current_base_ = base_;
@@ -1452,7 +1460,26 @@ int Viewer::Run() {
       const gl::HillaireGl* fused = compare_sky_ == nullptr && !false_colour_ && !meter && sky_->batch_count() == 1
                                         ? sky_->hillaire_gl()
                                         : nullptr;
-      if (fused == nullptr) sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      // While the next sky's tables build on a thread of their own (source4d with
+      // --source4d-tables cpu), the shown frame is drawn again only when what it depends on
+      // changed: on llvmpipe the same frame again would take the cores from the build (1280x720:
+      // a frame pass of ~90 ms on both cores, docs/viewer.md#source4d-tables-on-the-cpu).
+      const Camera camera = ViewCamera(state_, width, height);
+      const Camera& drawn = drawn_camera_;
+      const bool frame_current =
+          drawn_generation_ == sky_generation_ && !view_changed && camera.kind == drawn.kind &&
+          camera.width == drawn.width && camera.height == drawn.height && camera.fov_deg == drawn.fov_deg &&
+          camera.yaw_deg == drawn.yaw_deg && camera.pitch_deg == drawn.pitch_deg &&
+          terms.sun_disc == drawn_terms_.sun_disc && terms.ground == drawn_terms_.ground;
+      const bool reuse_frame = frame_current && compare_sky_ == nullptr && pending_ != nullptr &&
+                               pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
+      if (fused == nullptr && !reuse_frame) {
+        sky_->RenderFrame(camera, terms, pass_timings_);
+        drawn_generation_ = sky_generation_;
+        drawn_camera_ = camera;
+        drawn_terms_ = terms;
+      }
+      if (fused != nullptr) drawn_generation_ = -1;
       if (compare_sky_ != nullptr) {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       }
