@@ -230,10 +230,11 @@ constexpr int kSource4dGroupsPerStep = 16;
 // backend builds them ~8x faster than the GL passes (docs/performance.md, "source4d beside
 // hillaire"). The build runs in a oneTBB arena of its own, so that a parallel loop of the render
 // thread never picks up one of its tasks (work stealing within one arena) and stalls a frame.
-// The build reports each finished pass (gathering, products, sum: 2 orders + 1 per batch) and
+// The build reports each finished pass (transmittance, quadrature, gathering and product per
+// order, sum: 2 x orders + 1 per batch) and
 // checks `cancel` there: a cancelled build stops after the pass it is in. Its threads keep the
 // render thread's priority: at 1280x720 llvmpipe's frames keep both cores of a 2-core machine
-// busy, and a build at nice 10 took 25 s instead of 5 s to reach the screen (docs/viewer.md).
+// busy, and a build at nice 10 took 24 s instead of 5 s to reach the screen (docs/viewer.md).
 struct Source4dCpuBuildState {
   std::atomic<bool> cancel{false};
   std::atomic<bool> finished{false};
@@ -350,7 +351,7 @@ class Source4dCpuBuild {
     if (!state_->passes.empty()) line += " (last " + state_->passes.back().first + ")";
     return line;
   }
-  // The CPU's pass times so far, as cpu_NAME (their sum over the batches).
+  // The CPU's pass times so far, as cpu_NAME (each name once per batch).
   void AddPassTimes(PassTimings* timings) const {
     if (timings == nullptr) return;
     std::lock_guard<std::mutex> lock(state_->mutex);

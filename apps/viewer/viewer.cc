@@ -869,7 +869,9 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   command.height = image.height;
   cli::RenderOutputs outputs(common, command, plan, shown_model_);
   outputs.SetMetadata("atmo:writer", "atmo-viewer");
-  if (shown_model_ == "source4d") outputs.SetMetadata("atmo:source4dTables", shown_source4d_cpu_tables_ ? "cpu" : "gpu");
+  if (shown_model_ == "source4d") {
+    outputs.SetMetadata("atmo:source4dTables", shown_source4d_cpu_tables_ ? "cpu" : "gpu");
+  }
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
   const bool monte_carlo = standard_error.width > 0;
   if (monte_carlo) {
