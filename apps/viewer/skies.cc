@@ -231,10 +231,10 @@ constexpr int kSource4dGroupsPerStep = 16;
 // hillaire"). The build runs in a oneTBB arena of its own, so that a parallel loop of the render
 // thread never picks up one of its tasks (work stealing within one arena) and stalls a frame.
 // The build reports each finished pass (transmittance, quadrature, gathering and product per
-// order, sum: 2 x orders + 1 per batch) and
-// checks `cancel` there: a cancelled build stops after the pass it is in. Its threads keep the
-// render thread's priority: at 1280x720 llvmpipe's frames keep both cores of a 2-core machine
-// busy, and a build at nice 10 took 24 s instead of 5 s to reach the screen (docs/viewer.md).
+// order, sum: 2 x orders + 1 per batch) and checks `cancel` there: a cancelled build stops after
+// the pass it is in. Its threads keep the render thread's priority: at 1280x720 llvmpipe's frames
+// keep both cores of a 2-core machine busy, and a build at nice 10 took 24 s instead of 5 s to
+// reach the screen (docs/viewer.md).
 struct Source4dCpuBuildState {
   std::atomic<bool> cancel{false};
   std::atomic<bool> finished{false};
