@@ -549,6 +549,9 @@ class Viewer {
   // the shown sky (drawn_generation_ -1: unknown, e.g. after a screenshot or the fused pass).
   int sky_generation_ = 0;
   int drawn_generation_ = -1;
+  // The last frame showed an unchanged frame while the next sky's tables build on a thread of
+  // their own: the next frame waits for input up to kBuildWaitS first (Run).
+  bool waiting_for_build_ = false;
   Camera drawn_camera_;
   RadianceTerms drawn_terms_;
   ViewState shown_knobs_;  // the atmosphere knobs of what is shown
@@ -1368,7 +1371,13 @@ int Viewer::Run() {
   // (elek's tables still building, reference short of --spp).
   for (frame_ = 0;; ++frame_) {
     if (glfwWindowShouldClose(window)) break;
-    glfwPollEvents();
+    // While a thread builds the next sky and nothing on screen changes, the loop waits for input
+    // (up to 0.1 s) instead of drawing the same window again at once: on a software GL a window of
+    // 1280x720 costs ~50 ms of both cores (display, panels, swap), which the build needs more.
+    constexpr double kBuildWaitS = 0.1;
+    if (waiting_for_build_) glfwWaitEventsTimeout(kBuildWaitS);
+    else glfwPollEvents();
+    waiting_for_build_ = false;
     const auto now = std::chrono::steady_clock::now();
     const double dt_s = std::chrono::duration<double>(now - last).count();
     last = now;
@@ -1475,6 +1484,7 @@ int Viewer::Run() {
           terms.sun_disc == drawn_terms_.sun_disc && terms.ground == drawn_terms_.ground;
       const bool reuse_frame = frame_current && compare_sky_ == nullptr && pending_ != nullptr &&
                                pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
+      waiting_for_build_ = reuse_frame;
       if (fused == nullptr && !reuse_frame) {
         sky_->RenderFrame(camera, terms, pass_timings_);
         drawn_generation_ = sky_generation_;
