@@ -22,6 +22,9 @@
 //   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
 //   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
 //                           of the lit air they see (off: no splitting)
+//   guiding=table           where the guided draws come from: table (the tabulated first-order
+//                           radiance proxy, whose integral is also the importance) or lobes
+//                           (the sun and horizon lobes, importance along one axis)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -57,6 +60,7 @@ struct ReferenceSettings {
   double horizon_lobe = 0.5;
   int shadow_splits = 4;
   bool importance_splitting = true;
+  cpu::ShadowGuiding guiding = cpu::ShadowGuiding::kTable;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
