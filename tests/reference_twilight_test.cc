@@ -85,6 +85,7 @@ TEST(ReferenceSegmentEstimator, AgreesWithTheVertexEstimatorOrderByOrder) {
   auto segment = MakeReference(p, {{"seed", "3"}, {"nee", "segment"}, {"shadow_guiding", "0"}});
   auto guided = MakeReference(p, {{"seed", "4"}});  // the defaults: nee=auto, shadow guiding by the table
   auto lobes = MakeReference(p, {{"seed", "11"}, {"guiding", "lobes"}});  // the sun and horizon lobes
+  auto table = MakeReference(p, {{"seed", "14"}, {"table_fraction", "1"}});  // the table alone
   // The horizon lobe alone and heavy splitting: the sampling of the lobes at its extremes.
   auto horizon = MakeReference(
       p, {{"seed", "5"}, {"guiding", "lobes"}, {"shadow_guiding", "0.9"}, {"horizon_lobe", "1"}, {"shadow_splits", "8"}});
@@ -98,7 +99,7 @@ TEST(ReferenceSegmentEstimator, AgreesWithTheVertexEstimatorOrderByOrder) {
     const glm::dvec3 sun = Direction(q.sun_zenith_deg, 0.0);
     const glm::dvec3 view = Direction(q.view_zenith_deg, q.azimuth_deg);
     const OrderEstimate a = AsReference(*vertex->View(q.altitude_m, sun)).EstimateByOrder(view, k.vertex_paths);
-    for (const ReferenceModel* model : {segment.get(), guided.get(), lobes.get(), horizon.get()}) {
+    for (const ReferenceModel* model : {segment.get(), guided.get(), lobes.get(), table.get(), horizon.get()}) {
       const OrderEstimate b = AsReference(*model->View(q.altitude_m, sun)).EstimateByOrder(view, k.paths);
       for (int c = 0; c < 3; ++c) {
         const double se = std::hypot(a.total[c].standard_error, b.total[c].standard_error);
@@ -355,7 +356,8 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
                                    {"shadow_guiding", "1"}, {"shadow_guiding", "x"}, {"horizon_lobe", "-0.1"},
                                    {"horizon_lobe", "1.5"}, {"shadow_splits", "0"}, {"shadow_splits", "65"},
                                    {"shadow_splits", "2.5"}, {"importance_splitting", "yes"},
-                                   {"guiding", "both"}, {"guiding", ""}}) {
+                                   {"guiding", "both"}, {"guiding", ""}, {"table_fraction", "-0.1"},
+                                   {"table_fraction", "1.5"}}) {
     try {
       CreateModel("reference", p, {{key, value}});
       ADD_FAILURE() << key << "=" << value << " was accepted";
@@ -371,14 +373,15 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
   } catch (const Error& e) {
     const std::string message = e.what();
     for (const char* key :
-         {"nee", "nee_samples", "shadow_guiding", "horizon_lobe", "shadow_splits", "importance_splitting", "guiding"}) {
+         {"nee", "nee_samples", "shadow_guiding", "horizon_lobe", "shadow_splits", "importance_splitting", "guiding",
+          "table_fraction"}) {
       EXPECT_NE(message.find(key), std::string::npos);
     }
   }
   EXPECT_NO_THROW(CreateModel("reference", p, {{"nee", "vertex"}, {"nee_samples", "64"}, {"shadow_guiding", "0.95"},
                                                        {"horizon_lobe", "1"}, {"shadow_splits", "64"},
                                                        {"guiding", "lobes"}}));
-  EXPECT_NO_THROW(CreateModel("reference", p, {{"guiding", "table"}}));
+  EXPECT_NO_THROW(CreateModel("reference", p, {{"guiding", "table"}, {"table_fraction", "1"}}));
 }
 
 }  // namespace

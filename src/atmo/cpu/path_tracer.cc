@@ -242,6 +242,9 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     throw Error("the horizon lobe fraction must be in [0, 1]");
   }
   if (settings_.shadow_splits < 1) throw Error("shadow splitting needs at least 1 direction");
+  if (!(settings_.table_fraction >= 0.0 && settings_.table_fraction <= 1.0)) {
+    throw Error("the guide table's fraction of the guided draws must be in [0, 1]");
+  }
   guide_ = std::make_shared<GuideTable>();
   if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
@@ -970,36 +973,29 @@ double PathTracer::GuideTableImportance(const glm::dvec3& x, const glm::dvec3& s
 
 glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind,
                                        double g, std::size_t channel, Rng& rng, double& mis_weight) const {
+  // One-sample MIS of the phase function (1 - guide), the table's sampler (guiding=table: the
+  // fraction table_fraction of guide) and the lobes (the rest of guide, split by horizon_lobe).
   const double guide = settings_.shadow_guiding;
-  if (settings_.guiding == ShadowGuiding::kTable) {
-    // One-sample MIS of the phase function (1 - guide) and the table's sampler (guide).
-    const GuideTable& table = Guide();
-    const GuidePosition at = LocateGuide(table, x, sun);
-    glm::dvec3 next;
-    if (rng.Uniform() < guide) {
-      next = SampleGuide(table, at, channel, rng);
-    } else {
-      const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
-      next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
-    }
-    const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
-    const double mixture = (1.0 - guide) * phase + guide * GuidePdf(table, at, channel, next);
-    mis_weight = mixture > 0.0 ? phase / mixture : 0.0;
-    return next;
-  }
-  const double horizon = guide * settings_.horizon_lobe;
-  const double sun_lobe = guide - horizon;
+  const double table_share = settings_.guiding == ShadowGuiding::kTable ? guide * settings_.table_fraction : 0.0;
+  const double lobes = guide - table_share;
+  const double horizon = lobes * settings_.horizon_lobe;
+  const double sun_lobe = lobes - horizon;
   glm::dvec3 up, towards, across;
   double e0;
   HorizonFrame(x, sun, up, towards, across, e0);
   constexpr double kHalfPi = 0.5 * kPi;
+  const GuideTable* table = table_share > 0.0 ? &Guide() : nullptr;
+  GuidePosition at{};
+  if (table) at = LocateGuide(*table, x, sun);
 
   glm::dvec3 next;
   const double u = rng.Uniform();
-  if (u < sun_lobe) {
+  if (table && u >= 1.0 - table_share) {
+    next = SampleGuide(*table, at, channel, rng);
+  } else if (u < sun_lobe) {
     const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
     next = DirectionAbout(sun, mu, 2.0 * kPi * rng.Uniform());
-  } else if (u < guide) {
+  } else if (u < lobes) {
     const double azimuth = SampleTruncatedLaplace(0.0, kHorizonAzimuthScale, -kPi, kPi, rng.Uniform());
     const double elevation = SampleTruncatedLaplace(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, rng.Uniform());
     next = glm::normalize(std::cos(elevation) * (std::cos(azimuth) * towards + std::sin(azimuth) * across) +
@@ -1010,6 +1006,7 @@ glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d,
   }
   const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
   double mixture = (1.0 - guide) * phase;
+  if (table) mixture += table_share * GuidePdf(*table, at, channel, next);
   if (sun_lobe > 0.0) {
     mixture += sun_lobe * shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(sun, next));
   }

@@ -32,14 +32,18 @@
 //     on the rest of a path once one of its segments started there (its lit vertices are rare and
 //     heavy), and the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
 //   - at a vertex in the planet's shadow the new direction comes, with probability
-//     shadow_guiding, from a guiding lobe instead of the phase function: a Henyey-Greenstein lobe
-//     (g 0.8) about the sun, or (fraction horizon_lobe of the guided draws) a lobe about the sun's
-//     azimuth just below the local horizontal, where the lit air of a deep-twilight vertex lies;
+//     shadow_guiding, from a guide instead of the phase function: by default (guiding kTable) half
+//     of the guided draws (table_fraction) from the sampler of a table of the first-order radiance
+//     the vertex sees from each direction (built once per tracer on first use: GuideTable), the
+//     others (all of them with kLobes) from a Henyey-Greenstein lobe (g 0.8) about the sun, or
+//     (fraction horizon_lobe of them) a lobe about the sun's azimuth just below the local
+//     horizontal, where the lit air of a deep-twilight vertex lies;
 //     weighted by phase / mixture pdf (one-sample MIS, weight <= 1 / (1 - shadow_guiding));
 //   - splitting at the first vertex of a path in the shadow: shadow_splits directions, each with
 //     its segment estimate at 1/N of the weight, one of them continued with the full weight;
 //   - importance splitting at the later shadowed vertices (importance_splitting): a proxy of the
-//     lit air a vertex sees (ImportanceProxy) times the path's weight, against the same product at
+//     lit air a vertex sees (the table's integral over directions, or with kLobes ImportanceProxy
+//     along one axis) times the path's weight, against the same product at
 //     the path's first shadowed vertex, says into how many copies (of 1/n of the weight) the path
 //     is split there, and Russian roulette is taken relative to that weight, so the rare paths
 //     that climb to the bright air above the shadow no longer carry most of the estimate alone;
@@ -129,6 +133,9 @@ struct PathTracerSettings {
   bool importance_splitting = true;
   // Where the guided draws (shadow_guiding) come from, and the importance of importance splitting.
   ShadowGuiding guiding = ShadowGuiding::kTable;
+  // With kTable: the fraction of the guided draws from the table's sampler, the rest from the
+  // lobes (split by horizon_lobe), in [0, 1].
+  double table_fraction = 0.5;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).

@@ -64,6 +64,8 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
       if (value == "table") s.guiding = cpu::ShadowGuiding::kTable;
       else if (value == "lobes") s.guiding = cpu::ShadowGuiding::kLobes;
       else throw Error("option guiding=" + value + ": expected table or lobes");
+    } else if (key == "table_fraction") {
+      s.table_fraction = ParseDoubleOption(key, value, 0.0, 1.0);
     } else if (key == "quadrature_tolerance") {
       s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
     } else if (key == "seed") {
@@ -71,7 +73,7 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
     } else {
       throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
                   "max_samples, estimator, forced_collisions, nee, nee_samples, shadow_guiding, horizon_lobe, shadow_splits, "
-                  "importance_splitting, guiding, quadrature_tolerance, seed)");
+                  "importance_splitting, guiding, table_fraction, quadrature_tolerance, seed)");
     }
   }
   if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
@@ -87,7 +89,8 @@ ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const Ref
       settings_(settings),
       tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3, settings.next_event, settings.nee_samples,
                                       settings.shadow_guiding, settings.horizon_lobe, settings.shadow_splits,
-                                      settings.importance_splitting, settings.guiding}) {}
+                                      settings.importance_splitting, settings.guiding,
+                                      settings.table_fraction}) {}
 
 std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {
