@@ -90,6 +90,21 @@ TEST(GlContext, ReportsRendererAndVersion) {
   std::printf("GL_RENDERER=%s\nGL_VERSION=%s\n", context.renderer().c_str(), context.version().c_str());
 }
 
+// Mesa's software rasterisers by their GL_RENDERER strings (what atmo-viewer's --source4d-tables
+// auto reads), and hardware ones that are not.
+TEST(GlContext, TellsSoftwareRenderersApart) {
+  for (const char* software : {"llvmpipe (LLVM 15.0.6, 256 bits)", "softpipe", "SWR (LLVM 6.0.0, 256 bits)",
+                               "Mesa X11 swrast", "Software Rasterizer"}) {
+    EXPECT_TRUE(IsSoftwareRenderer(software)) << software;
+  }
+  for (const char* hardware : {"NVIDIA H200/PCIe/SSE2", "AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.7)",
+                               "Mesa Intel(R) UHD Graphics 620 (KBL GT2)", ""}) {
+    EXPECT_FALSE(IsSoftwareRenderer(hardware)) << hardware;
+  }
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  EXPECT_EQ(context.software_renderer(), IsSoftwareRenderer(context.renderer()));
+}
+
 TEST(GlShaderSources, EmbedsTheSharedFilesVerbatim) {
   // The GL backend compiles the very text that shared.h includes as C++.
   EXPECT_NE(SharedGlslSource("transmittance.glsl").find("ComputeTransmittanceToTopAtmosphereBoundaryTexel"),

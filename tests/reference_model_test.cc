@@ -334,11 +334,73 @@ TEST(ReferenceModel, TargetRelativeErrorIsReached) {
   for (int c = 0; c < 3; ++c) EXPECT_LE(e.total[c].standard_error, 0.02 * e.total[c].mean);
 }
 
+// The tally's variance of the variance from its power sums = the two-pass definition
+// sum (x - m)^4 / (sum (x - m)^2)^2 - 1/n, after merging; ~ (kurtosis - 1) / n for a light-tailed
+// sample, and near 1 once one value carries the variance.
+TEST(ReferenceModel, TallyVarianceOfVarianceIsTheTwoPassValue) {
+  std::vector<double> values;
+  std::uint64_t state = 12345;
+  for (int i = 0; i < 4000; ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const double u = static_cast<double>(state >> 11) * 0x1.0p-53;
+    values.push_back(1e-6 * (2.0 + std::log(1.0 - u)));  // shifted exponential, scale 1e-6
+  }
+  const auto two_pass = [](const std::vector<double>& x) {
+    double m = 0.0;
+    for (double v : x) m += v;
+    m /= static_cast<double>(x.size());
+    double s2 = 0.0, s4 = 0.0;
+    for (double v : x) {
+      s2 += (v - m) * (v - m);
+      s4 += (v - m) * (v - m) * (v - m) * (v - m);
+    }
+    return s4 / (s2 * s2) - 1.0 / static_cast<double>(x.size());
+  };
+  const auto tally_of = [](const std::vector<double>& x) {
+    cpu::PathTally a(1), b(1);
+    for (std::size_t i = 0; i < x.size(); ++i) (i % 3 == 0 ? a : b).Add(0, x[i]);
+    a.paths = (x.size() + 2) / 3;
+    b.paths = x.size() - a.paths;
+    a.Merge(b);
+    return a.Get(0, 0);
+  };
+  const cpu::Estimate light = tally_of(values);
+  EXPECT_NEAR(light.variance_of_variance, two_pass(values), 1e-9);
+  // Exponential: kurtosis 9, so VOV ~ 8 / n.
+  EXPECT_NEAR(light.variance_of_variance * 4000.0, 8.0, 3.0);
+  values[17] = 1e-2;  // one path 10^4 times the others
+  const cpu::Estimate heavy = tally_of(values);
+  EXPECT_NEAR(heavy.variance_of_variance, two_pass(values), 1e-9);
+  EXPECT_GT(heavy.variance_of_variance, 0.9);
+}
+
+// The doubling goes on while the standard error is set by a few paths: with a target the
+// estimator meets at once (100 %), max_vov=1 stops at the first count and the default (0.1) only
+// where the VOV is at most 0.1 in every channel. In deep twilight (ground, sun 104 deg,
+// horizontal view away from the sun) 2048 paths have VOVs of 0.27-0.96, so it runs more paths.
+TEST(ReferenceModel, TargetRelativeErrorWaitsForATrustworthyError) {
+  const auto run = [](const char* max_vov) {
+    auto model = MakeReference(Preset("earth"), {{"samples", "2048"}, {"target_rel_error", "1"},
+                                                 {"max_vov", max_vov}, {"max_samples", "65536"}});
+    const auto sky = model->View(0.0, Direction(104.0, 0.0));
+    return AsReference(*sky).EstimateByOrder(Direction(90.0, 180.0));
+  };
+  const OrderEstimate off = run("1");
+  EXPECT_EQ(off.paths, 2048u);
+  const OrderEstimate on = run("0.1");
+  EXPECT_GT(on.paths, off.paths);
+  if (on.paths < 65536u) {
+    for (int c = 0; c < 3; ++c) EXPECT_LE(on.total[c].variance_of_variance, 0.1) << "channel " << c;
+  }
+}
+
 TEST(ReferenceModel, OptionsAndInputsAreChecked) {
   const AtmosphereParameters p = Preset("earth");
   EXPECT_THROW(CreateModel("reference", p, {{"samples", "0"}}), Error);
   EXPECT_THROW(CreateModel("reference", p, {{"estimator", "magic"}}), Error);
   EXPECT_THROW(CreateModel("reference", p, {{"target_rel_error", "-1"}}), Error);
+  EXPECT_THROW(CreateModel("reference", p, {{"max_vov", "0"}}), Error);
+  EXPECT_THROW(CreateModel("reference", p, {{"max_vov", "2"}}), Error);
   EXPECT_THROW(CreateModel("reference", p, {{"samples", "100"}, {"max_samples", "10"}}), Error);
   EXPECT_THROW(CreateModel("reference", p, {{"frobnicate", "1"}}), Error);
   auto model = CreateModel("reference", p);

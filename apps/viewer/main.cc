@@ -5,7 +5,7 @@
 //               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
 //               --sun-azimuth --date ... --ev --exposure --tonemap ...]
 //               [--frames N [--screenshot F.png|F.exr|NAME]] [--script F] [--save-config F.json]
-//               [--recompute-every-frame] [--hidden]
+//               [--recompute-every-frame] [--source4d-tables gpu|cpu|auto] [--hidden]
 //
 // This file only parses the command line (the flags of `atmo render` through apps/atmo/cli_flags.h)
 // and calls RunViewer. Errors: one line `atmo-viewer: error: ...` on stderr; exit 2 for a command
@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
   app.add_option("--build-budget", options.build_budget_ms,
                  "milliseconds of elek's and source4d's table steps per frame while they build (default 25)")
       ->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--source4d-tables", options.source4d_tables,
+                 "where source4d's tables are built: gpu, cpu (a worker thread) or auto (cpu on a software GL "
+                 "such as llvmpipe, else gpu; default)");
   app.add_option("--frame-log", options.frame_log,
                  "write one line per frame: number, ms, model shown, model being built, its progress");
   app.add_option("--reference-divisor", options.reference_divisor,

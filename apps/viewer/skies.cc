@@ -8,12 +8,18 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
+#include <vector>
+
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "cpu/camera.h"
+#include "cpu/source4d_tables.h"
 #include "cpu/sun_disc.h"
 #include "gl/elek_gl.h"
 #include "gl/hillaire_gl.h"
@@ -219,19 +225,183 @@ class ElekSky final : public Sky {
 // (64 steps of 24 samples per invocation) on llvmpipe with 2 threads.
 constexpr int kSource4dGroupsPerStep = 16;
 
-// Source4d: per batch a gl::Source4dTablesBuilder run a few steps per frame (as elek's), then
-// RunSource4dFramePass, the passes of `atmo render --backend gl --model source4d`.
+// The CPU's build of source4d's tables (cpu::ComputeSource4dTables, what Source4dModel::Precompute
+// runs) on a thread of its own, for --source4d-tables cpu: on a software GL (llvmpipe) the CPU
+// backend builds them ~8x faster than the GL passes (docs/performance.md, "source4d beside
+// hillaire"). The build runs in a oneTBB arena of its own, so that a parallel loop of the render
+// thread never picks up one of its tasks (work stealing within one arena) and stalls a frame.
+// The build reports each finished pass (transmittance, quadrature, gathering and product per
+// order, sum: 2 x orders + 1 per batch) and checks `cancel` there: a cancelled build stops after
+// the pass it is in. Its threads keep the render thread's priority: at 1280x720 llvmpipe's frames
+// keep both cores of a 2-core machine busy, and a build at nice 10 took 24 s instead of 5 s to
+// reach the screen (docs/viewer.md).
+struct Source4dCpuBuildState {
+  std::atomic<bool> cancel{false};
+  std::atomic<bool> finished{false};
+  std::atomic<int> passes_done{0};
+  int passes_total = 0;
+  mutable std::mutex mutex;  // guards what follows
+  std::vector<std::pair<std::string, double>> passes;  // name and ms of each finished pass, in order
+  std::vector<cpu::Source4dTables> tables;             // per batch, once finished without an error
+  std::string error;                                   // what the build threw, else empty
+};
+
+struct Source4dBuildCancelled {};
+
+void RunSource4dCpuBuild(const std::shared_ptr<Source4dCpuBuildState>& state,
+                         const std::vector<shared::AtmosphereParameters>& atmospheres,
+                         const cpu::Source4dSettings& settings) {
+  try {
+    oneapi::tbb::task_arena arena;
+    arena.execute([&] {
+      std::vector<cpu::Source4dTables> built;
+      for (const shared::AtmosphereParameters& atmosphere : atmospheres) {
+        if (state->cancel) throw Source4dBuildCancelled{};
+        cpu::Source4dTables tables;
+        cpu::ComputeSource4dTables(atmosphere, settings, tables, [&](std::string_view pass, double ms) {
+          {
+            std::lock_guard<std::mutex> lock(state->mutex);
+            state->passes.emplace_back(std::string(pass), ms);
+          }
+          ++state->passes_done;
+          if (state->cancel) throw Source4dBuildCancelled{};
+        });
+        built.push_back(std::move(tables));
+      }
+      std::lock_guard<std::mutex> lock(state->mutex);
+      state->tables = std::move(built);
+    });
+  } catch (const Source4dBuildCancelled&) {
+  } catch (const std::exception& error) {
+    std::lock_guard<std::mutex> lock(state->mutex);
+    state->error = error.what();
+  }
+  state->finished = true;
+}
+
+// The builds of skies destroyed while their build ran (a parameter changed again): cancelled,
+// left to stop after their current pass, joined once finished (never waited for, but at exit).
+class RetiredSource4dBuilds {
+ public:
+  ~RetiredSource4dBuilds() { JoinAll(); }
+  void Retire(std::shared_ptr<Source4dCpuBuildState> state, std::thread thread) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    JoinFinished();
+    builds_.emplace_back(std::move(state), std::move(thread));
+  }
+  void JoinAll() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto& [state, thread] : builds_) {
+      if (thread.joinable()) thread.join();
+    }
+    builds_.clear();
+  }
+
+ private:
+  void JoinFinished() {
+    std::erase_if(builds_, [](auto& build) {
+      if (!build.first->finished) return false;
+      build.second.join();  // its last statement ran: returns at once
+      return true;
+    });
+  }
+  std::mutex mutex_;
+  std::vector<std::pair<std::shared_ptr<Source4dCpuBuildState>, std::thread>> builds_;
+};
+
+RetiredSource4dBuilds& RetiredBuilds() {
+  static RetiredSource4dBuilds builds;
+  return builds;
+}
+
+// One build of every batch's tables on a worker thread; destroyed before it finished, it is
+// cancelled and retired (RetiredSource4dBuilds), not waited for.
+class Source4dCpuBuild {
+ public:
+  Source4dCpuBuild(std::vector<shared::AtmosphereParameters> atmospheres, const cpu::Source4dSettings& settings)
+      : state_(std::make_shared<Source4dCpuBuildState>()) {
+    // ComputeSource4dTables's passes: transmittance, quadrature, sum, and with orders >= 2 the
+    // gathering of orders 1 .. N-1 and the products of orders 2 .. N.
+    state_->passes_total = static_cast<int>(atmospheres.size()) * (2 * std::max(settings.orders, 1) + 1);
+    thread_ = std::thread([state = state_, atmospheres = std::move(atmospheres), settings] {
+      RunSource4dCpuBuild(state, atmospheres, settings);
+    });
+  }
+  ~Source4dCpuBuild() {
+    if (!thread_.joinable()) return;  // taken
+    state_->cancel = true;
+    if (state_->finished) {
+      thread_.join();
+    } else {
+      RetiredBuilds().Retire(state_, std::move(thread_));
+    }
+  }
+  Source4dCpuBuild(const Source4dCpuBuild&) = delete;
+  Source4dCpuBuild& operator=(const Source4dCpuBuild&) = delete;
+
+  bool finished() const { return state_->finished; }
+  // Passes finished / passes in all: 0 .. 1, by pass, not by time (the gatherings take most).
+  double progress() const {
+    return std::min(1.0, static_cast<double>(state_->passes_done) / std::max(state_->passes_total, 1));
+  }
+  std::string Status() const {
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    std::string line = "tables on the CPU: " + std::to_string(state_->passes.size()) + " of " +
+                       std::to_string(state_->passes_total) + " passes";
+    if (!state_->passes.empty()) line += " (last " + state_->passes.back().first + ")";
+    return line;
+  }
+  // The CPU's pass times so far, as cpu_NAME (each name once per batch).
+  void AddPassTimes(PassTimings* timings) const {
+    if (timings == nullptr) return;
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    for (const auto& [name, ms] : state_->passes) timings->Add("cpu_" + name, ms);
+  }
+  // Once finished(): the tables per batch; throws atmo::Error with what the build threw.
+  std::vector<cpu::Source4dTables> Take() {
+    thread_.join();
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    if (!state_->error.empty()) throw Error(state_->error);
+    return std::move(state_->tables);
+  }
+
+ private:
+  std::shared_ptr<Source4dCpuBuildState> state_;
+  std::thread thread_;
+};
+
+// Source4d: its tables either per batch from a gl::Source4dTablesBuilder run a few steps per
+// frame (as elek's; request.source4d_cpu_tables false), or from the CPU on a worker thread
+// (Source4dCpuBuild), uploaded once all are built; then RunSource4dFramePass, the passes of
+// `atmo render --backend gl --model source4d` (gl::RenderSource4dGl of the CPU-built model with
+// CPU tables).
 class Source4dSky final : public Sky {
  public:
   Source4dSky(const gl::Context& context, const SkyRequest& request)
-      : context_(context), parameters_(request.parameters), model_(parameters_, request.source4d) {
+      : context_(context),
+        parameters_(request.parameters),
+        model_(parameters_, request.source4d),
+        cpu_tables_(request.source4d_cpu_tables) {
     for (std::size_t b = 0; b < model_.batches().size(); ++b) km_.push_back(ToSharedParameters(parameters_, b, 1000.0));
+    if (cpu_tables_) {
+      cpu_build_ = std::make_unique<Source4dCpuBuild>(CpuAtmospheres(), model_.settings().tables);
+      return;
+    }
     // The settings are checked (and the programs compiled) now, not in the first frame.
     builder_ = std::make_unique<gl::Source4dTablesBuilder>(context_, km_[0], model_.settings().tables,
                                                            kSource4dGroupsPerStep);
   }
   std::size_t batch_count() const override { return km_.size(); }
   bool Build(double budget_ms, PassTimings* timings) override {
+    if (cpu_tables_) {
+      if (cpu_build_ == nullptr) return true;
+      cpu_build_->AddPassTimes(timings);
+      if (!cpu_build_->finished()) return false;  // the last sky stays on screen
+      const std::vector<cpu::Source4dTables> tables = cpu_build_->Take();
+      cpu_build_.reset();
+      Upload(tables, timings);
+      return true;
+    }
     const std::size_t built = tables_.size();
     const bool done = StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, [this](std::size_t b) {
       return std::make_unique<gl::Source4dTablesBuilder>(context_, km_[b], model_.settings().tables,
@@ -240,9 +410,29 @@ class Source4dSky final : public Sky {
     if (tables_.size() != built) sky_view_stale_ = true;
     return done;
   }
-  double progress() const override { return BuildProgress(builder_, tables_.size(), km_.size()); }
+  double progress() const override {
+    if (cpu_tables_) return cpu_build_ != nullptr ? cpu_build_->progress() : 1.0;
+    return BuildProgress(builder_, tables_.size(), km_.size());
+  }
+  bool BuildsOnItsOwnThread() const override { return cpu_build_ != nullptr; }
+  std::string BuildStatus() const override {
+    return cpu_build_ != nullptr ? cpu_build_->Status() : (cpu_tables_ ? "" : "tables on the GPU");
+  }
   void Recompute(PassTimings* timings) override {
     builder_.reset();
+    cpu_build_.reset();
+    if (cpu_tables_) {
+      // On this thread, at once (the benchmark of --recompute-every-frame).
+      std::vector<cpu::Source4dTables> tables;
+      for (const shared::AtmosphereParameters& atmosphere : CpuAtmospheres()) {
+        cpu::ComputeSource4dTables(atmosphere, model_.settings().tables, tables.emplace_back(),
+                                   [&](std::string_view pass, double ms) {
+                                     if (timings != nullptr) timings->Add("cpu_" + std::string(pass), ms);
+                                   });
+      }
+      Upload(tables, timings);
+      return;
+    }
     tables_.clear();
     for (const shared::AtmosphereParameters& km : km_)
       tables_.push_back(gl::ComputeSource4dTablesGl(context_, km, model_.settings().tables, timings));
@@ -288,11 +478,27 @@ class Source4dSky final : public Sky {
   }
 
  private:
+  // The batches' atmospheres in metres, as Source4dModel::Precompute builds them.
+  std::vector<shared::AtmosphereParameters> CpuAtmospheres() const {
+    std::vector<shared::AtmosphereParameters> atmospheres;
+    for (const Source4dModel::Batch& batch : model_.batches()) atmospheres.push_back(batch.atmosphere);
+    return atmospheres;
+  }
+  void Upload(const std::vector<cpu::Source4dTables>& tables, PassTimings* timings) {
+    const auto start = Clock::now();
+    tables_.clear();
+    for (const cpu::Source4dTables& t : tables) tables_.push_back(gl::UploadSource4dTables(t));
+    if (timings != nullptr) timings->Add("source4d_gl_upload", MillisecondsSince(start));
+    sky_view_stale_ = true;
+  }
+
   const gl::Context& context_;
   AtmosphereParameters parameters_;
   Source4dModel model_;  // checks the parameters and the settings; no tables of its own
   std::vector<shared::AtmosphereParameters> km_;
-  std::unique_ptr<gl::Source4dTablesBuilder> builder_;  // of batch tables_.size()
+  bool cpu_tables_ = false;                             // the tables from the CPU (Source4dCpuBuild)
+  std::unique_ptr<gl::Source4dTablesBuilder> builder_;  // GPU: of batch tables_.size()
+  std::unique_ptr<Source4dCpuBuild> cpu_build_;          // CPU: every batch, until uploaded
   std::vector<gl::Source4dTablesGl> tables_;
   std::vector<gl::GpuTexture> frames_;
   std::vector<gl::Source4dSkyViewGl> sky_views_;  // per batch, for r_km_ and sun_
@@ -419,6 +625,7 @@ class ReferenceSky final : public Sky {
     std::lock_guard<std::mutex> lock(mutex_);
     return shown_.samples_per_pixel >= spp_ || !error_.empty();
   }
+  bool SameInputsSameFrame() const override { return false; }
 
  private:
   static bool SameRender(const RenderSettings& a, const RenderSettings& b) {
@@ -513,6 +720,8 @@ class ReferenceSky final : public Sky {
 };
 
 }  // namespace
+
+void JoinSource4dCpuBuilds() { RetiredBuilds().JoinAll(); }
 
 const std::vector<std::string>& ViewerModelNames() {
   static const std::vector<std::string> names = {"hillaire", "elek", "simple", "reference", "source4d"};

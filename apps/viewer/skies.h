@@ -5,8 +5,9 @@
 //   elek       gl::ElekTablesBuilder: the tables a few steps per frame (Build's time budget), so
 //              that the window keeps drawing (the last finished sky) while they are computed.
 //   simple     gl::RunSimpleFramePass: no tables, the closed form per pixel.
-//   source4d   gl::Source4dTablesBuilder: the tables a few steps per frame, as elek's; the frame
-//              pass gl::RunSource4dFramePass.
+//   source4d   gl::Source4dTablesBuilder: the tables a few steps per frame, as elek's; or, with
+//              request.source4d_cpu_tables (--source4d-tables cpu), cpu::ComputeSource4dTables
+//              on a worker thread, uploaded when done; the frame pass gl::RunSource4dFramePass.
 //   reference  the CPU path tracer's progressive render (RenderProgressive) on a background
 //              thread at a fraction of the window's size, each finished pass uploaded; restarted
 //              when the view, the camera or the terms change.
@@ -16,7 +17,9 @@
 //   while (!sky->Build(25.0, &timings)) { draw the previous sky }
 //   sky->SetView(altitude_m, sun_elevation_deg, sun_azimuth_deg, ground, &timings);
 //   sky->RenderFrame(camera, terms, &timings);             // into frame_texture(b), b < batch_count()
-// Everything is called on the context's thread; only reference runs work of its own elsewhere.
+// Everything is called on the context's thread; only reference and source4d's CPU tables run
+// work of their own elsewhere. A sky destroyed while its CPU tables build does not wait for them
+// (the build stops after its current pass); JoinSource4dCpuBuilds() waits for those at exit.
 #pragma once
 
 #include <cstddef>
@@ -52,6 +55,7 @@ struct SkyRequest {
   HillaireSettings hillaire;        // model hillaire
   ElekSettings elek;                // model elek
   Source4dModelSettings source4d;   // model source4d
+  bool source4d_cpu_tables = false; // source4d: the tables from the CPU on a worker thread, not GL passes
   ModelOptions reference_options;   // model reference (CreateModel's options; seed included)
   std::uint64_t reference_spp = 0;  // reference: paths per pixel to stop at (0: the model's samples)
   int reference_divisor = 4;        // reference: the frame is the window's size / this (at least 1 pixel)
@@ -65,6 +69,14 @@ class Sky {
   // table is built and the sky can be drawn.
   virtual bool Build(double budget_ms, PassTimings* timings) = 0;
   virtual double progress() const { return 1.0; }  // of Build, 0 .. 1
+  // Whether Build's work runs on a thread of its own (source4d's CPU tables): the frames meanwhile
+  // had better leave the cores to it.
+  virtual bool BuildsOnItsOwnThread() const { return false; }
+  // Whether RenderFrame with the same camera, terms and view draws the same frame (not reference,
+  // whose frames are the passes of its background render).
+  virtual bool SameInputsSameFrame() const { return true; }
+  // A line on what Build does (source4d: where its tables are built, the CPU's passes done), or empty.
+  virtual std::string BuildStatus() const { return ""; }
   // Every table again, at once (--recompute-every-frame).
   virtual void Recompute(PassTimings* timings) = 0;
   // The observer (metres) and the sun (degrees, as RenderSettings); `ground`: the lit ground is wanted.
@@ -91,6 +103,10 @@ class Sky {
 };
 
 std::unique_ptr<Sky> MakeSky(const gl::Context& context, const SkyRequest& request);
+
+// Waits for the CPU table builds of source4d skies destroyed before their build finished (each
+// cancelled: it stops after the pass it is in). Call at exit, once no sky is left.
+void JoinSource4dCpuBuilds();
 
 // The median over pixels and channels of standard error / radiance (pixels of radiance 0 left
 // out): the panel's measure of a progressive estimate's noise.

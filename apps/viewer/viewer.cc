@@ -538,11 +538,19 @@ class Viewer {
   ElekSettings elek_settings_;     // --option of --model elek, else elek's defaults
   Source4dModelSettings source4d_settings_;        // --option of --model source4d, then the panel's
   Source4dModelSettings shown_source4d_settings_;  // of the shown sky (to go back to on an error)
+  bool source4d_cpu_tables_ = false;               // --source4d-tables resolved (the panel's choice)
+  bool shown_source4d_cpu_tables_ = false;         // of the shown sky
   ModelOptions reference_options_;  // --option and --seed of --model reference
   std::string shown_model_;        // the model of sky_
   ViewState state_;
   ViewState loaded_;  // the knobs of base_
   ViewState built_;   // what the sky view was last made for
+  // The frame textures' contents: sky_generation_, camera and terms of the last RenderFrame of
+  // the shown sky (drawn_generation_ -1: unknown, e.g. after a screenshot or the fused pass).
+  int sky_generation_ = 0;
+  int drawn_generation_ = -1;
+  Camera drawn_camera_;
+  RadianceTerms drawn_terms_;
   ViewState shown_knobs_;  // the atmosphere knobs of what is shown
   std::unique_ptr<gl::Context> context_;
   std::unique_ptr<Sky> sky_;      // shown
@@ -697,6 +705,10 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     throw Error("--false-colour takes luminance (got " + options_.false_colour + ")");
   }
   false_colour_ = options_.false_colour == "luminance";
+  const std::string& tables = options_.source4d_tables;
+  if (tables != "gpu" && tables != "cpu" && tables != "auto") {
+    throw Error("--source4d-tables takes gpu, cpu or auto (got '" + tables + "')");
+  }
   if (!options_.frame_log.empty()) {
     cli::CheckOutputWritable(options_.frame_log);
     frame_log_ = std::fopen(options_.frame_log.c_str(), "w");
@@ -717,6 +729,9 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   window.title = "atmo-viewer";
   window.visible = !options_.hidden;
   context_ = std::make_unique<gl::Context>(window);
+  // auto: the CPU on a software rasteriser, where GL passes run on the same cores ~8x slower.
+  source4d_cpu_tables_ = tables == "cpu" || (tables == "auto" && context_->software_renderer());
+  shown_source4d_cpu_tables_ = source4d_cpu_tables_;
   GLFWwindow* glfw_window = static_cast<GLFWwindow*>(context_->window());
   // Scripted runs measure frames, not the display's refresh: no vsync.
   glfwSwapInterval(options_.frames > 0 ? 0 : 1);
@@ -735,6 +750,7 @@ Viewer::~Viewer() {
   compare_sky_.reset();
   pending_.reset();
   sky_.reset();
+  JoinSource4dCpuBuilds();  // of skies destroyed while their tables were built (cancelled)
   display_.reset();
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
@@ -769,6 +785,7 @@ std::unique_ptr<Sky> Viewer::MakeSky(const std::string& model, const AtmosphereP
   request.hillaire = settings_;
   request.elek = elek_settings_;
   request.source4d = source4d_settings_;
+  request.source4d_cpu_tables = source4d_cpu_tables_;
   request.reference_options = reference_options_;
   request.reference_spp = options_.render.spp.value_or(0);
   request.reference_divisor = options_.reference_divisor;
@@ -802,6 +819,7 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   Image standard_error;
   std::uint64_t samples_per_pixel = 0;
   Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
+  drawn_generation_ = -1;  // the screenshot's frame (no disc) is in the frame textures now
   // Reference's estimate has its own (smaller) size.
   plan.settings.camera.width = image.width;
   plan.settings.camera.height = image.height;
@@ -851,6 +869,9 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   command.height = image.height;
   cli::RenderOutputs outputs(common, command, plan, shown_model_);
   outputs.SetMetadata("atmo:writer", "atmo-viewer");
+  if (shown_model_ == "source4d") {
+    outputs.SetMetadata("atmo:source4dTables", shown_source4d_cpu_tables_ ? "cpu" : "gpu");
+  }
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
   const bool monte_carlo = standard_error.width > 0;
   if (monte_carlo) {
@@ -918,6 +939,7 @@ void Viewer::UpdateSky() {
     }
     if (!pending_->Build(options_.build_budget_ms, pass_timings_)) return;  // shown in a later frame
     sky_ = std::move(pending_);
+    ++sky_generation_;
     shown_model_ = pending_model_;
     current_ = std::move(next);
     current_base_ = base_;
@@ -927,6 +949,7 @@ void Viewer::UpdateSky() {
     current_preset_index_ = preset_index_;
     shown_settings_ = settings_;
     shown_source4d_settings_ = source4d_settings_;
+    shown_source4d_cpu_tables_ = source4d_cpu_tables_;
     settings_changed_ = false;
     shown_knobs_ = state_;
     UpdateDisplayWeights();
@@ -945,6 +968,7 @@ void Viewer::UpdateSky() {
     preset_index_ = current_preset_index_;
     settings_ = shown_settings_;
     source4d_settings_ = shown_source4d_settings_;
+    source4d_cpu_tables_ = shown_source4d_cpu_tables_;
     settings_changed_ = false;
     state_.model = shown_model_;
     requested_model_ = shown_model_;
@@ -1249,8 +1273,18 @@ void Viewer::DrawPanels() {
         status_ = error.what();
       }
     }
+    // Where the tables are built (--source4d-tables): a change builds them again there.
+    int where = source4d_cpu_tables_ ? 1 : 0;
+    if (ImGui::Combo("tables on", &where, "gpu (GL passes)\0cpu (worker thread)\0") &&
+        (where == 1) != source4d_cpu_tables_) {
+      source4d_cpu_tables_ = where == 1;
+      settings_changed_ = true;
+      ++settings_generation_;
+    }
     if (pending_ != nullptr && pending_model_ == "source4d") {
       ImGui::Text("building the tables: %.0f %%", 100.0 * pending_->progress());
+      const std::string line = pending_->BuildStatus();
+      if (!line.empty()) ImGui::TextWrapped("%s", line.c_str());
     }
   }
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -1428,7 +1462,26 @@ int Viewer::Run() {
       const gl::HillaireGl* fused = compare_sky_ == nullptr && !false_colour_ && !meter && sky_->batch_count() == 1
                                         ? sky_->hillaire_gl()
                                         : nullptr;
-      if (fused == nullptr) sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+      // While the next sky's tables build on a thread of their own (source4d with
+      // --source4d-tables cpu), the shown frame is drawn again only when what it depends on
+      // changed: on llvmpipe the same frame again would take the cores from the build (1280x720:
+      // a frame pass of ~90 ms on both cores, docs/viewer.md#source4d-tables-on-the-cpu).
+      const Camera camera = ViewCamera(state_, width, height);
+      const Camera& drawn = drawn_camera_;
+      const bool frame_current =
+          drawn_generation_ == sky_generation_ && !view_changed && camera.kind == drawn.kind &&
+          camera.width == drawn.width && camera.height == drawn.height && camera.fov_deg == drawn.fov_deg &&
+          camera.yaw_deg == drawn.yaw_deg && camera.pitch_deg == drawn.pitch_deg &&
+          terms.sun_disc == drawn_terms_.sun_disc && terms.ground == drawn_terms_.ground;
+      const bool reuse_frame = frame_current && compare_sky_ == nullptr && pending_ != nullptr &&
+                               pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
+      if (fused == nullptr && !reuse_frame) {
+        sky_->RenderFrame(camera, terms, pass_timings_);
+        drawn_generation_ = sky_generation_;
+        drawn_camera_ = camera;
+        drawn_terms_ = terms;
+      }
+      if (fused != nullptr) drawn_generation_ = -1;
       if (compare_sky_ != nullptr) {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       }

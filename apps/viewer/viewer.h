@@ -25,6 +25,9 @@ struct ViewerOptions {
                                        // and PNG paths are the screenshot of the last frame (empty: none)
   int frames = 0;                      // stop after this many frames (0: when the window is closed)
   double build_budget_ms = 25.0;       // per frame, of elek's and source4d's table steps while they build
+  // Where source4d's tables are built: gpu (GL passes, a few steps per frame), cpu (the CPU
+  // backend on a worker thread) or auto (cpu on a software GL, gl::IsSoftwareRenderer; else gpu).
+  std::string source4d_tables = "auto";
   std::string script_path;             // timed moves (script.h); empty: none
   std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
   bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)

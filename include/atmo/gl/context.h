@@ -28,6 +28,12 @@ namespace atmo::gl {
 
 class ComputeProgram;
 
+// Whether a GL_RENDERER string names one of Mesa's software rasterisers: llvmpipe, softpipe,
+// SWR (OpenSWR) or swrast ("Software Rasterizer"), compared without case. On those the GL passes
+// run on the CPU's cores (llvmpipe: its own threads), so work that the CPU backend does faster
+// is better done there.
+bool IsSoftwareRenderer(std::string_view renderer);
+
 struct WindowOptions {
   int width = 1280;   // pixels, [1, 16384]
   int height = 720;   // pixels, [1, 16384]
@@ -53,6 +59,8 @@ class Context {
 
   const std::string& renderer() const { return renderer_; }  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   const std::string& version() const { return version_; }    // GL_VERSION, e.g. "4.5 (Core Profile) Mesa 22.3.6"
+  // Whether renderer() is a software rasteriser (IsSoftwareRenderer): the "GPU" is the CPU.
+  bool software_renderer() const { return IsSoftwareRenderer(renderer_); }
 
   // For the backend's passes (src/atmo/gl/program.h, private; callers outside atmo do not need it).
   // The compute program of the shared files (in shared.h's order) and `main_source`

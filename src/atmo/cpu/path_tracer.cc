@@ -170,11 +170,26 @@ class PathTracer::Rng {
   std::uint64_t state_;
 };
 
+void PathTally::Add(std::size_t index, double x) {
+  const double x2 = x * x;
+  sum[index] += x;
+  sum_sq[index] += x2;
+  sum_cube[index] += x2 * x;
+  sum_quad[index] += x2 * x2;
+}
+
+void PathTally::Reset() {
+  paths = 0;
+  for (std::vector<double>* v : {&sum, &sum_sq, &sum_cube, &sum_quad}) std::fill(v->begin(), v->end(), 0.0);
+}
+
 void PathTally::Merge(const PathTally& other) {
   paths += other.paths;
   for (std::size_t i = 0; i < sum.size(); ++i) {
     sum[i] += other.sum[i];
     sum_sq[i] += other.sum_sq[i];
+    sum_cube[i] += other.sum_cube[i];
+    sum_quad[i] += other.sum_quad[i];
   }
 }
 
@@ -185,8 +200,15 @@ Estimate PathTally::Get(std::size_t channel, int slot) const {
   const double n = static_cast<double>(paths);
   e.mean = sum[i] / n;
   if (paths > 1) {
-    const double variance = std::max(0.0, (sum_sq[i] - n * e.mean * e.mean) / (n - 1.0));
-    e.standard_error = std::sqrt(variance / n);
+    const double m = e.mean;
+    const double central_2 = std::max(0.0, sum_sq[i] - n * m * m);
+    e.standard_error = std::sqrt(central_2 / (n - 1.0) / n);
+    // The central fourth-power sum from the raw ones; rounding can only make it slightly negative
+    // when the values hardly spread, where the VOV is ~0 anyway.
+    const double central_4 = sum_quad[i] - 4.0 * m * sum_cube[i] + 6.0 * m * m * sum_sq[i] - 3.0 * n * m * m * m * m;
+    if (central_2 > 0.0) {
+      e.variance_of_variance = std::clamp(central_4 / (central_2 * central_2) - 1.0 / n, 0.0, 1.0);
+    }
   }
   return e;
 }
@@ -1242,13 +1264,10 @@ void PathTracer::TraceSerial(const TraceQuery& query, std::uint64_t seed, std::u
       TracePath(query, channels_[c], rng, orders);
       double total = 0.0;
       for (int k = 0; k < kOrderBins; ++k) {
-        const std::size_t slot = c * kTallySlots + 1 + static_cast<std::size_t>(k);
-        tally.sum[slot] += orders[k];
-        tally.sum_sq[slot] += orders[k] * orders[k];
+        tally.Add(c * kTallySlots + 1 + static_cast<std::size_t>(k), orders[k]);
         total += orders[k];
       }
-      tally.sum[c * kTallySlots] += total;
-      tally.sum_sq[c * kTallySlots] += total * total;
+      tally.Add(c * kTallySlots, total);
     }
   }
   tally.paths += count;
@@ -1304,8 +1323,7 @@ PathTally PathTracer::TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t s
         TracePath(query, channels_[c], rng, orders);
         double total = 0.0;
         for (double v : orders) total += v;
-        tally.sum[c * kTallySlots] += total;
-        tally.sum_sq[c * kTallySlots] += total * total;
+        tally.Add(c * kTallySlots, total);
       }
     }
     tally.paths += n;
@@ -1328,14 +1346,11 @@ PathTally PathTracer::DiffuseIrradiance(const glm::dvec3& origin, const glm::dve
         std::array<double, kOrderBins> orders{};
         TracePath(query, channels_[c], rng, orders);
         for (int k = 0; k < kOrderBins; ++k) {
-          const double v = kPi * orders[k];
-          tally.sum[c * kTallySlots + 1 + k] += v;
-          tally.sum_sq[c * kTallySlots + 1 + k] += v * v;
+          tally.Add(c * kTallySlots + 1 + k, kPi * orders[k]);
         }
         double total = 0.0;
         for (double v : orders) total += kPi * v;
-        tally.sum[c * kTallySlots] += total;
-        tally.sum_sq[c * kTallySlots] += total * total;
+        tally.Add(c * kTallySlots, total);
       }
     }
     tally.paths += n;

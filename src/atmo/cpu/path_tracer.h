@@ -87,16 +87,29 @@ inline constexpr int kTallySlots = 1 + kOrderBins;
 struct Estimate {
   double mean = 0.0;
   double standard_error = 0.0;  // of the mean, from the sample variance of the per-path values
+  // The relative variance of the variance (MCNP's VOV, X-5 Monte Carlo Team 2003):
+  // sum (x - mean)^4 / (sum (x - mean)^2)^2 - 1/n over the per-path values x, the squared
+  // relative standard error of the estimated variance. It is about (kurtosis - 1) / n for a
+  // well-behaved estimator and near 1 when one path carries most of the sample variance, i.e.
+  // when the standard error itself is not yet to be trusted (deep twilight's heavy tails).
+  double variance_of_variance = 0.0;
 };
 
-// Sums of per-path values and of their squares, per channel and slot.
+// Sums of per-path values and of their second, third and fourth powers, per channel and slot.
 struct PathTally {
   std::uint64_t paths = 0;
   std::vector<double> sum;     // [channel * kTallySlots + slot]
   std::vector<double> sum_sq;  // same layout
+  std::vector<double> sum_cube;
+  std::vector<double> sum_quad;
 
   explicit PathTally(std::size_t channel_count = 0)
-      : sum(channel_count * kTallySlots, 0.0), sum_sq(channel_count * kTallySlots, 0.0) {}
+      : sum(channel_count * kTallySlots, 0.0),
+        sum_sq(channel_count * kTallySlots, 0.0),
+        sum_cube(channel_count * kTallySlots, 0.0),
+        sum_quad(channel_count * kTallySlots, 0.0) {}
+  void Add(std::size_t index, double x);  // one path's value into [index] of every sum
+  void Reset();                           // no paths
   void Merge(const PathTally& other);
   Estimate Get(std::size_t channel, int slot) const;
 };

@@ -106,9 +106,7 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
         for (int x = 0; x < width; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * width + x;
           if (IsZero(views[i])) continue;
-          std::fill(tally.sum.begin(), tally.sum.end(), 0.0);
-          std::fill(tally.sum_sq.begin(), tally.sum_sq.end(), 0.0);
-          tally.paths = 0;
+          tally.Reset();
           sky.AddPaths(views[i], settings.terms.ground, done, count, tally);
           for (std::size_t c = 0; c < nc; ++c) {
             sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];

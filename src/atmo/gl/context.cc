@@ -8,6 +8,7 @@
 // machine with a GPU and Mesa installed, the surfaceless platform alone could land on llvmpipe.
 #include "gl/context.h"
 
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -127,6 +128,15 @@ Context::Context() {
   }
   if (context_ == nullptr) throw Error("no headless OpenGL 4.5 context: " + why);
   ReadDriverStrings();
+}
+
+bool IsSoftwareRenderer(std::string_view renderer) {
+  std::string lower(renderer);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const std::string_view name : {"llvmpipe", "softpipe", "swr", "software rasterizer"}) {
+    if (lower.find(name) != std::string::npos) return true;
+  }
+  return false;
 }
 
 void Context::ReadDriverStrings() {

@@ -5,8 +5,12 @@
 // Options (`--option key=value`; docs/models/reference.md):
 //   samples=4096            paths per query and channel (`atmo sample --samples N`)
 //   target_rel_error=0      > 0: double the paths until standard error / mean <= this for every
-//                           channel, or until max_samples (`atmo sample --target-rel-error E`)
+//                           channel (and max_vov holds), or until max_samples
+//                           (`atmo sample --target-rel-error E`)
 //   max_samples=16777216    cap of the doubling
+//   max_vov=0.1             the doubling also goes on while a channel's relative variance of the
+//                           variance (cpu::Estimate::variance_of_variance) is above this: its
+//                           standard error is then set by a few paths (1: off)
 //   estimator=path          path: all orders by path tracing; single_quadrature: single scattering
 //                           only, by deterministic quadrature (standard error 0)
 //   forced_collisions=on    force the first tentative collision of segments whose end scores 0
@@ -55,6 +59,7 @@ struct ReferenceSettings {
   std::uint64_t samples = 4096;
   double target_rel_error = 0.0;  // 0: a fixed number of samples
   std::uint64_t max_samples = std::uint64_t{1} << 24;
+  double max_vov = 0.1;  // MCNP's bound on the variance of the variance for a trusted error
   Estimator estimator = Estimator::kPath;
   bool forced_collisions = true;
   cpu::NextEventEstimation next_event = cpu::NextEventEstimation::kAuto;
