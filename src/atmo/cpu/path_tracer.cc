@@ -268,7 +268,11 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     throw Error("the guide table's fraction of the guided draws must be in [0, 1]");
   }
   guide_ = std::make_shared<GuideTable>();
-  if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
+  // The sun-ray proxy table serves the segment estimate and the guide table (which shadow guiding
+  // by the table uses with any next-event estimation).
+  if (!half_space_ && (settings_.next_event != NextEventEstimation::kVertex ||
+                       (settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
+                        settings_.table_fraction > 0.0))) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
     const double rg = atmosphere_.bottom_radius;
     const double h_top = std::sqrt((atmosphere_.top_radius - rg) * (atmosphere_.top_radius + rg));
