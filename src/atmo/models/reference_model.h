@@ -21,9 +21,8 @@
 //   nee_samples=2           stratified points per segment integral
 //   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
 //                           new direction from the guide (MIS with the phase function)
-//   horizon_lobe=0.5        with guiding=lobes: the fraction of the guided draws from the lobe
-//                           about the sun's azimuth just below the local horizontal (the rest:
-//                           about the sun)
+//   horizon_lobe=0.5        the fraction of the lobes' draws from the lobe about the sun's
+//                           azimuth just below the local horizontal (the rest: about the sun)
 //   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
 //   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
 //                           of the lit air they see (off: no splitting)
