@@ -1,8 +1,10 @@
 #include "cpu/path_tracer.h"
 
+#include <atomic>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <mutex>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
@@ -68,6 +70,28 @@ constexpr double kResidualRate = 0.25;
 // Importance splitting: at most this many copies at one vertex, and this many walks per path.
 constexpr int kMaxCopies = 8;
 constexpr int kMaxWalks = 32;
+// The radiance-proxy guide table (PathTracer::GuideTable, docs/models/reference.md). Positions: the
+// altitudes below, as fractions of the atmosphere's thickness (dense near the ground, where most
+// shadowed vertices are and where the local horizon's dip changes fastest: 0.5 deg per node up to
+// 3 km), times kGuideSunNodes sun zenith angles from 90 deg to 90 deg + 3 acos(R_ground / R_top)
+// (earth: 90-120 deg in 1.9 deg steps; beyond it no lit air is in sight). Directions, in the local
+// frame: elevation cells of 0.75 deg from -8 to +13 deg (the local horizon's dip is 0-6 deg
+// for vertices up to 40 km, and the lit air seen from deep shadow lies a few degrees above the
+// ground's horizon) and coarser ones outside; azimuth about the sun's azimuth, |phi| in [0, pi],
+// with edges pi (k / 16)^2 (0.7 deg wide at phi = 0, 22 deg at pi). Each direction cell's proxy is
+// the first-order radiance along its centre direction (RayRadianceProxy).
+constexpr int kGuideAltitudes = 15;
+constexpr double kGuideAltitudeFractions[kGuideAltitudes] = {0.0,  0.005, 0.015, 0.03, 0.05, 0.08, 0.12, 0.17,
+                                                             0.23, 0.30,  0.38,  0.48, 0.62, 0.8,  1.0};
+constexpr int kGuideSunNodes = 17;
+constexpr int kGuidePhi = 16;
+constexpr double kGuideFineLow = -8.0, kGuideFineHigh = 13.0, kGuideFineStep = 0.75;  // deg
+constexpr double kGuideCoarseBelow[] = {-90.0, -60.0, -40.0, -28.0, -20.0, -15.0, -12.0, -10.0};
+constexpr double kGuideCoarseAbove[] = {14.5, 16.5, 19.0, 23.0, 29.0, 37.0, 50.0, 68.0, 90.0};
+// Each position's direction sampler is (1 - kGuideFloor) the proxy times solid angle, normalised,
+// plus kGuideFloor uniform in solid angle: no cell is ever 0, so a cell whose centre misses a
+// thin band of lit air still draws it, at a bounded weight.
+constexpr double kGuideFloor = 0.02;
 
 // splitmix64's finaliser (Steele, Lea, Flood 2014): a bijective 64-bit mix.
 std::uint64_t Mix64(std::uint64_t z) {
@@ -240,7 +264,15 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     throw Error("the horizon lobe fraction must be in [0, 1]");
   }
   if (settings_.shadow_splits < 1) throw Error("shadow splitting needs at least 1 direction");
-  if (!half_space_ && settings_.next_event != NextEventEstimation::kVertex) {
+  if (!(settings_.table_fraction >= 0.0 && settings_.table_fraction <= 1.0)) {
+    throw Error("the guide table's fraction of the guided draws must be in [0, 1]");
+  }
+  guide_ = std::make_shared<GuideTable>();
+  // The sun-ray proxy table serves the segment estimate and the guide table (which shadow guiding
+  // by the table uses with any next-event estimation).
+  if (!half_space_ && (settings_.next_event != NextEventEstimation::kVertex ||
+                       (settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
+                        settings_.table_fraction > 0.0))) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
     const double rg = atmosphere_.bottom_radius;
     const double h_top = std::sqrt((atmosphere_.top_radius - rg) * (atmosphere_.top_radius + rg));
@@ -700,22 +732,296 @@ double PathTracer::ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, c
   return integral;
 }
 
+// The radiance-proxy guide table (docs/models/reference.md, "Radiance-proxy guiding"). The
+// first-order radiance that reaches a vertex x from direction w, L1(x, w) = sum_m p_m(w.sun)
+// integral T sigma_s,m T_sun dt, depends on (|x|, x.sun / |x|, x.w / |x|, the azimuth of w about x
+// from the sun's azimuth) only, and is even in that azimuth: one table serves every query of the
+// tracer. Per channel and table position, a piecewise-constant density in solid angle over the
+// direction cells; a vertex's sampler is the bilinear mixture of its four neighbouring positions'
+// (a deterministic function of x, so the mixture pdf of a direction drawn by any technique is
+// the same function of it).
+struct PathTracer::GuideTable {
+  std::once_flag once;
+  std::atomic<bool> built{false};
+  std::vector<double> altitudes;  // m, kGuideAltitudes
+  double sun_step = 0.0;          // rad between sun zenith angle nodes, from pi / 2
+  std::vector<double> mu_edges;   // cosines to the local zenith, ascending from -1 to 1
+  std::vector<double> phi_edges;  // |azimuth| from the sun's, ascending from 0 to pi
+  int cells = 0;                  // (mu_edges.size() - 1) * kGuidePhi
+  // [(channel * positions + position) * (cells + 1) + k]: the CDF over cells k = mu * kGuidePhi +
+  // phi (0 first, 1 last), and per (channel, position) the proxy's integral over the sphere.
+  std::vector<double> cdf;
+  std::vector<double> integral;
+  std::size_t positions() const { return altitudes.size() * kGuideSunNodes; }
+};
+
+void PathTracer::RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, const glm::dvec3& sun, double* out) const {
+  const std::size_t channels = channels_.size();
+  for (std::size_t c = 0; c < channels; ++c) out[c] = 0.0;
+  double length;
+  bool ground;
+  Segment(x, w, length, ground);
+  if (!(length > 0.0 && length < kInfinity)) return;
+  double shadow_begin, shadow_end;
+  ShadowInterval(x, w, length, sun, shadow_begin, shadow_end);
+  const bool shadow = shadow_begin < shadow_end;
+  if (shadow && shadow_begin <= 0.0 && shadow_end >= length) return;
+  std::array<double, kSegmentIntervals + 3> ts;
+  int n = 0;
+  const double t_low = std::clamp(-glm::dot(x, w), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    ts[n++] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+  }
+  if (shadow) {
+    for (double t : {shadow_begin, shadow_end}) {
+      if (t > 0.0 && t < length) ts[n++] = t;
+    }
+  }
+  std::sort(ts.begin(), ts.begin() + n);
+  const double nu = glm::dot(w, sun);
+  const double p_rayleigh = shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
+  const double p_mie = shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  // Per channel: optical depth so far, the previous node's extinction and integrand.
+  std::array<double, 16> tau_small{}, sigma_small{}, g_small{};
+  std::vector<double> tau_big, sigma_big, g_big;
+  double* tau = tau_small.data();
+  double* sigma_previous = sigma_small.data();
+  double* g_previous = g_small.data();
+  if (channels > tau_small.size()) {
+    tau_big.assign(channels, 0.0), sigma_big.assign(channels, 0.0), g_big.assign(channels, 0.0);
+    tau = tau_big.data(), sigma_previous = sigma_big.data(), g_previous = g_big.data();
+  }
+  for (int i = 0; i < n; ++i) {
+    const glm::dvec3 y = x + ts[i] * w;
+    const glm::dvec3 densities = Densities(y);
+    const bool lit_before = i > 0 && !(shadow && 0.5 * (ts[i - 1] + ts[i]) > shadow_begin &&
+                                       0.5 * (ts[i - 1] + ts[i]) < shadow_end);
+    const bool lit_after = i + 1 < n && !(shadow && 0.5 * (ts[i] + ts[i + 1]) > shadow_begin &&
+                                          0.5 * (ts[i] + ts[i + 1]) < shadow_end);
+    const bool needed = lit_before || lit_after;
+    const glm::dvec3 sun_densities = needed ? SunDensityProxy(y, sun) : glm::dvec3(0.0);
+    for (std::size_t c = 0; c < channels; ++c) {
+      const Channel& ch = channels_[c];
+      const double sigma = OpticalDepth(ch, densities);
+      if (i > 0) tau[c] += 0.5 * (sigma_previous[c] + sigma) * (ts[i] - ts[i - 1]);
+      sigma_previous[c] = sigma;
+      const double g = needed ? (ch.rayleigh_scattering * p_rayleigh * densities.x +
+                                 ch.mie_scattering * p_mie * densities.y) *
+                                    std::exp(-tau[c] - OpticalDepth(ch, sun_densities))
+                              : 0.0;
+      if (lit_before) out[c] += 0.5 * (g_previous[c] + g) * (ts[i] - ts[i - 1]);
+      g_previous[c] = g;
+    }
+  }
+}
+
+void PathTracer::BuildGuideTable(GuideTable& table) const {
+  const double rg = atmosphere_.bottom_radius;
+  const double rt = atmosphere_.top_radius;
+  const double thickness = rt - rg;
+  for (double f : kGuideAltitudeFractions) table.altitudes.push_back(f * thickness);
+  table.sun_step = 3.0 * std::acos(std::clamp(rg / rt, -1.0, 1.0)) / (kGuideSunNodes - 1);
+  std::vector<double> elevations(std::begin(kGuideCoarseBelow), std::end(kGuideCoarseBelow));
+  for (double e = kGuideFineLow; e <= kGuideFineHigh + 1e-9; e += kGuideFineStep) elevations.push_back(e);
+  elevations.insert(elevations.end(), std::begin(kGuideCoarseAbove), std::end(kGuideCoarseAbove));
+  for (double e : elevations) table.mu_edges.push_back(std::sin(e * kPi / 180.0));
+  table.mu_edges.front() = -1.0;
+  table.mu_edges.back() = 1.0;
+  for (int k = 0; k <= kGuidePhi; ++k) table.phi_edges.push_back(kPi * (k * k) / (kGuidePhi * kGuidePhi));
+  const int n_mu = static_cast<int>(table.mu_edges.size()) - 1;
+  table.cells = n_mu * kGuidePhi;
+  const std::size_t channels = channels_.size();
+  const std::size_t positions = table.positions();
+  const std::size_t stride = static_cast<std::size_t>(table.cells) + 1;
+  table.cdf.assign(channels * positions * stride, 0.0);
+  table.integral.assign(channels * positions, 0.0);
+  std::vector<double> value(static_cast<std::size_t>(table.cells) * channels);
+  std::vector<double> solid_angle(static_cast<std::size_t>(table.cells));
+  for (int m = 0; m < n_mu; ++m) {
+    for (int f = 0; f < kGuidePhi; ++f) {
+      solid_angle[m * kGuidePhi + f] =
+          (table.mu_edges[m + 1] - table.mu_edges[m]) * (table.phi_edges[f + 1] - table.phi_edges[f]);
+    }
+  }
+  for (std::size_t ih = 0; ih < table.altitudes.size(); ++ih) {
+    const glm::dvec3 x(0.0, 0.0, rg + table.altitudes[ih]);
+    for (int is = 0; is < kGuideSunNodes; ++is) {
+      const double theta = 0.5 * kPi + is * table.sun_step;
+      const glm::dvec3 sun(std::sin(theta), 0.0, std::cos(theta));
+      for (int m = 0; m < n_mu; ++m) {
+        const double mu = 0.5 * (table.mu_edges[m] + table.mu_edges[m + 1]);
+        const double sin_mu = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+        for (int f = 0; f < kGuidePhi; ++f) {
+          const double phi = 0.5 * (table.phi_edges[f] + table.phi_edges[f + 1]);
+          const glm::dvec3 w(sin_mu * std::cos(phi), sin_mu * std::sin(phi), mu);
+          RayRadianceProxy(x, w, sun, &value[static_cast<std::size_t>(m * kGuidePhi + f) * channels]);
+        }
+      }
+      const std::size_t position = ih * kGuideSunNodes + static_cast<std::size_t>(is);
+      for (std::size_t c = 0; c < channels; ++c) {
+        double total = 0.0;
+        for (int k = 0; k < table.cells; ++k) total += value[static_cast<std::size_t>(k) * channels + c] * solid_angle[k];
+        table.integral[c * positions + position] = 2.0 * total;  // both signs of the azimuth
+        double* cdf = &table.cdf[(c * positions + position) * stride];
+        double sum = 0.0;
+        cdf[0] = 0.0;
+        for (int k = 0; k < table.cells; ++k) {
+          const double proxy = total > 0.0 ? value[static_cast<std::size_t>(k) * channels + c] * solid_angle[k] / total : 0.0;
+          const double floor = solid_angle[k] / (2.0 * kPi);  // one side of the sphere: 2 pi
+          sum += total > 0.0 ? (1.0 - kGuideFloor) * proxy + kGuideFloor * floor : floor;
+          cdf[k + 1] = sum;
+        }
+        for (int k = 1; k <= table.cells; ++k) cdf[k] /= sum;
+        cdf[table.cells] = 1.0;
+      }
+    }
+  }
+}
+
+const PathTracer::GuideTable& PathTracer::Guide() const {
+  std::call_once(guide_->once, [this] {
+    BuildGuideTable(*guide_);
+    guide_->built = true;
+  });
+  return *guide_;
+}
+
+bool PathTracer::GuideTableBuilt() const { return guide_->built; }
+
+void PathTracer::GuideTableEdges(std::vector<double>& mu_edges, std::vector<double>& phi_edges) const {
+  const GuideTable& table = Guide();
+  mu_edges = table.mu_edges;
+  phi_edges = table.phi_edges;
+}
+
+PathTracer::GuidePosition PathTracer::LocateGuide(const GuideTable& table, const glm::dvec3& x,
+                                                  const glm::dvec3& sun) const {
+  GuidePosition at;
+  const double r = glm::length(x);
+  at.up = x / r;
+  at.towards = sun - glm::dot(sun, at.up) * at.up;
+  if (glm::dot(at.towards, at.towards) < 1e-24) at.towards = DirectionAbout(at.up, 0.0, 0.0);
+  at.towards = glm::normalize(at.towards);
+  at.across = glm::cross(at.up, at.towards);
+  const double h = r - atmosphere_.bottom_radius;
+  const int n_h = static_cast<int>(table.altitudes.size());
+  int ih = 0;
+  while (ih + 2 < n_h && table.altitudes[ih + 1] <= h) ++ih;
+  const double fh = std::clamp((h - table.altitudes[ih]) / (table.altitudes[ih + 1] - table.altitudes[ih]), 0.0, 1.0);
+  const double theta = std::acos(std::clamp(glm::dot(at.up, sun), -1.0, 1.0));
+  const double u = std::clamp((theta - 0.5 * kPi) / table.sun_step, 0.0, static_cast<double>(kGuideSunNodes - 1));
+  const int is = std::min(static_cast<int>(u), kGuideSunNodes - 2);
+  const double fs = u - is;
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      at.index[2 * a + b] = (ih + a) * kGuideSunNodes + is + b;
+      at.weight[2 * a + b] = (a ? fh : 1.0 - fh) * (b ? fs : 1.0 - fs);
+    }
+  }
+  return at;
+}
+
+glm::dvec3 PathTracer::SampleGuide(const GuideTable& table, const GuidePosition& at, std::size_t channel,
+                                   Rng& rng) const {
+  // A neighbouring position by its bilinear weight, a cell by its CDF, then uniform in solid
+  // angle in the cell (uniform in mu and phi), the azimuth's sign at random.
+  double u = rng.Uniform();
+  int n = 0;
+  while (n < 3 && !(u < at.weight[n])) u -= at.weight[n++];
+  while (n > 0 && !(at.weight[n] > 0.0)) --n;
+  const std::size_t stride = static_cast<std::size_t>(table.cells) + 1;
+  const double* cdf = &table.cdf[(channel * table.positions() + static_cast<std::size_t>(at.index[n])) * stride];
+  const double v = rng.Uniform();
+  int k = static_cast<int>(std::upper_bound(cdf, cdf + stride, v) - cdf) - 1;
+  k = std::clamp(k, 0, table.cells - 1);
+  const int m = k / kGuidePhi;
+  const int f = k % kGuidePhi;
+  const double mu = table.mu_edges[m] + rng.Uniform() * (table.mu_edges[m + 1] - table.mu_edges[m]);
+  double phi = table.phi_edges[f] + rng.Uniform() * (table.phi_edges[f + 1] - table.phi_edges[f]);
+  if (rng.Uniform() < 0.5) phi = -phi;
+  const double sin_mu = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+  return glm::normalize(mu * at.up + sin_mu * (std::cos(phi) * at.towards + std::sin(phi) * at.across));
+}
+
+double PathTracer::GuidePdf(const GuideTable& table, const GuidePosition& at, std::size_t channel,
+                            const glm::dvec3& w) const {
+  const double mu = std::clamp(glm::dot(w, at.up), -1.0, 1.0);
+  const double phi = std::atan2(std::abs(glm::dot(w, at.across)), glm::dot(w, at.towards));
+  const int n_mu = static_cast<int>(table.mu_edges.size()) - 1;
+  const int m = std::clamp(
+      static_cast<int>(std::upper_bound(table.mu_edges.begin(), table.mu_edges.end(), mu) - table.mu_edges.begin()) - 1,
+      0, n_mu - 1);
+  const int f = std::clamp(static_cast<int>(std::upper_bound(table.phi_edges.begin(), table.phi_edges.end(), phi) -
+                                            table.phi_edges.begin()) -
+                               1,
+                           0, kGuidePhi - 1);
+  const int k = m * kGuidePhi + f;
+  const double solid_angle =
+      2.0 * (table.mu_edges[m + 1] - table.mu_edges[m]) * (table.phi_edges[f + 1] - table.phi_edges[f]);
+  const std::size_t stride = static_cast<std::size_t>(table.cells) + 1;
+  double probability = 0.0;
+  for (int n = 0; n < 4; ++n) {
+    if (!(at.weight[n] > 0.0)) continue;
+    const double* cdf = &table.cdf[(channel * table.positions() + static_cast<std::size_t>(at.index[n])) * stride];
+    probability += at.weight[n] * (cdf[k + 1] - cdf[k]);
+  }
+  return probability / solid_angle;
+}
+
+double PathTracer::GuideImportance(const GuideTable& table, const GuidePosition& at, std::size_t channel) const {
+  double importance = 0.0;
+  for (int n = 0; n < 4; ++n) {
+    importance += at.weight[n] * table.integral[channel * table.positions() + static_cast<std::size_t>(at.index[n])];
+  }
+  return importance;
+}
+
+glm::dvec3 PathTracer::SampleGuideTable(const glm::dvec3& x, const glm::dvec3& sun, std::size_t channel,
+                                        std::uint64_t seed) const {
+  const GuideTable& table = Guide();
+  Rng rng(Mix64(seed ^ 0x7AB1Eull));
+  return SampleGuide(table, LocateGuide(table, x, sun), channel, rng);
+}
+
+double PathTracer::GuideTablePdf(const glm::dvec3& x, const glm::dvec3& sun, const glm::dvec3& w,
+                                 std::size_t channel) const {
+  const GuideTable& table = Guide();
+  return GuidePdf(table, LocateGuide(table, x, sun), channel, w);
+}
+
+double PathTracer::GuideTableImportance(const glm::dvec3& x, const glm::dvec3& sun, std::size_t channel) const {
+  const GuideTable& table = Guide();
+  return GuideImportance(table, LocateGuide(table, x, sun), channel);
+}
+
 glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind,
-                                       double g, Rng& rng, double& mis_weight) const {
+                                       double g, std::size_t channel, Rng& rng, double& mis_weight) const {
+  // One-sample MIS of the phase function (1 - guide), the table's sampler (guiding=table: the
+  // fraction table_fraction of guide) and the lobes (the rest of guide, split by horizon_lobe).
   const double guide = settings_.shadow_guiding;
-  const double horizon = guide * settings_.horizon_lobe;
-  const double sun_lobe = guide - horizon;
+  const double table_share = settings_.guiding == ShadowGuiding::kTable ? guide * settings_.table_fraction : 0.0;
+  const double lobes = guide - table_share;
+  const double horizon = lobes * settings_.horizon_lobe;
+  const double sun_lobe = lobes - horizon;
   glm::dvec3 up, towards, across;
   double e0;
   HorizonFrame(x, sun, up, towards, across, e0);
   constexpr double kHalfPi = 0.5 * kPi;
+  const GuideTable* table = table_share > 0.0 ? &Guide() : nullptr;
+  GuidePosition at{};
+  if (table) at = LocateGuide(*table, x, sun);
 
   glm::dvec3 next;
   const double u = rng.Uniform();
-  if (u < sun_lobe) {
+  if (table && u >= 1.0 - table_share) {
+    next = SampleGuide(*table, at, channel, rng);
+  } else if (u < sun_lobe) {
     const double mu = SamplePhaseCosine(shared::kPhaseHenyeyGreenstein, kGuideG, [&] { return rng.Uniform(); });
     next = DirectionAbout(sun, mu, 2.0 * kPi * rng.Uniform());
-  } else if (u < guide) {
+  } else if (u < lobes) {
     const double azimuth = SampleTruncatedLaplace(0.0, kHorizonAzimuthScale, -kPi, kPi, rng.Uniform());
     const double elevation = SampleTruncatedLaplace(e0, kHorizonElevationScale, -kHalfPi, kHalfPi, rng.Uniform());
     next = glm::normalize(std::cos(elevation) * (std::cos(azimuth) * towards + std::sin(azimuth) * across) +
@@ -726,6 +1032,7 @@ glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d,
   }
   const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
   double mixture = (1.0 - guide) * phase;
+  if (table) mixture += table_share * GuidePdf(*table, at, channel, next);
   if (sun_lobe > 0.0) {
     mixture += sun_lobe * shared::EvaluatePhaseFunction(shared::kPhaseHenyeyGreenstein, kGuideG, glm::dot(sun, next));
   }
@@ -745,15 +1052,17 @@ glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d,
 }
 
 glm::dvec3 PathTracer::SampleShadowDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, bool mie,
-                                             std::uint64_t seed, double& weight) const {
+                                             std::uint64_t seed, double& weight, std::size_t channel) const {
   Rng rng(Mix64(seed ^ 0x5D1Eull));
-  return GuidedDirection(x, d, sun, mie ? mie_phase_ : rayleigh_phase_, mie ? mie_g_ : rayleigh_g_, rng, weight);
+  return GuidedDirection(x, d, sun, mie ? mie_phase_ : rayleigh_phase_, mie ? mie_g_ : rayleigh_g_, channel, rng,
+                         weight);
 }
 
 void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
   glm::dvec3 entry = query.origin;
   if (!EnterAtmosphere(entry, query.view)) return;
+  const std::size_t channel = static_cast<std::size_t>(&c - channels_.data());
   // Importance splitting (settings_.importance_splitting): the walks that copies of the path
   // still have to trace, and the weight times importance at the path's first shadowed vertex,
   // which later shadowed vertices split towards (docs/models/reference.md).
@@ -864,7 +1173,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
         if (do_split) split = true;
         const auto draw = [&](double& direction_weight) {
           if (shadowed && settings_.shadow_guiding > 0.0) {
-            return GuidedDirection(p, d, query.sun, kind, g, rng, direction_weight);
+            return GuidedDirection(p, d, query.sun, kind, g, channel, rng, direction_weight);
           }
           direction_weight = 1.0;
           const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
@@ -891,7 +1200,9 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
         // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
         // n); at most kMaxCopies at a vertex and kMaxWalks per path.
         if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
-          const double importance = ImportanceProxy(p, query.sun, c);
+          const double importance = settings_.guiding == ShadowGuiding::kTable
+                                        ? GuideImportance(Guide(), LocateGuide(Guide(), p, query.sun), channel)
+                                        : ImportanceProxy(p, query.sun, c);
           if (importance > 0.0) {
             if (!(reference_importance > 0.0)) reference_importance = weight * importance;
             target = reference_importance / importance;

@@ -32,14 +32,18 @@
 //     on the rest of a path once one of its segments started there (its lit vertices are rare and
 //     heavy), and the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
 //   - at a vertex in the planet's shadow the new direction comes, with probability
-//     shadow_guiding, from a guiding lobe instead of the phase function: a Henyey-Greenstein lobe
-//     (g 0.8) about the sun, or (fraction horizon_lobe of the guided draws) a lobe about the sun's
-//     azimuth just below the local horizontal, where the lit air of a deep-twilight vertex lies;
+//     shadow_guiding, from a guide instead of the phase function: by default (guiding kTable) half
+//     of the guided draws (table_fraction) from the sampler of a table of the first-order radiance
+//     the vertex sees from each direction (built once per tracer on first use: GuideTable), the
+//     others (all of them with kLobes) from a Henyey-Greenstein lobe (g 0.8) about the sun, or
+//     (fraction horizon_lobe of them) a lobe about the sun's azimuth just below the local
+//     horizontal, where the lit air of a deep-twilight vertex lies;
 //     weighted by phase / mixture pdf (one-sample MIS, weight <= 1 / (1 - shadow_guiding));
 //   - splitting at the first vertex of a path in the shadow: shadow_splits directions, each with
 //     its segment estimate at 1/N of the weight, one of them continued with the full weight;
 //   - importance splitting at the later shadowed vertices (importance_splitting): a proxy of the
-//     lit air a vertex sees (ImportanceProxy) times the path's weight, against the same product at
+//     lit air a vertex sees (the table's integral over directions, or with kLobes ImportanceProxy
+//     along one axis) times the path's weight, against the same product at
 //     the path's first shadowed vertex, says into how many copies (of 1/n of the weight) the path
 //     is split there, and Russian roulette is taken relative to that weight, so the rare paths
 //     that climb to the bright air above the shadow no longer carry most of the estimate alone;
@@ -63,6 +67,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -117,6 +122,12 @@ enum class NextEventEstimation {
              // every later segment of such a path, kVertex on the others
 };
 
+// What the guided draws at a shadowed vertex come from (see the file comment).
+enum class ShadowGuiding {
+  kLobes,  // the lobe about the sun and the horizon lobe (horizon_lobe); ImportanceProxy
+  kTable,  // the tabulated first-order radiance proxy (GuideTable); its integral as importance
+};
+
 struct PathTracerSettings {
   bool forced_collisions = true;  // see the file comment
   int roulette_start_order = 3;   // Russian roulette after this many scattering events
@@ -133,6 +144,11 @@ struct PathTracerSettings {
   int shadow_splits = 4;
   // Importance splitting at the later shadowed vertices of a path (see TracePath).
   bool importance_splitting = true;
+  // Where the guided draws (shadow_guiding) come from, and the importance of importance splitting.
+  ShadowGuiding guiding = ShadowGuiding::kTable;
+  // With kTable: the fraction of the guided draws from the table's sampler, the rest from the
+  // lobes (split by horizon_lobe), in [0, 1].
+  double table_fraction = 0.5;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -204,7 +220,20 @@ class PathTracer {
   // phase / mixture pdf, so its mean over draws is 1 and weight * f(direction) is unbiased for
   // the phase-weighted mean of f.
   glm::dvec3 SampleShadowDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, bool mie,
-                                   std::uint64_t seed, double& weight) const;
+                                   std::uint64_t seed, double& weight, std::size_t channel = 0) const;
+  // The radiance-proxy guiding table (exposed for tests; spherical geometry, built on first use):
+  // a direction drawn from its sampler at x for channel `channel` from the stream `seed`, the
+  // sampler's solid-angle pdf of any unit direction w, and the importance of x (the proxy's
+  // integral over directions, interpolated between the table's positions).
+  glm::dvec3 SampleGuideTable(const glm::dvec3& x, const glm::dvec3& sun, std::size_t channel,
+                              std::uint64_t seed) const;
+  double GuideTablePdf(const glm::dvec3& x, const glm::dvec3& sun, const glm::dvec3& w, std::size_t channel) const;
+  double GuideTableImportance(const glm::dvec3& x, const glm::dvec3& sun, std::size_t channel) const;
+  // The edges of its direction cells: cosines to the local zenith (ascending, -1 to 1) and |azimuth|
+  // from the sun's (0 to pi); the pdf is constant on each cell and its mirror image.
+  void GuideTableEdges(std::vector<double>& mu_edges, std::vector<double>& phi_edges) const;
+  // Whether the guide table has been built (it is, only once a shadowed vertex needed it).
+  bool GuideTableBuilt() const;
 
   // Phase-function sampling (exposed for tests): a cosine nu distributed with the normalised phase
   // function `kind` (shared::kPhase*) of asymmetry g, from two uniform numbers in [0, 1) and a
@@ -222,6 +251,14 @@ class PathTracer {
   };
   struct Collision;
   class Rng;
+  struct GuideTable;
+  // Where x falls in the guide table: the four neighbouring positions (altitude, sun zenith
+  // angle) with their bilinear weights, and x's local frame (up, towards the sun's azimuth, across).
+  struct GuidePosition {
+    int index[4];
+    double weight[4];
+    glm::dvec3 up, towards, across;
+  };
 
   glm::dvec3 Densities(const glm::dvec3& p) const;
   // Upper bounds of the three densities on the segment [p, p + length d]: the profiles' maxima
@@ -261,12 +298,24 @@ class PathTracer {
   // by the phase function (kind, g): drawn from the mixture of the phase function and the guiding
   // lobes; `mis_weight` is set to phase / mixture pdf (<= 1 / (1 - shadow_guiding)).
   glm::dvec3 GuidedDirection(const glm::dvec3& x, const glm::dvec3& d, const glm::dvec3& sun, int kind, double g,
-                             Rng& rng, double& mis_weight) const;
+                             std::size_t channel, Rng& rng, double& mis_weight) const;
   // The horizon lobe's frame at x: up, towards the sun's azimuth, across, and the axis elevation.
   void HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
                     glm::dvec3& across, double& e0) const;
   // A proxy of the light a shadowed vertex x can scatter (importance splitting only).
   double ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, const Channel& c) const;
+  // The guide table, built on the first call (thread-safe).
+  const GuideTable& Guide() const;
+  void BuildGuideTable(GuideTable& table) const;
+  // The first-order radiance proxy seen from x along w, per channel (out[channel_count()]):
+  // integral over the lit part of the segment of sum_m p_m(w.sun) sigma_s,m exp(-tau_view -
+  // tau_sun), tau_view by the trapezoidal rule on SegmentSunlight's nodes, tau_sun from the proxy
+  // table; 0 for a segment entirely in the shadow.
+  void RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, const glm::dvec3& sun, double* out) const;
+  GuidePosition LocateGuide(const GuideTable& table, const glm::dvec3& x, const glm::dvec3& sun) const;
+  glm::dvec3 SampleGuide(const GuideTable& table, const GuidePosition& at, std::size_t channel, Rng& rng) const;
+  double GuidePdf(const GuideTable& table, const GuidePosition& at, std::size_t channel, const glm::dvec3& w) const;
+  double GuideImportance(const GuideTable& table, const GuidePosition& at, std::size_t channel) const;
   // One path of one channel; adds its contributions per order bin to `orders`.
   void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].
@@ -288,6 +337,8 @@ class PathTracer {
   glm::dvec3 max_extinction_;  // per medium, over channels: weights of the quadrature error
   PathTracerSettings settings_;
   std::vector<glm::dvec3> sun_proxy_;  // [r index * kSunProxyMu + mu index], see SunDensityProxy
+  // Built on first use by a shadowed vertex (Guide()); shared by copies of the tracer.
+  std::shared_ptr<GuideTable> guide_;
 };
 
 // Depressed cubic x^3 + p x + q = 0 with p > 0 (one real root), by Cardano's formula in a form

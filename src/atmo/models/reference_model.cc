@@ -62,14 +62,20 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
     } else if (key == "importance_splitting") {
       if (value != "on" && value != "off") throw Error("option importance_splitting=" + value + ": expected on or off");
       s.importance_splitting = value == "on";
+    } else if (key == "guiding") {
+      if (value == "table") s.guiding = cpu::ShadowGuiding::kTable;
+      else if (value == "lobes") s.guiding = cpu::ShadowGuiding::kLobes;
+      else throw Error("option guiding=" + value + ": expected table or lobes");
+    } else if (key == "table_fraction") {
+      s.table_fraction = ParseDoubleOption(key, value, 0.0, 1.0);
     } else if (key == "quadrature_tolerance") {
       s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
     } else if (key == "seed") {
       s.seed = ParseCount(key, value, 0, ~std::uint64_t{0});
     } else {
       throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
-                  "max_samples, max_vov, estimator, forced_collisions, nee, nee_samples, shadow_guiding, horizon_lobe, shadow_splits, "
-                  "importance_splitting, quadrature_tolerance, seed)");
+                  "max_samples, max_vov, estimator, forced_collisions, nee, nee_samples, shadow_guiding, horizon_lobe, "
+                  "shadow_splits, importance_splitting, guiding, table_fraction, quadrature_tolerance, seed)");
     }
   }
   if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
@@ -85,7 +91,8 @@ ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const Ref
       settings_(settings),
       tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3, settings.next_event, settings.nee_samples,
                                       settings.shadow_guiding, settings.horizon_lobe, settings.shadow_splits,
-                                      settings.importance_splitting}) {}
+                                      settings.importance_splitting, settings.guiding,
+                                      settings.table_fraction}) {}
 
 std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {

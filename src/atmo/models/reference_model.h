@@ -20,12 +20,17 @@
 //                           rest of such a path, vertex elsewhere)
 //   nee_samples=2           stratified points per segment integral
 //   shadow_guiding=0.5      at a vertex in the planet's shadow, the probability of drawing the
-//                           new direction from a lobe about the sun (MIS with the phase function)
-//   horizon_lobe=0.5        the fraction of the guided draws from the lobe about the sun's
+//                           new direction from the guide (MIS with the phase function)
+//   horizon_lobe=0.5        the fraction of the lobes' draws from the lobe about the sun's
 //                           azimuth just below the local horizontal (the rest: about the sun)
 //   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
 //   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
 //                           of the lit air they see (off: no splitting)
+//   guiding=table           where the guided draws come from: table (the tabulated first-order
+//                           radiance proxy, whose integral is also the importance) or lobes
+//                           (the sun and horizon lobes, importance along one axis)
+//   table_fraction=0.5      with guiding=table: the fraction of the guided draws from the table
+//                           (the rest from the lobes)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -62,6 +67,8 @@ struct ReferenceSettings {
   double horizon_lobe = 0.5;
   int shadow_splits = 4;
   bool importance_splitting = true;
+  cpu::ShadowGuiding guiding = cpu::ShadowGuiding::kTable;
+  double table_fraction = 0.5;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
