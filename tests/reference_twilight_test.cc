@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "atmo/model.h"
@@ -330,6 +331,44 @@ TEST(ReferenceSegmentEstimator, GuideTableSamplerIsNormalisedAndFollowsItsPdf) {
   }
 }
 
+TEST(ReferenceSegmentEstimator, GuideTableOrdersAddLightAndDoNotDependOnThreads) {
+  // guide_orders: each further order adds the light scattered by the air along a direction from
+  // the previous order's radiance, so the table's integral (the importance) grows with the orders
+  // at every vertex, and most where a vertex sees no sunlit air but sunlit air's light: at sun 108
+  // deg near the ground the first-order light is a thin band far away. The table is built over
+  // its positions in parallel, each on its own: one thread and two give the same table.
+  const AtmosphereParameters p = Preset("earth");
+  const auto tracer_with = [&](int orders) {
+    cpu::PathTracerSettings settings;
+    settings.guide_orders = orders;
+    return std::make_unique<cpu::PathTracer>(p, settings);
+  };
+  const auto one = tracer_with(1), two = tracer_with(2), three = tracer_with(3);
+  std::unique_ptr<cpu::PathTracer> two_on_one_thread = tracer_with(2);
+  oneapi::tbb::task_arena single(1);
+  single.execute([&] { two_on_one_thread->GuideTableImportance(two_on_one_thread->ObserverPosition(0.0), Direction(100.0, 0.0), 0); });
+  double share_low = 0.0, share_high = 0.0;
+  for (double sun_zenith : {92.0, 100.0, 108.0}) {
+    const glm::dvec3 sun = Direction(sun_zenith, 0.0);
+    for (double altitude : {0.0, 2e3, 20e3, 60e3}) {
+      const glm::dvec3 x = one->ObserverPosition(altitude);
+      for (std::size_t c = 0; c < 3; ++c) {
+        const double i1 = one->GuideTableImportance(x, sun, c);
+        const double i2 = two->GuideTableImportance(x, sun, c);
+        const double i3 = three->GuideTableImportance(x, sun, c);
+        EXPECT_GT(i2, i1) << sun_zenith << " " << altitude << " " << c;
+        EXPECT_GT(i3, i2) << sun_zenith << " " << altitude << " " << c;
+        EXPECT_EQ(i2, two_on_one_thread->GuideTableImportance(x, sun, c)) << sun_zenith << " " << altitude << " " << c;
+        if (sun_zenith == 108.0 && altitude == 0.0 && c == 1) share_low = (i2 - i1) / i2;
+        if (sun_zenith == 92.0 && altitude == 60e3 && c == 1) share_high = (i2 - i1) / i2;
+      }
+    }
+  }
+  std::printf("second order's share of the importance (green): sun 108 deg, ground %.3f; sun 92 deg, 60 km %.3f\n",
+              share_low, share_high);
+  EXPECT_GT(share_low, share_high);
+}
+
 TEST(ReferenceSegmentEstimator, SunUpIsTheSameWithEitherGuidingAndBuildsNoTable) {
   // With the sun up no vertex is in the planet's shadow: guiding=table and guiding=lobes give
   // bit-identical radiances and standard errors, and the table is never built.
@@ -364,6 +403,7 @@ TEST(ReferenceSegmentEstimator, TableGuidingKeepsTheMeanOfTheLobesAndOfTheVertex
   auto vertex = MakeReference(p, vertex_options);
   auto table = MakeReference(p, {{"seed", "16"}});
   auto table_alone = MakeReference(p, {{"seed", "17"}, {"table_fraction", "1"}});
+  auto first_order = MakeReference(p, {{"seed", "21"}, {"guide_orders", "1"}});
   auto lobes = MakeReference(p, {{"seed", "18"}, {"guiding", "lobes"}});
   for (const Query& q : {Query{10e3, 98.0, 90.0, 0.0}, Query{10e3, 104.0, 85.0, 0.0}}) {
     const glm::dvec3 sun = Direction(q.sun_zenith_deg, 0.0);
@@ -373,6 +413,7 @@ TEST(ReferenceSegmentEstimator, TableGuidingKeepsTheMeanOfTheLobesAndOfTheVertex
     std::vector<OrderEstimate> others = {AsReference(*table->View(q.altitude_m, sun)).EstimateByOrder(view, paths)};
     if (q.sun_zenith_deg < 100.0) {
       others.push_back(AsReference(*table_alone->View(q.altitude_m, sun)).EstimateByOrder(view, paths));
+      others.push_back(AsReference(*first_order->View(q.altitude_m, sun)).EstimateByOrder(view, paths));
       others.push_back(AsReference(*vertex->View(q.altitude_m, sun)).EstimateByOrder(view, 131072));
     }
     for (std::size_t k = 0; k < others.size(); ++k) {
@@ -413,7 +454,8 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
                                    {"horizon_lobe", "1.5"}, {"shadow_splits", "0"}, {"shadow_splits", "65"},
                                    {"shadow_splits", "2.5"}, {"importance_splitting", "yes"},
                                    {"guiding", "both"}, {"guiding", ""}, {"table_fraction", "-0.1"},
-                                   {"table_fraction", "1.5"}}) {
+                                   {"table_fraction", "1.5"}, {"guide_orders", "0"}, {"guide_orders", "5"},
+                                   {"guide_orders", "1.5"}}) {
     try {
       CreateModel("reference", p, {{key, value}});
       ADD_FAILURE() << key << "=" << value << " was accepted";
@@ -430,7 +472,7 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
     const std::string message = e.what();
     for (const char* key :
          {"nee", "nee_samples", "shadow_guiding", "horizon_lobe", "shadow_splits", "importance_splitting", "guiding",
-          "table_fraction"}) {
+          "table_fraction", "guide_orders"}) {
       EXPECT_NE(message.find(key), std::string::npos);
     }
   }
@@ -438,6 +480,8 @@ TEST(ReferenceSegmentEstimator, OptionsAreChecked) {
                                                        {"horizon_lobe", "1"}, {"shadow_splits", "64"},
                                                        {"guiding", "lobes"}}));
   EXPECT_NO_THROW(CreateModel("reference", p, {{"guiding", "table"}, {"table_fraction", "1"}}));
+  EXPECT_NO_THROW(CreateModel("reference", p, {{"guide_orders", "1"}}));
+  EXPECT_NO_THROW(CreateModel("reference", p, {{"guide_orders", "4"}}));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "physics/shared_parameters.h"
@@ -79,7 +80,9 @@ constexpr int kMaxWalks = 32;
 // for vertices up to 40 km, and the lit air seen from deep shadow lies a few degrees above the
 // ground's horizon) and coarser ones outside; azimuth about the sun's azimuth, |phi| in [0, pi],
 // with edges pi (k / 16)^2 (0.7 deg wide at phi = 0, 22 deg at pi). Each direction cell's proxy is
-// the first-order radiance along its centre direction (RayRadianceProxy).
+// the first-order radiance along its centre direction (RayRadianceProxy), plus with guide_orders
+// >= 2 the light of the next orders along it (RayNextOrderProxy, from the previous order's integral
+// over directions).
 constexpr int kGuideAltitudes = 15;
 constexpr double kGuideAltitudeFractions[kGuideAltitudes] = {0.0,  0.005, 0.015, 0.03, 0.05, 0.08, 0.12, 0.17,
                                                              0.23, 0.30,  0.38,  0.48, 0.62, 0.8,  1.0};
@@ -818,6 +821,42 @@ void PathTracer::RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, cons
   }
 }
 
+void PathTracer::RayNextOrderProxy(const GuideTable& table, const std::vector<double>& previous, const glm::dvec3& x,
+                                   const glm::dvec3& w, const glm::dvec3& sun, double* out) const {
+  const std::size_t channels = channels_.size();
+  for (std::size_t c = 0; c < channels; ++c) out[c] = 0.0;
+  double length;
+  bool ground;
+  Segment(x, w, length, ground);
+  if (!(length > 0.0 && length < kInfinity)) return;
+  const double t_low = std::clamp(-glm::dot(x, w), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  const std::size_t positions = table.positions();
+  std::vector<double> tau(channels, 0.0), sigma_previous(channels, 0.0), g_previous(channels, 0.0);
+  double t_previous = 0.0;
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    const double t = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+    const glm::dvec3 y = x + t * w;
+    const glm::dvec3 densities = Densities(y);
+    const GuidePosition at = LocateGuide(table, y, sun);
+    for (std::size_t c = 0; c < channels; ++c) {
+      const Channel& ch = channels_[c];
+      const double sigma = OpticalDepth(ch, densities);
+      if (i > 0) tau[c] += 0.5 * (sigma_previous[c] + sigma) * (t - t_previous);
+      sigma_previous[c] = sigma;
+      double radiance = 0.0;
+      for (int n = 0; n < 4; ++n) radiance += at.weight[n] * previous[c * positions + static_cast<std::size_t>(at.index[n])];
+      const double g = (ch.rayleigh_scattering * densities.x + ch.mie_scattering * densities.y) *
+                       std::exp(-tau[c]) * radiance / (4.0 * kPi);
+      if (i > 0) out[c] += 0.5 * (g_previous[c] + g) * (t - t_previous);
+      g_previous[c] = g;
+    }
+    t_previous = t;
+  }
+}
+
 void PathTracer::BuildGuideTable(GuideTable& table) const {
   const double rg = atmosphere_.bottom_radius;
   const double rt = atmosphere_.top_radius;
@@ -835,48 +874,90 @@ void PathTracer::BuildGuideTable(GuideTable& table) const {
   table.cells = n_mu * kGuidePhi;
   const std::size_t channels = channels_.size();
   const std::size_t positions = table.positions();
-  const std::size_t stride = static_cast<std::size_t>(table.cells) + 1;
+  const std::size_t cells = static_cast<std::size_t>(table.cells);
+  const std::size_t stride = cells + 1;
   table.cdf.assign(channels * positions * stride, 0.0);
   table.integral.assign(channels * positions, 0.0);
-  std::vector<double> value(static_cast<std::size_t>(table.cells) * channels);
-  std::vector<double> solid_angle(static_cast<std::size_t>(table.cells));
+  std::vector<double> solid_angle(cells);
   for (int m = 0; m < n_mu; ++m) {
     for (int f = 0; f < kGuidePhi; ++f) {
       solid_angle[m * kGuidePhi + f] =
           (table.mu_edges[m + 1] - table.mu_edges[m]) * (table.phi_edges[f + 1] - table.phi_edges[f]);
     }
   }
-  for (std::size_t ih = 0; ih < table.altitudes.size(); ++ih) {
-    const glm::dvec3 x(0.0, 0.0, rg + table.altitudes[ih]);
-    for (int is = 0; is < kGuideSunNodes; ++is) {
-      const double theta = 0.5 * kPi + is * table.sun_step;
-      const glm::dvec3 sun(std::sin(theta), 0.0, std::cos(theta));
-      for (int m = 0; m < n_mu; ++m) {
-        const double mu = 0.5 * (table.mu_edges[m] + table.mu_edges[m + 1]);
-        const double sin_mu = std::sqrt(std::max(0.0, 1.0 - mu * mu));
-        for (int f = 0; f < kGuidePhi; ++f) {
-          const double phi = 0.5 * (table.phi_edges[f] + table.phi_edges[f + 1]);
-          const glm::dvec3 w(sin_mu * std::cos(phi), sin_mu * std::sin(phi), mu);
-          RayRadianceProxy(x, w, sun, &value[static_cast<std::size_t>(m * kGuidePhi + f) * channels]);
-        }
-      }
-      const std::size_t position = ih * kGuideSunNodes + static_cast<std::size_t>(is);
+  // The position and the cell centre directions of each table entry.
+  const auto position_of = [&](std::size_t position, glm::dvec3& x, glm::dvec3& sun) {
+    const std::size_t ih = position / kGuideSunNodes;
+    const int is = static_cast<int>(position % kGuideSunNodes);
+    x = glm::dvec3(0.0, 0.0, rg + table.altitudes[ih]);
+    const double theta = 0.5 * kPi + is * table.sun_step;
+    sun = glm::dvec3(std::sin(theta), 0.0, std::cos(theta));
+  };
+  const auto direction_of = [&](std::size_t k) {
+    const int m = static_cast<int>(k) / kGuidePhi;
+    const int f = static_cast<int>(k) % kGuidePhi;
+    const double mu = 0.5 * (table.mu_edges[m] + table.mu_edges[m + 1]);
+    const double sin_mu = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+    const double phi = 0.5 * (table.phi_edges[f] + table.phi_edges[f + 1]);
+    return glm::dvec3(sin_mu * std::cos(phi), sin_mu * std::sin(phi), mu);
+  };
+  // value[(position * cells + k) * channels + c]: the sum of the orders so far; order[...]: the
+  // last order alone, and its integral over directions per (channel, position).
+  std::vector<double> value(positions * cells * channels), order(positions * cells * channels);
+  std::vector<double> order_integral(channels * positions);
+  const auto integrate = [&](const std::vector<double>& v, std::vector<double>& out) {
+    for (std::size_t position = 0; position < positions; ++position) {
       for (std::size_t c = 0; c < channels; ++c) {
         double total = 0.0;
-        for (int k = 0; k < table.cells; ++k) total += value[static_cast<std::size_t>(k) * channels + c] * solid_angle[k];
-        table.integral[c * positions + position] = 2.0 * total;  // both signs of the azimuth
-        double* cdf = &table.cdf[(c * positions + position) * stride];
-        double sum = 0.0;
-        cdf[0] = 0.0;
-        for (int k = 0; k < table.cells; ++k) {
-          const double proxy = total > 0.0 ? value[static_cast<std::size_t>(k) * channels + c] * solid_angle[k] / total : 0.0;
-          const double floor = solid_angle[k] / (2.0 * kPi);  // one side of the sphere: 2 pi
-          sum += total > 0.0 ? (1.0 - kGuideFloor) * proxy + kGuideFloor * floor : floor;
-          cdf[k + 1] = sum;
-        }
-        for (int k = 1; k <= table.cells; ++k) cdf[k] /= sum;
-        cdf[table.cells] = 1.0;
+        for (std::size_t k = 0; k < cells; ++k) total += v[(position * cells + k) * channels + c] * solid_angle[k];
+        out[c * positions + position] = 2.0 * total;  // both signs of the azimuth
       }
+    }
+  };
+  // Positions in parallel (each independent, so the table does not depend on the thread count),
+  // isolated: a thread waiting here must not pick up a path of the caller's loop, which could ask
+  // for this table again.
+  const auto for_positions = [&](const std::function<void(std::size_t)>& body) {
+    oneapi::tbb::this_task_arena::isolate([&] {
+      oneapi::tbb::parallel_for(std::size_t{0}, positions, body);
+    });
+  };
+  for_positions([&](std::size_t position) {
+    glm::dvec3 x, sun;
+    position_of(position, x, sun);
+    for (std::size_t k = 0; k < cells; ++k) {
+      RayRadianceProxy(x, direction_of(k), sun, &order[(position * cells + k) * channels]);
+    }
+  });
+  value = order;
+  for (int n = 2; n <= settings_.guide_orders; ++n) {
+    integrate(order, order_integral);
+    std::vector<double> next(order.size());
+    for_positions([&](std::size_t position) {
+      glm::dvec3 x, sun;
+      position_of(position, x, sun);
+      for (std::size_t k = 0; k < cells; ++k) {
+        RayNextOrderProxy(table, order_integral, x, direction_of(k), sun, &next[(position * cells + k) * channels]);
+      }
+    });
+    order = std::move(next);
+    for (std::size_t i = 0; i < value.size(); ++i) value[i] += order[i];
+  }
+  integrate(value, table.integral);
+  for (std::size_t position = 0; position < positions; ++position) {
+    for (std::size_t c = 0; c < channels; ++c) {
+      const double total = 0.5 * table.integral[c * positions + position];
+      double* cdf = &table.cdf[(c * positions + position) * stride];
+      double sum = 0.0;
+      cdf[0] = 0.0;
+      for (std::size_t k = 0; k < cells; ++k) {
+        const double proxy = total > 0.0 ? value[(position * cells + k) * channels + c] * solid_angle[k] / total : 0.0;
+        const double floor = solid_angle[k] / (2.0 * kPi);  // one side of the sphere: 2 pi
+        sum += total > 0.0 ? (1.0 - kGuideFloor) * proxy + kGuideFloor * floor : floor;
+        cdf[k + 1] = sum;
+      }
+      for (std::size_t k = 1; k <= cells; ++k) cdf[k] /= sum;
+      cdf[cells] = 1.0;
     }
   }
 }

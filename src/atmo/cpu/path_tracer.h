@@ -33,8 +33,9 @@
 //     heavy), and the vertex estimate elsewhere (5-10x cheaper, and as good where every vertex is lit);
 //   - at a vertex in the planet's shadow the new direction comes, with probability
 //     shadow_guiding, from a guide instead of the phase function: by default (guiding kTable) half
-//     of the guided draws (table_fraction) from the sampler of a table of the first-order radiance
-//     the vertex sees from each direction (built once per tracer on first use: GuideTable), the
+//     of the guided draws (table_fraction) from the sampler of a table of the radiance the vertex
+//     sees from each direction, orders 1 and 2 (guide_orders; built once per tracer on first use:
+//     GuideTable), the
 //     others (all of them with kLobes) from a Henyey-Greenstein lobe (g 0.8) about the sun, or
 //     (fraction horizon_lobe of them) a lobe about the sun's azimuth just below the local
 //     horizontal, where the lit air of a deep-twilight vertex lies;
@@ -149,6 +150,11 @@ struct PathTracerSettings {
   // With kTable: the fraction of the guided draws from the table's sampler, the rest from the
   // lobes (split by horizon_lobe), in [0, 1].
   double table_fraction = 0.5;
+  // With kTable: the scattering orders of the light the table's cells hold, 1 .. 4: 1 is the
+  // first-order radiance proxy alone; each further order adds the light that the air along the
+  // cell's direction scatters isotropically from the previous order's radiance (its integral over
+  // directions, from the table itself), so that shadowed air lit only by other air counts too.
+  int guide_orders = 2;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -312,6 +318,11 @@ class PathTracer {
   // tau_sun), tau_view by the trapezoidal rule on SegmentSunlight's nodes, tau_sun from the proxy
   // table; 0 for a segment entirely in the shadow.
   void RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, const glm::dvec3& sun, double* out) const;
+  // The next order's proxy along x + t w, per channel: the integral of exp(-tau_view) sigma_s
+  // times `previous` (per channel and table position: the previous order's radiance integrated
+  // over directions) / 4 pi at each point, the trapezoidal rule on SegmentSunlight's nodes.
+  void RayNextOrderProxy(const GuideTable& table, const std::vector<double>& previous, const glm::dvec3& x,
+                         const glm::dvec3& w, const glm::dvec3& sun, double* out) const;
   GuidePosition LocateGuide(const GuideTable& table, const glm::dvec3& x, const glm::dvec3& sun) const;
   glm::dvec3 SampleGuide(const GuideTable& table, const GuidePosition& at, std::size_t channel, Rng& rng) const;
   double GuidePdf(const GuideTable& table, const GuidePosition& at, std::size_t channel, const glm::dvec3& w) const;

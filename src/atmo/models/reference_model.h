@@ -31,6 +31,8 @@
 //                           (the sun and horizon lobes, importance along one axis)
 //   table_fraction=0.5      with guiding=table: the fraction of the guided draws from the table
 //                           (the rest from the lobes)
+//   guide_orders=2          with guiding=table: the orders of the light the table holds, 1-4 (1:
+//                           first-order light only; 2 adds the air lit by that light)
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -69,6 +71,7 @@ struct ReferenceSettings {
   bool importance_splitting = true;
   cpu::ShadowGuiding guiding = cpu::ShadowGuiding::kTable;
   double table_fraction = 0.5;
+  int guide_orders = 2;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
