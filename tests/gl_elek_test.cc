@@ -1,5 +1,6 @@
 // Model elek on the GL backend (gl/elek_gl.h) agrees with the CPU: every order of the table, the
-// sum, and rendered images (configuration gl_f32_rgb against cpu_f64_rgb, STYLE.md).
+// sum, and rendered images (configuration gl_f32_rgb against cpu_f64_rgb, docs/architecture.md,
+// "Configurations").
 //
 // Label `gl`. Each test skips only when no headless OpenGL context can be made (no EGL/Mesa
 // driver); on the CI image (Mesa llvmpipe through EGL surfaceless) they run.

@@ -1,7 +1,7 @@
 // Model source4d on the GL backend (gl/source4d_gl.h) agrees with the CPU: the shared functions of
 // src/atmo/shared/source4d.glsl compiled as GLSL, rendered images on the same CPU-built tables,
 // the tables built on the GPU, and `atmo render --backend gl` (configuration gl_f32_rgb against
-// cpu_f64_rgb, STYLE.md).
+// cpu_f64_rgb, docs/architecture.md, "Configurations").
 //
 // Label `gl`. Each test skips only when no headless OpenGL context can be made (no EGL/Mesa
 // driver); on the CI image (Mesa llvmpipe through EGL surfaceless) they run.

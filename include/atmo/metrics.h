@@ -1,5 +1,5 @@
 // The named error metrics of atmo, defined once and used everywhere: `atmo compare`, the tests
-// and the viewer (STYLE.md: "a fixed, named set of error metrics").
+// and the viewer (docs/accuracy.md, "How `atmo compare` works").
 //
 // To use it:
 //   double e = atmo::RelativeError(model_radiance, reference_radiance);      // signed, (M - R) / R

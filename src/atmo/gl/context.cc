@@ -1,4 +1,5 @@
-// The EGL sequence of docs: /work/shared/notes/build.md, "Headless OpenGL compute on llvmpipe":
+// The EGL sequence for headless OpenGL compute on Mesa's surfaceless platform (docs/architecture.md,
+// "Context"), with its traps:
 //  - platform displays come from eglGetPlatformDisplayEXT resolved through eglGetProcAddress
 //    (epoxy cannot resolve the EGL 1.5 core eglGetPlatformDisplay before a display exists);
 //  - eglChooseConfig defaults EGL_SURFACE_TYPE to EGL_WINDOW_BIT, and the surfaceless configs are

@@ -1,5 +1,6 @@
-// Model elek computed on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend
-// (the public entry points, with the model options by name, are in include/atmo/gl/elek_gl.h).
+// Model elek computed on the GL backend: configuration gl_f32_rgb (docs/architecture.md,
+// "Configurations"), private to the backend (the public entry points, with the model options by
+// name, are in include/atmo/gl/elek_gl.h).
 //
 // The table of one batch of three channels is built by compute passes that call the per-texel
 // kernels of src/atmo/shared/elek.glsl in float, with the atmosphere in km, and the tables stay on

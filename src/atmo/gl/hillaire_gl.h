@@ -1,5 +1,6 @@
-// Model hillaire on the GL backend: configuration gl_f32_rgb (STYLE.md), private to the backend
-// (the public entry points, with the model options by name, are in include/atmo/gl/hillaire_gl.h).
+// Model hillaire on the GL backend: configuration gl_f32_rgb (docs/architecture.md,
+// "Configurations"), private to the backend (the public entry points, with the model options by
+// name, are in include/atmo/gl/hillaire_gl.h).
 //
 // Every table and every per-pixel or per-direction evaluation is a GL compute pass whose main()
 // calls the shared per-texel kernels of src/atmo/shared in float, with the atmosphere in km

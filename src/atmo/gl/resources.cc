@@ -7,6 +7,7 @@
 #include <epoxy/gl.h>
 
 #include "atmo/error.h"
+#include "gl/context.h"
 
 namespace atmo::gl {
 
@@ -178,7 +179,7 @@ double NowMs() {
 GpuPassTimer::GpuPassTimer(PassTimings* timings) : timings_(timings) {
   if (timings_ == nullptr) return;
   const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  software_ = renderer != nullptr && std::string_view(renderer).find("llvmpipe") != std::string_view::npos;
+  software_ = renderer != nullptr && IsSoftwareRenderer(renderer);
   if (!software_) glGenQueries(1, &query_);
   Start();
 }
