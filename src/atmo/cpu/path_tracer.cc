@@ -68,6 +68,9 @@ constexpr double kHorizonElevationScale = 0.035;  // rad
 // Rate of the residual-ratio-tracking walks, as a fraction of the largest node extinction (plus 2
 // collisions per walk): see ResidualSunTransmittance.
 constexpr double kResidualRate = 0.25;
+// view_collisions=guided: the share of the view ray's collisions drawn from the guide's importance
+// proposal; the rest from delta tracking's density (a defensive mixture, GuidedViewCollision).
+constexpr double kGuidedCollisionShare = 0.5;
 // Importance splitting: at most this many copies at one vertex, and this many walks per path.
 constexpr int kMaxCopies = 8;
 constexpr int kMaxWalks = 32;
@@ -272,10 +275,10 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   }
   guide_ = std::make_shared<GuideTable>();
   // The sun-ray proxy table serves the segment estimate and the guide table (which shadow guiding
-  // by the table uses with any next-event estimation).
+  // by the table and the guided view collisions use with any next-event estimation).
   if (!half_space_ && (settings_.next_event != NextEventEstimation::kVertex ||
                        (settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
-                        settings_.table_fraction > 0.0))) {
+                        (settings_.table_fraction > 0.0 || settings_.view_collisions == ViewCollisions::kGuided)))) {
     // Bruneton's mapping: x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), both in [0, 1].
     const double rg = atmosphere_.bottom_radius;
     const double h_top = std::sqrt((atmosphere_.top_radius - rg) * (atmosphere_.top_radius + rg));
@@ -645,43 +648,133 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
     wj[j] = 1.0 / (k * pdf);
   }
 
-  // One residual-ratio-tracking walk along [0, t_k] against the control that is linear between
-  // the nodes (as in ResidualSunTransmittance): T(p, x_j) = exp(-tau_c(t_j)) times the running
-  // product at t_j, unbiased for every j.
-  const double t_last = tj[k - 1];
+  std::array<double, 64> transmittance_small;
+  std::vector<double> transmittance_big;
+  double* transmittance = transmittance_small.data();
+  if (k > 64) {
+    transmittance_big.resize(k);
+    transmittance = transmittance_big.data();
+  }
+  ResidualViewTransmittances(p, d, ts.data(), sigma_node.data(), tau_node.data(), n, tj, k, c, rng, transmittance);
+  double estimate = 0.0;
+  for (int j = 0; j < k; ++j) {
+    const glm::dvec3 x = p + tj[j] * d;
+    const glm::dvec3 densities = Densities(x);
+    const double s = rayleigh * densities.x + mie * densities.y;
+    if (s > 0.0) estimate += wj[j] * transmittance[j] * s * ResidualSunTransmittance(x, sun, c, rng);
+  }
+  return estimate;
+}
+
+// One residual-ratio-tracking walk along [0, t_k] against the control that is linear between
+// the nodes (as in ResidualSunTransmittance): T(p, x_j) = exp(-tau_c(t_j)) times the running
+// product at t_j, unbiased for every j.
+void PathTracer::ResidualViewTransmittances(const glm::dvec3& p, const glm::dvec3& d, const double* ts,
+                                            const double* sigma_node, const double* tau_node, int n, const double* t,
+                                            int k, const Channel& c, Rng& rng, double* out) const {
+  const double t_last = t[k - 1];
   double sigma_max = 0.0;
   for (int i = 0; i < n; ++i) sigma_max = std::max(sigma_max, sigma_node[i]);
   const double walk_rate = t_last > 0.0 ? (2.0 + kResidualRate * sigma_max * t_last) / t_last : 1.0;
   // The control at t and its integral from 0 to t, with `node` the piece that holds t.
   int node = 0;
-  const auto control = [&](double t, double& tau_c) {
-    while (node + 2 < n && ts[node + 1] <= t) ++node;
+  const auto control = [&](double at, double& tau_c) {
+    while (node + 2 < n && ts[node + 1] <= at) ++node;
     const double width = ts[node + 1] - ts[node];
-    const double f = width > 0.0 ? std::clamp((t - ts[node]) / width, 0.0, 1.0) : 0.0;
+    const double f = width > 0.0 ? std::clamp((at - ts[node]) / width, 0.0, 1.0) : 0.0;
     const double sigma_c = sigma_node[node] + f * (sigma_node[node + 1] - sigma_node[node]);
-    tau_c = tau_node[node] + 0.5 * (sigma_node[node] + sigma_c) * (t - ts[node]);
+    tau_c = tau_node[node] + 0.5 * (sigma_node[node] + sigma_c) * (at - ts[node]);
     return sigma_c;
   };
   double product = 1.0;
   double t_next = -std::log1p(-rng.Uniform()) / walk_rate;
   std::uint64_t steps = 0;
-  double estimate = 0.0;
   for (int j = 0; j < k; ++j) {
     double tau_c;
-    while (t_next < tj[j] && steps < kMaxTrackingSteps) {
+    while (t_next < t[j] && steps < kMaxTrackingSteps) {
       ++steps;
       const double sigma_c = control(t_next, tau_c);
       product *= 1.0 - (OpticalDepth(c, Densities(p + t_next * d)) - sigma_c) / walk_rate;
       t_next -= std::log1p(-rng.Uniform()) / walk_rate;
     }
     node = 0;
-    control(tj[j], tau_c);
-    const glm::dvec3 x = p + tj[j] * d;
-    const glm::dvec3 densities = Densities(x);
-    const double s = rayleigh * densities.x + mie * densities.y;
-    if (s > 0.0) estimate += wj[j] * std::exp(-tau_c) * product * s * ResidualSunTransmittance(x, sun, c, rng);
+    control(t[j], tau_c);
+    out[j] = std::exp(-tau_c) * product;
   }
-  return estimate;
+}
+
+// The view ray's collision drawn by importance (view_collisions=guided, docs/models/reference.md):
+// from a proposal that follows sigma_t(t) exp(-tau(t)) I(x_t), I the guide table's importance (the
+// light a point of the shadow sees, orders 1 and 2), piecewise exponential between 17 nodes about
+// the ray's lowest point and floored at kProposalFloor of its largest node value, mixed with a
+// proposal of delta tracking's own density T sigma_t (kGuidedCollisionShare). `factor` = T(p, x_t)
+// sigma_t(x_t) / q(t), q the mixture's pdf and T by residual ratio tracking, so that the
+// collision's expected weight is that of delta tracking at every t. Returns false where the
+// proposal has no mass (no extinction on the segment).
+bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                                     const Channel& c, std::size_t channel, Rng& rng, double& t,
+                                     double& factor) const {
+  const GuideTable& table = Guide();
+  constexpr int n = kSegmentIntervals + 1;
+  std::array<double, n> ts, sigma_node, tau_node;
+  // Two piecewise-exponential proposals on the same nodes: [0] sigma_t exp(-tau) I (the guide's),
+  // [1] sigma_t exp(-tau) (delta tracking's density, defensive); each floored at kProposalFloor of
+  // its largest node value.
+  std::array<std::array<double, n>, 2> g;
+  std::array<std::array<double, n - 1>, 2> mass{}, rate{};
+  std::array<double, 2> total{};
+  const double t_low = std::clamp(-glm::dot(p, d), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  double tau = 0.0;
+  std::array<double, 2> g_max{};
+  for (int i = 0; i < n; ++i) {
+    const double x = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    ts[i] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + x * std::abs(x), 0.0, length);
+    const glm::dvec3 y = p + ts[i] * d;
+    const double sigma = OpticalDepth(c, Densities(y));
+    if (i > 0) tau += 0.5 * (sigma_node[i - 1] + sigma) * (ts[i] - ts[i - 1]);
+    sigma_node[i] = sigma;
+    tau_node[i] = tau;
+    g[1][i] = sigma * std::exp(-tau);
+    g[0][i] = g[1][i] * GuideImportance(table, LocateGuide(table, y, sun), channel);
+    for (int a = 0; a < 2; ++a) g_max[a] = std::max(g_max[a], g[a][i]);
+  }
+  if (!(g_max[1] > 0.0)) return false;
+  if (!(g_max[0] > 0.0)) g[0] = g[1], g_max[0] = g_max[1];
+  for (int a = 0; a < 2; ++a) {
+    for (int i = 0; i + 1 < n; ++i) {
+      const double ga = std::max(g[a][i], kProposalFloor * g_max[a]);
+      const double gb = std::max(g[a][i + 1], kProposalFloor * g_max[a]);
+      g[a][i] = ga;
+      const double width = ts[i + 1] - ts[i];
+      const double log_ratio = std::log(gb / ga);
+      rate[a][i] = width > 0.0 ? log_ratio / width : 0.0;
+      mass[a][i] = std::abs(log_ratio) < 1e-9 ? ga * width : ga * width * std::expm1(log_ratio) / log_ratio;
+      total[a] += mass[a][i];
+    }
+    if (!(total[a] > 0.0)) return false;
+  }
+  // A component (kGuidedCollisionShare the guide's), a piece by its mass, a point in it.
+  const int a = rng.Uniform() < kGuidedCollisionShare ? 0 : 1;
+  double u = rng.Uniform() * total[a];
+  int piece = 0;
+  while (piece + 1 < n - 1 && (mass[a][piece] == 0.0 || u >= mass[a][piece])) u -= mass[a][piece++];
+  while (piece > 0 && !(mass[a][piece] > 0.0)) u = mass[a][--piece];  // rounding ran past the last mass
+  if (!(mass[a][piece] > 0.0)) return false;
+  const double width = ts[piece + 1] - ts[piece];
+  const double v = std::clamp(u / mass[a][piece], 0.0, 1.0);
+  const double r = rate[a][piece];
+  double s = std::abs(r * width) < 1e-9 ? v * width : std::log1p(v * std::expm1(r * width)) / r;
+  s = std::clamp(s, 0.0, width);
+  t = ts[piece] + s;
+  // The mixture's pdf at t (both components share the pieces).
+  const double pdf = kGuidedCollisionShare * g[0][piece] * std::exp(rate[0][piece] * s) / total[0] +
+                     (1.0 - kGuidedCollisionShare) * g[1][piece] * std::exp(rate[1][piece] * s) / total[1];
+  double transmittance;
+  ResidualViewTransmittances(p, d, ts.data(), sigma_node.data(), tau_node.data(), n, &t, 1, c, rng, &transmittance);
+  factor = transmittance * OpticalDepth(c, Densities(p + t * d)) / pdf;
+  return true;
 }
 
 void PathTracer::HorizonFrame(const glm::dvec3& x, const glm::dvec3& sun, glm::dvec3& up, glm::dvec3& towards,
@@ -1201,11 +1294,24 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       segment_scale = 1.0;
 
       // Delta tracking against the segment's majorant, the first tentative collision forced into
-      // the segment where allowed.
+      // the segment where allowed; or, on a view ray that starts in the planet's shadow and whose
+      // end scores nothing, the collision drawn by the guide table's importance.
       bool collided = false;
       glm::dvec3 densities(0.0);
-      const double majorant = cross_to_ground ? 0.0 : Majorant(c, p, d, length);
-      if (majorant > 0.0) {
+      const bool guided_collision = order == 0 && settings_.view_collisions == ViewCollisions::kGuided &&
+                                    settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
+                                    !half_space_ && !cross_to_ground &&
+                                    !end_scores && length < kInfinity && InShadow(p, query.sun);
+      const double majorant = cross_to_ground || guided_collision ? 0.0 : Majorant(c, p, d, length);
+      if (guided_collision) {
+        double t, factor;
+        if (!GuidedViewCollision(p, d, length, query.sun, c, channel, rng, t, factor)) return;
+        weight *= factor;
+        p += t * d;
+        densities = Densities(p);
+        collided = OpticalDepth(c, densities) > 0.0;
+        if (!collided) return;
+      } else if (majorant > 0.0) {
         const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;
         double t = 0.0;
         bool first = true;

@@ -123,6 +123,13 @@ enum class NextEventEstimation {
              // every later segment of such a path, kVertex on the others
 };
 
+// How the view ray's own collision is drawn (see PathTracer::GuidedViewCollision).
+enum class ViewCollisions {
+  kTracked,  // delta tracking, as every other segment
+  kGuided,   // on a view ray that starts in the planet's shadow (with kTable guiding and
+             // shadow_guiding > 0): by the guide table's importance along the ray
+};
+
 // What the guided draws at a shadowed vertex come from (see the file comment).
 enum class ShadowGuiding {
   kLobes,  // the lobe about the sun and the horizon lobe (horizon_lobe); ImportanceProxy
@@ -142,7 +149,7 @@ struct PathTracerSettings {
   double horizon_lobe = 0.5;
   // At the first scattering vertex of a path in the planet's shadow, the number of directions
   // drawn (splitting): each takes its segment estimate with 1/N of the weight, one goes on; >= 1.
-  int shadow_splits = 4;
+  int shadow_splits = 1;
   // Importance splitting at the later shadowed vertices of a path (see TracePath).
   bool importance_splitting = true;
   // Where the guided draws (shadow_guiding) come from, and the importance of importance splitting.
@@ -155,6 +162,7 @@ struct PathTracerSettings {
   // cell's direction scatters isotropically from the previous order's radiance (its integral over
   // directions, from the table itself), so that shadowed air lit only by other air counts too.
   int guide_orders = 2;
+  ViewCollisions view_collisions = ViewCollisions::kGuided;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
@@ -293,6 +301,15 @@ class PathTracer {
   // The segment estimate of next-event estimation (spherical geometry, finite length): an
   // unbiased estimate of integral_0^length T(p, x_t) sum_media sigma_s(x_t) p(nu) T_sun(x_t) dt,
   // x_t = p + t d, nu = dot(d, sun), i.e. the expected vertex estimate at the next collision.
+  // T(p, p + t_j d) for the ascending t[0 .. k), from one residual-ratio-tracking walk against the
+  // control extinction linear between the n nodes ts (values sigma_node, integrals tau_node).
+  void ResidualViewTransmittances(const glm::dvec3& p, const glm::dvec3& d, const double* ts, const double* sigma_node,
+                                  const double* tau_node, int n, const double* t, int k, const Channel& c, Rng& rng,
+                                  double* out) const;
+  // The view ray's collision at t drawn by the guide table's importance, with the weight factor
+  // T sigma_t / pdf that keeps its expectation (view_collisions=guided); false: no collision.
+  bool GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                           const Channel& c, std::size_t channel, Rng& rng, double& t, double& factor) const;
   double SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                          const Channel& c, Rng& rng) const;
   // Density integrals along the sun ray from x to the top, from a small table (importance

@@ -23,7 +23,7 @@
 //                           new direction from the guide (MIS with the phase function)
 //   horizon_lobe=0.5        the fraction of the lobes' draws from the lobe about the sun's
 //                           azimuth just below the local horizontal (the rest: about the sun)
-//   shadow_splits=4         directions drawn at a path's first shadowed vertex (splitting; 1: off)
+//   shadow_splits=1         directions drawn at a path's first shadowed vertex (splitting; 1: off)
 //   importance_splitting=on split a path at its later shadowed vertices in proportion to a proxy
 //                           of the lit air they see (off: no splitting)
 //   guiding=table           where the guided draws come from: table (the tabulated first-order
@@ -33,6 +33,9 @@
 //                           (the rest from the lobes)
 //   guide_orders=2          with guiding=table: the orders of the light the table holds, 1-4 (1:
 //                           first-order light only; 2 adds the air lit by that light)
+//   view_collisions=guided  guided: a view ray that starts in the planet's shadow draws its
+//                           collision by the guide table's importance (with guiding=table);
+//                           tracked: by delta tracking
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -67,11 +70,12 @@ struct ReferenceSettings {
   int nee_samples = 2;
   double shadow_guiding = 0.5;
   double horizon_lobe = 0.5;
-  int shadow_splits = 4;
+  int shadow_splits = 1;
   bool importance_splitting = true;
   cpu::ShadowGuiding guiding = cpu::ShadowGuiding::kTable;
   double table_fraction = 0.5;
   int guide_orders = 2;
+  cpu::ViewCollisions view_collisions = cpu::ViewCollisions::kGuided;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
