@@ -540,6 +540,25 @@ glm::dvec3 PathTracer::SunDensityProxy(const glm::dvec3& x, const glm::dvec3& su
 // T(p, x_j) s(x_j) T_sun(x_j) / (K pdf(t_j)) with both transmittances by ratio tracking (the view
 // one by a single walk along the segment, read at every t_j), so the estimate is unbiased
 // wherever the proposal is positive, i.e. on the whole lit part.
+int PathTracer::SegmentNodes(const glm::dvec3& p, const glm::dvec3& d, double length, double shadow_begin,
+                             double shadow_end, double* ts) const {
+  int n = 0;
+  const double t_low = std::clamp(-glm::dot(p, d), 0.0, length);
+  const double x_0 = -std::sqrt(t_low);
+  const double x_1 = std::sqrt(length - t_low);
+  for (int i = 0; i <= kSegmentIntervals; ++i) {
+    const double x = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
+    ts[n++] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + x * std::abs(x), 0.0, length);
+  }
+  if (shadow_begin < shadow_end) {
+    for (double t : {shadow_begin, shadow_end}) {
+      if (t > 0.0 && t < length) ts[n++] = t;
+    }
+    std::sort(ts, ts + n);
+  }
+  return n;
+}
+
 double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                                    const Channel& c, Rng& rng) const {
   if (!(length > 0.0)) return 0.0;
@@ -554,20 +573,7 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
 
   // Nodes.
   std::array<double, kSegmentIntervals + 3> ts;
-  int n = 0;
-  const double t_low = std::clamp(-glm::dot(p, d), 0.0, length);
-  const double x_0 = -std::sqrt(t_low);
-  const double x_1 = std::sqrt(length - t_low);
-  for (int i = 0; i <= kSegmentIntervals; ++i) {
-    const double x = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
-    ts[n++] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + x * std::abs(x), 0.0, length);
-  }
-  if (shadow) {
-    for (double t : {shadow_begin, shadow_end}) {
-      if (t > 0.0 && t < length) ts[n++] = t;
-    }
-  }
-  std::sort(ts.begin(), ts.begin() + n);
+  const int n = SegmentNodes(p, d, length, shadow_begin, shadow_end, ts.data());
 
   // Node values and the proposal's pieces.
   std::array<double, kSegmentIntervals + 3> g;
@@ -708,8 +714,8 @@ void PathTracer::ResidualViewTransmittances(const glm::dvec3& p, const glm::dvec
 // light a point of the shadow sees, orders 1 and 2), piecewise exponential between 17 nodes about
 // the ray's lowest point and floored at kProposalFloor of its largest node value, mixed with a
 // proposal of delta tracking's own density T sigma_t (kGuidedCollisionShare). `factor` = T(p, x_t)
-// sigma_t(x_t) / q(t), q the mixture's pdf and T by residual ratio tracking, so that the
-// collision's expected weight is that of delta tracking at every t. Returns false where the
+// / q(t), q the mixture's pdf and T by residual ratio tracking: times sigma_t(x_t) (the caller's,
+// at the collision) the collision's expected weight is that of delta tracking at every t. Returns false where the
 // proposal has no mass (no extinction on the segment).
 bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                                      const Channel& c, std::size_t channel, Rng& rng, double& t,
@@ -723,14 +729,10 @@ bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, d
   std::array<std::array<double, n>, 2> g;
   std::array<std::array<double, n - 1>, 2> mass{}, rate{};
   std::array<double, 2> total{};
-  const double t_low = std::clamp(-glm::dot(p, d), 0.0, length);
-  const double x_0 = -std::sqrt(t_low);
-  const double x_1 = std::sqrt(length - t_low);
+  SegmentNodes(p, d, length, 0.0, 0.0, ts.data());
   double tau = 0.0;
   std::array<double, 2> g_max{};
   for (int i = 0; i < n; ++i) {
-    const double x = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
-    ts[i] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + x * std::abs(x), 0.0, length);
     const glm::dvec3 y = p + ts[i] * d;
     const double sigma = OpticalDepth(c, Densities(y));
     if (i > 0) tau += 0.5 * (sigma_node[i - 1] + sigma) * (ts[i] - ts[i - 1]);
@@ -773,7 +775,7 @@ bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, d
                      (1.0 - kGuidedCollisionShare) * g[1][piece] * std::exp(rate[1][piece] * s) / total[1];
   double transmittance;
   ResidualViewTransmittances(p, d, ts.data(), sigma_node.data(), tau_node.data(), n, &t, 1, c, rng, &transmittance);
-  factor = transmittance * OpticalDepth(c, Densities(p + t * d)) / pdf;
+  factor = transmittance / pdf;
   return true;
 }
 
@@ -805,13 +807,11 @@ double PathTracer::ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, c
   if (!(length > 0.0 && length < kInfinity)) return 0.0;
   double shadow_begin, shadow_end;
   ShadowInterval(x, a, length, sun, shadow_begin, shadow_end);
-  const double t_low = std::clamp(-glm::dot(x, a), 0.0, length);
-  const double x_0 = -std::sqrt(t_low);
-  const double x_1 = std::sqrt(length - t_low);
+  std::array<double, kSegmentIntervals + 1> ts;
+  SegmentNodes(x, a, length, 0.0, 0.0, ts.data());
   double tau = 0.0, sigma_previous = 0.0, g_previous = 0.0, t_previous = 0.0, integral = 0.0;
   for (int i = 0; i <= kSegmentIntervals; ++i) {
-    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
-    const double t = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+    const double t = ts[i];
     const glm::dvec3 y = x + t * a;
     const glm::dvec3 densities = Densities(y);
     const double sigma = OpticalDepth(c, densities);
@@ -863,20 +863,7 @@ void PathTracer::RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, cons
   const bool shadow = shadow_begin < shadow_end;
   if (shadow && shadow_begin <= 0.0 && shadow_end >= length) return;
   std::array<double, kSegmentIntervals + 3> ts;
-  int n = 0;
-  const double t_low = std::clamp(-glm::dot(x, w), 0.0, length);
-  const double x_0 = -std::sqrt(t_low);
-  const double x_1 = std::sqrt(length - t_low);
-  for (int i = 0; i <= kSegmentIntervals; ++i) {
-    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
-    ts[n++] = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
-  }
-  if (shadow) {
-    for (double t : {shadow_begin, shadow_end}) {
-      if (t > 0.0 && t < length) ts[n++] = t;
-    }
-  }
-  std::sort(ts.begin(), ts.begin() + n);
+  const int n = SegmentNodes(x, w, length, shadow_begin, shadow_end, ts.data());
   const double nu = glm::dot(w, sun);
   const double p_rayleigh = shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
   const double p_mie = shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
@@ -922,15 +909,13 @@ void PathTracer::RayNextOrderProxy(const GuideTable& table, const std::vector<do
   bool ground;
   Segment(x, w, length, ground);
   if (!(length > 0.0 && length < kInfinity)) return;
-  const double t_low = std::clamp(-glm::dot(x, w), 0.0, length);
-  const double x_0 = -std::sqrt(t_low);
-  const double x_1 = std::sqrt(length - t_low);
+  std::array<double, kSegmentIntervals + 1> ts;
+  SegmentNodes(x, w, length, 0.0, 0.0, ts.data());
   const std::size_t positions = table.positions();
   std::vector<double> tau(channels, 0.0), sigma_previous(channels, 0.0), g_previous(channels, 0.0);
   double t_previous = 0.0;
   for (int i = 0; i <= kSegmentIntervals; ++i) {
-    const double u = x_0 + (x_1 - x_0) * i / kSegmentIntervals;
-    const double t = i == 0 ? 0.0 : i == kSegmentIntervals ? length : std::clamp(t_low + u * std::abs(u), 0.0, length);
+    const double t = ts[i];
     const glm::dvec3 y = x + t * w;
     const glm::dvec3 densities = Densities(y);
     const GuidePosition at = LocateGuide(table, y, sun);
@@ -1306,10 +1291,10 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       if (guided_collision) {
         double t, factor;
         if (!GuidedViewCollision(p, d, length, query.sun, c, channel, rng, t, factor)) return;
-        weight *= factor;
         p += t * d;
         densities = Densities(p);
-        collided = OpticalDepth(c, densities) > 0.0;
+        weight *= factor * OpticalDepth(c, densities);
+        collided = weight > 0.0;
         if (!collided) return;
       } else if (majorant > 0.0) {
         const bool force = settings_.forced_collisions && !end_scores && length < kInfinity;

@@ -301,13 +301,20 @@ class PathTracer {
   // The segment estimate of next-event estimation (spherical geometry, finite length): an
   // unbiased estimate of integral_0^length T(p, x_t) sum_media sigma_s(x_t) p(nu) T_sun(x_t) dt,
   // x_t = p + t d, nu = dot(d, sun), i.e. the expected vertex estimate at the next collision.
+  // The nodes of a segment's quadratures and proposals: kSegmentIntervals intervals about its lowest
+  // point (t = t_low + x |x|, x uniform), plus the shadow's edges that fall inside (none when
+  // shadow_begin >= shadow_end), ascending in ts (room for kSegmentIntervals + 1, + 3 with the
+  // shadow's edges); returns the count.
+  int SegmentNodes(const glm::dvec3& p, const glm::dvec3& d, double length, double shadow_begin, double shadow_end,
+                   double* ts) const;
   // T(p, p + t_j d) for the ascending t[0 .. k), from one residual-ratio-tracking walk against the
   // control extinction linear between the n nodes ts (values sigma_node, integrals tau_node).
   void ResidualViewTransmittances(const glm::dvec3& p, const glm::dvec3& d, const double* ts, const double* sigma_node,
                                   const double* tau_node, int n, const double* t, int k, const Channel& c, Rng& rng,
                                   double* out) const;
   // The view ray's collision at t drawn by the guide table's importance, with the weight factor
-  // T sigma_t / pdf that keeps its expectation (view_collisions=guided); false: no collision.
+  // T / pdf that, times sigma_t there, keeps its expectation (view_collisions=guided); false: no
+  // collision.
   bool GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                            const Channel& c, std::size_t channel, Rng& rng, double& t, double& factor) const;
   double SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
