@@ -559,25 +559,43 @@ int PathTracer::SegmentNodes(const glm::dvec3& p, const glm::dvec3& d, double le
   return n;
 }
 
-double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
-                                   const Channel& c, Rng& rng) const {
-  if (!(length > 0.0)) return 0.0;
+// The deterministic part of a segment estimate: its nodes, the proposal's pieces and the control
+// of its view transmittance. It is the same for every path along one segment, so the view ray's
+// is made once per query (ViewRayPlan) and each path only draws from it.
+struct PathTracer::SegmentPlan {
+  bool empty = true;  // the estimate is 0 (no scattering on the segment's lit part)
+  double rayleigh = 0.0, mie = 0.0;  // sigma_s p(nu) per medium at density 1
+  int n = 0;                         // nodes
+  int first_lit = -1, last_lit = -1;
+  double total = 0.0;  // the proposal's mass
+  std::array<double, kSegmentIntervals + 3> ts, sigma_node, tau_node;
+  std::array<double, kSegmentIntervals + 3> g;         // the proposal at node i, floored
+  std::array<double, kSegmentIntervals + 3> mass{};    // of piece i, [i, i + 1]
+  std::array<double, kSegmentIntervals + 3> rate{};    // ln(g_b / g_a) / width
+  std::array<double, kSegmentIntervals + 3> below{};   // mass of the pieces before piece i
+};
+
+void PathTracer::PlanSegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                                     const Channel& c, SegmentPlan& plan) const {
+  plan.empty = true;
+  if (!(length > 0.0)) return;
   const double nu = glm::dot(d, sun);
   const double rayleigh = c.rayleigh_scattering * shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
   const double mie = c.mie_scattering * shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
-  if (!(rayleigh + mie > 0.0)) return 0.0;
+  if (!(rayleigh + mie > 0.0)) return;
+  plan.rayleigh = rayleigh;
+  plan.mie = mie;
   double shadow_begin, shadow_end;
   ShadowInterval(p, d, length, sun, shadow_begin, shadow_end);
   const bool shadow = shadow_begin < shadow_end;
-  if (shadow && shadow_begin <= 0.0 && shadow_end >= length) return 0.0;
+  if (shadow && shadow_begin <= 0.0 && shadow_end >= length) return;
 
   // Nodes.
-  std::array<double, kSegmentIntervals + 3> ts;
-  const int n = SegmentNodes(p, d, length, shadow_begin, shadow_end, ts.data());
+  auto& ts = plan.ts;
+  const int n = plan.n = SegmentNodes(p, d, length, shadow_begin, shadow_end, ts.data());
 
   // Node values and the proposal's pieces.
-  std::array<double, kSegmentIntervals + 3> g;
-  std::array<double, kSegmentIntervals + 3> scattering, sigma_node, tau_node;
+  auto& g = plan.g;
   double tau_view = 0.0;
   double sigma_previous = 0.0;
   double g_max = 0.0;
@@ -587,10 +605,10 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
     const double sigma = OpticalDepth(c, densities);
     if (i > 0) tau_view += 0.5 * (sigma_previous + sigma) * (ts[i] - ts[i - 1]);
     sigma_previous = sigma;
-    sigma_node[i] = sigma;
-    tau_node[i] = tau_view;
-    scattering[i] = rayleigh * densities.x + mie * densities.y;
-    g[i] = scattering[i] * std::exp(-tau_view - OpticalDepth(c, SunDensityProxy(x, sun)));
+    plan.sigma_node[i] = sigma;
+    plan.tau_node[i] = tau_view;
+    const double scattering = rayleigh * densities.x + mie * densities.y;
+    g[i] = scattering * std::exp(-tau_view - OpticalDepth(c, SunDensityProxy(x, sun)));
   }
   const auto lit_piece = [&](int i) {
     const double mid = 0.5 * (ts[i] + ts[i + 1]);
@@ -600,28 +618,47 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
     if (lit_piece(i)) g_max = std::max({g_max, g[i], g[i + 1]});
   }
   // g_max = 0: no scattering on the lit part, or exp(-tau) below the smallest double there.
-  if (!(g_max > 0.0)) return 0.0;
-  std::array<double, kSegmentIntervals + 3> mass{};  // of piece i, [i, i + 1]
-  std::array<double, kSegmentIntervals + 3> rate{};  // ln(g_b / g_a) / width
-  std::array<double, kSegmentIntervals + 3> below{};  // mass of the pieces before piece i
+  if (!(g_max > 0.0)) return;
   double total = 0.0;
   int first_lit = -1, last_lit = -1;
   for (int i = 0; i + 1 < n; ++i) {
-    below[i] = total;
+    plan.below[i] = total;
     if (!lit_piece(i)) continue;
     g[i] = std::max(g[i], kProposalFloor * g_max);
     const double gb = std::max(g[i + 1], kProposalFloor * g_max);
     const double width = ts[i + 1] - ts[i];
     const double log_ratio = std::log(gb / g[i]);
-    rate[i] = log_ratio / width;
-    mass[i] = std::abs(log_ratio) < 1e-9 ? g[i] * width : g[i] * width * std::expm1(log_ratio) / log_ratio;
-    total += mass[i];
-    if (mass[i] > 0.0) {
+    plan.rate[i] = log_ratio / width;
+    plan.mass[i] = std::abs(log_ratio) < 1e-9 ? g[i] * width : g[i] * width * std::expm1(log_ratio) / log_ratio;
+    total += plan.mass[i];
+    if (plan.mass[i] > 0.0) {
       if (first_lit < 0) first_lit = i;
       last_lit = i;
     }
   }
-  if (!(total > 0.0) || first_lit < 0) return 0.0;
+  if (!(total > 0.0) || first_lit < 0) return;
+  plan.total = total;
+  plan.first_lit = first_lit;
+  plan.last_lit = last_lit;
+  plan.empty = false;
+}
+
+double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                                   const Channel& c, Rng& rng) const {
+  SegmentPlan plan;
+  PlanSegmentSunlight(p, d, length, sun, c, plan);
+  return SegmentSunlight(plan, p, d, sun, c, rng);
+}
+
+double PathTracer::SegmentSunlight(const SegmentPlan& plan, const glm::dvec3& p, const glm::dvec3& d,
+                                   const glm::dvec3& sun, const Channel& c, Rng& rng) const {
+  if (plan.empty) return 0.0;
+  const auto& ts = plan.ts;
+  const auto& g = plan.g;
+  const auto& mass = plan.mass;
+  const auto& rate = plan.rate;
+  const auto& below = plan.below;
+  const double total = plan.total;
 
   // Stratified points in the proposal's CDF; their order along the segment is that of u.
   const int k = settings_.segment_samples;
@@ -635,11 +672,11 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
     tj = heap_t.data();
     wj = heap_w.data();
   }
-  int piece = first_lit;
+  int piece = plan.first_lit;
   for (int j = 0; j < k; ++j) {
     const double u = (j + rng.Uniform()) / k * total;
     // The first piece with mass whose end is above u (the last one if rounding put u at the end).
-    while (piece < last_lit && (mass[piece] == 0.0 || below[piece] + mass[piece] <= u)) ++piece;
+    while (piece < plan.last_lit && (mass[piece] == 0.0 || below[piece] + mass[piece] <= u)) ++piece;
     const double width = ts[piece + 1] - ts[piece];
     const double v = std::clamp((u - below[piece]) / mass[piece], 0.0, 1.0);
     double s;
@@ -661,12 +698,13 @@ double PathTracer::SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, dou
     transmittance_big.resize(k);
     transmittance = transmittance_big.data();
   }
-  ResidualViewTransmittances(p, d, ts.data(), sigma_node.data(), tau_node.data(), n, tj, k, c, rng, transmittance);
+  ResidualViewTransmittances(p, d, ts.data(), plan.sigma_node.data(), plan.tau_node.data(), plan.n, tj, k, c, rng,
+                             transmittance);
   double estimate = 0.0;
   for (int j = 0; j < k; ++j) {
     const glm::dvec3 x = p + tj[j] * d;
     const glm::dvec3 densities = Densities(x);
-    const double s = rayleigh * densities.x + mie * densities.y;
+    const double s = plan.rayleigh * densities.x + plan.mie * densities.y;
     if (s > 0.0) estimate += wj[j] * transmittance[j] * s * ResidualSunTransmittance(x, sun, c, rng);
   }
   return estimate;
@@ -709,40 +747,48 @@ void PathTracer::ResidualViewTransmittances(const glm::dvec3& p, const glm::dvec
   }
 }
 
-// The view ray's collision drawn by importance (view_collisions=guided, docs/models/reference.md):
-// from a proposal that follows sigma_t(t) exp(-tau(t)) I(x_t), I the guide table's importance (the
-// light a point of the shadow sees, orders 1 and 2), piecewise exponential between 17 nodes about
-// the ray's lowest point and floored at kProposalFloor of its largest node value, mixed with a
-// proposal of delta tracking's own density T sigma_t (kGuidedCollisionShare). `factor` = T(p, x_t)
-// / q(t), q the mixture's pdf and T by residual ratio tracking: times sigma_t(x_t) (the caller's,
-// at the collision) the collision's expected weight is that of delta tracking at every t. Returns false where the
-// proposal has no mass (no extinction on the segment).
-bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
-                                     const Channel& c, std::size_t channel, Rng& rng, double& t,
-                                     double& factor) const {
-  const GuideTable& table = Guide();
-  constexpr int n = kSegmentIntervals + 1;
-  std::array<double, n> ts, sigma_node, tau_node;
-  // Two piecewise-exponential proposals on the same nodes: [0] sigma_t exp(-tau) I (the guide's),
-  // [1] sigma_t exp(-tau) (delta tracking's density, defensive); each floored at kProposalFloor of
-  // its largest node value.
-  std::array<std::array<double, n>, 2> g;
-  std::array<std::array<double, n - 1>, 2> mass{}, rate{};
+// The deterministic part of GuidedViewCollision: the two proposals on the segment's nodes.
+struct PathTracer::CollisionPlan {
+  static constexpr int kNodes = kSegmentIntervals + 1;
+  bool valid = false;  // false: the proposal has no mass (no collision)
+  std::array<double, kNodes> ts, sigma_node, tau_node;
+  // [0] sigma_t exp(-tau) I (the guide's), [1] sigma_t exp(-tau) (delta tracking's density,
+  // defensive); at the nodes, each floored at kProposalFloor of its largest node value.
+  std::array<std::array<double, kNodes>, 2> g;
+  std::array<std::array<double, kNodes - 1>, 2> mass{}, rate{};
   std::array<double, 2> total{};
+};
+
+// One view ray's plan per channel, made once per query (PathTracer::Trace).
+struct PathTracer::ViewRayPlan {
+  bool segment_planned = false;
+  SegmentPlan segment;
+  bool collision_planned = false;
+  CollisionPlan collision;
+};
+
+void PathTracer::PlanGuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length,
+                                         const glm::dvec3& sun, const Channel& c, std::size_t channel,
+                                         CollisionPlan& plan) const {
+  const GuideTable& table = Guide();
+  constexpr int n = CollisionPlan::kNodes;
+  auto& ts = plan.ts;
+  auto& g = plan.g;
+  plan.valid = false;
   SegmentNodes(p, d, length, 0.0, 0.0, ts.data());
   double tau = 0.0;
   std::array<double, 2> g_max{};
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 y = p + ts[i] * d;
     const double sigma = OpticalDepth(c, Densities(y));
-    if (i > 0) tau += 0.5 * (sigma_node[i - 1] + sigma) * (ts[i] - ts[i - 1]);
-    sigma_node[i] = sigma;
-    tau_node[i] = tau;
+    if (i > 0) tau += 0.5 * (plan.sigma_node[i - 1] + sigma) * (ts[i] - ts[i - 1]);
+    plan.sigma_node[i] = sigma;
+    plan.tau_node[i] = tau;
     g[1][i] = sigma * std::exp(-tau);
     g[0][i] = g[1][i] * GuideImportance(table, LocateGuide(table, y, sun), channel);
     for (int a = 0; a < 2; ++a) g_max[a] = std::max(g_max[a], g[a][i]);
   }
-  if (!(g_max[1] > 0.0)) return false;
+  if (!(g_max[1] > 0.0)) return;
   if (!(g_max[0] > 0.0)) g[0] = g[1], g_max[0] = g_max[1];
   for (int a = 0; a < 2; ++a) {
     for (int i = 0; i + 1 < n; ++i) {
@@ -751,12 +797,33 @@ bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, d
       g[a][i] = ga;
       const double width = ts[i + 1] - ts[i];
       const double log_ratio = std::log(gb / ga);
-      rate[a][i] = width > 0.0 ? log_ratio / width : 0.0;
-      mass[a][i] = std::abs(log_ratio) < 1e-9 ? ga * width : ga * width * std::expm1(log_ratio) / log_ratio;
-      total[a] += mass[a][i];
+      plan.rate[a][i] = width > 0.0 ? log_ratio / width : 0.0;
+      plan.mass[a][i] = std::abs(log_ratio) < 1e-9 ? ga * width : ga * width * std::expm1(log_ratio) / log_ratio;
+      plan.total[a] += plan.mass[a][i];
     }
-    if (!(total[a] > 0.0)) return false;
+    if (!(plan.total[a] > 0.0)) return;
   }
+  plan.valid = true;
+}
+
+// The view ray's collision drawn by importance (view_collisions=guided, docs/models/reference.md):
+// from a proposal that follows sigma_t(t) exp(-tau(t)) I(x_t), I the guide table's importance (the
+// light a point of the shadow sees, orders 1 and 2), piecewise exponential between 17 nodes about
+// the ray's lowest point and floored at kProposalFloor of its largest node value, mixed with a
+// proposal of delta tracking's own density T sigma_t (kGuidedCollisionShare). `factor` = T(p, x_t)
+// / q(t), q the mixture's pdf and T by residual ratio tracking: times sigma_t(x_t) (the caller's,
+// at the collision) the collision's expected weight is that of delta tracking at every t. Returns false
+// where the proposal has no mass (no extinction on the segment). The proposal is the plan's
+// (PlanGuidedViewCollision), made once per query.
+bool PathTracer::GuidedViewCollision(const CollisionPlan& plan, const glm::dvec3& p, const glm::dvec3& d,
+                                     const Channel& c, Rng& rng, double& t, double& factor) const {
+  if (!plan.valid) return false;
+  constexpr int n = CollisionPlan::kNodes;
+  const auto& ts = plan.ts;
+  const auto& g = plan.g;
+  const auto& mass = plan.mass;
+  const auto& rate = plan.rate;
+  const auto& total = plan.total;
   // A component (kGuidedCollisionShare the guide's), a piece by its mass, a point in it.
   const int a = rng.Uniform() < kGuidedCollisionShare ? 0 : 1;
   double u = rng.Uniform() * total[a];
@@ -774,7 +841,8 @@ bool PathTracer::GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, d
   const double pdf = kGuidedCollisionShare * g[0][piece] * std::exp(rate[0][piece] * s) / total[0] +
                      (1.0 - kGuidedCollisionShare) * g[1][piece] * std::exp(rate[1][piece] * s) / total[1];
   double transmittance;
-  ResidualViewTransmittances(p, d, ts.data(), sigma_node.data(), tau_node.data(), n, &t, 1, c, rng, &transmittance);
+  ResidualViewTransmittances(p, d, ts.data(), plan.sigma_node.data(), plan.tau_node.data(), n, &t, 1, c, rng,
+                             &transmittance);
   factor = transmittance / pdf;
   return true;
 }
@@ -1217,7 +1285,7 @@ glm::dvec3 PathTracer::SampleShadowDirection(const glm::dvec3& x, const glm::dve
                          weight);
 }
 
-void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
+void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const ViewRayPlan& view_plan, Rng& rng,
                            std::array<double, kOrderBins>& orders) const {
   glm::dvec3 entry = query.origin;
   if (!EnterAtmosphere(entry, query.view)) return;
@@ -1266,10 +1334,13 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
 
       // Next-event estimation on the segment: the expected vertex estimate of the next collision,
       // scored in that collision's order bin; the vertex itself then takes none.
+      // The view ray (order 0: the path's first segment) takes both from its plan (PlanViewRay).
       bool segment_nee = false;
-      if (!half_space_ && !cross_to_ground && length < kInfinity &&
-          settings_.next_event != NextEventEstimation::kVertex) {
-        segment_nee = settings_.next_event == NextEventEstimation::kSegment || order == 0 || been_shadowed;
+      if (order == 0) {
+        segment_nee = view_plan.segment_planned;
+        if (segment_nee) orders[0] += weight * SegmentSunlight(view_plan.segment, p, d, query.sun, c, rng);
+      } else if (!half_space_ && length < kInfinity && settings_.next_event != NextEventEstimation::kVertex) {
+        segment_nee = settings_.next_event == NextEventEstimation::kSegment || been_shadowed;
         if (!segment_nee) segment_nee = been_shadowed = InShadow(p, query.sun);
         if (segment_nee) {
           orders[std::min(order + 1, kOrderBins) - 1] +=
@@ -1283,14 +1354,11 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
       // end scores nothing, the collision drawn by the guide table's importance.
       bool collided = false;
       glm::dvec3 densities(0.0);
-      const bool guided_collision = order == 0 && settings_.view_collisions == ViewCollisions::kGuided &&
-                                    settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
-                                    !half_space_ && !cross_to_ground &&
-                                    !end_scores && length < kInfinity && InShadow(p, query.sun);
+      const bool guided_collision = order == 0 && view_plan.collision_planned;
       const double majorant = cross_to_ground || guided_collision ? 0.0 : Majorant(c, p, d, length);
       if (guided_collision) {
         double t, factor;
-        if (!GuidedViewCollision(p, d, length, query.sun, c, channel, rng, t, factor)) return;
+        if (!GuidedViewCollision(view_plan.collision, p, d, c, rng, t, factor)) return;
         p += t * d;
         densities = Densities(p);
         weight *= factor * OpticalDepth(c, densities);
@@ -1430,14 +1498,48 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, Rng& rng,
   }
 }
 
+// The view ray's deterministic parts, as TracePath's first segment makes them: the same inputs
+// in the same order, so a path drawn from the plan is the path drawn without it, bit for bit.
+void PathTracer::PlanViewRay(const TraceQuery& query, const Channel& c, ViewRayPlan& plan) const {
+  glm::dvec3 entry = query.origin;
+  if (!EnterAtmosphere(entry, query.view)) return;
+  const std::size_t channel = static_cast<std::size_t>(&c - channels_.data());
+  double length;
+  bool ground;
+  Segment(entry, query.view, length, ground);
+  const bool end_scores = ground && c.albedo > 0.0 && (query.include_first_ground_hit || query.ground_only);
+  const bool cross_to_ground = query.ground_only;
+  if (!half_space_ && !cross_to_ground && length < kInfinity && settings_.next_event != NextEventEstimation::kVertex) {
+    PlanSegmentSunlight(entry, query.view, length, query.sun, c, plan.segment);
+    plan.segment_planned = true;
+  }
+  if (settings_.view_collisions == ViewCollisions::kGuided && settings_.guiding == ShadowGuiding::kTable &&
+      settings_.shadow_guiding > 0.0 && !half_space_ && !cross_to_ground && !end_scores && length < kInfinity &&
+      InShadow(entry, query.sun)) {
+    PlanGuidedViewCollision(entry, query.view, length, query.sun, c, channel, plan.collision);
+    plan.collision_planned = true;
+  }
+}
+
+std::vector<PathTracer::ViewRayPlan> PathTracer::PlanViewRays(const TraceQuery& query) const {
+  std::vector<ViewRayPlan> plans(channels_.size());
+  for (std::size_t c = 0; c < channels_.size(); ++c) PlanViewRay(query, channels_[c], plans[c]);
+  return plans;
+}
+
 void PathTracer::TraceSerial(const TraceQuery& query, std::uint64_t seed, std::uint64_t first, std::uint64_t count,
                              PathTally& tally) const {
+  TraceSerial(query, PlanViewRays(query), seed, first, count, tally);
+}
+
+void PathTracer::TraceSerial(const TraceQuery& query, const std::vector<ViewRayPlan>& plans, std::uint64_t seed,
+                             std::uint64_t first, std::uint64_t count, PathTally& tally) const {
   const std::uint64_t key = QueryKey(query);
   for (std::uint64_t i = first; i < first + count; ++i) {
     for (std::size_t c = 0; c < channels_.size(); ++c) {
       Rng rng(StreamSeed(seed, key, i, c));
       std::array<double, kOrderBins> orders{};
-      TracePath(query, channels_[c], rng, orders);
+      TracePath(query, channels_[c], plans[c], rng, orders);
       double total = 0.0;
       for (int k = 0; k < kOrderBins; ++k) {
         tally.Add(c * kTallySlots + 1 + static_cast<std::size_t>(k), orders[k]);
@@ -1472,8 +1574,9 @@ PathTally TraceBlocks(std::size_t channels, std::uint64_t first, std::uint64_t c
 
 PathTally PathTracer::Trace(const TraceQuery& query, std::uint64_t seed, std::uint64_t first,
                             std::uint64_t count) const {
+  const std::vector<ViewRayPlan> plans = PlanViewRays(query);
   return TraceBlocks(channels_.size(), first, count, [&](std::uint64_t start, std::uint64_t n, PathTally& tally) {
-    TraceSerial(query, seed, start, n, tally);
+    TraceSerial(query, plans, seed, start, n, tally);
   });
 }
 
@@ -1496,7 +1599,9 @@ PathTally PathTracer::TopOutgoingRadiance(const glm::dvec3& sun, std::uint64_t s
       for (std::size_t c = 0; c < channels_.size(); ++c) {
         Rng rng(StreamSeed(seed, kKey, i, c));
         std::array<double, kOrderBins> orders{};
-        TracePath(query, channels_[c], rng, orders);
+        ViewRayPlan plan;
+        PlanViewRay(query, channels_[c], plan);
+        TracePath(query, channels_[c], plan, rng, orders);
         double total = 0.0;
         for (double v : orders) total += v;
         tally.Add(c * kTallySlots, total);
@@ -1520,7 +1625,9 @@ PathTally PathTracer::DiffuseIrradiance(const glm::dvec3& origin, const glm::dve
       for (std::size_t c = 0; c < channels_.size(); ++c) {
         Rng rng(StreamSeed(seed, kKey, i, c));
         std::array<double, kOrderBins> orders{};
-        TracePath(query, channels_[c], rng, orders);
+        ViewRayPlan plan;
+        PlanViewRay(query, channels_[c], plan);
+        TracePath(query, channels_[c], plan, rng, orders);
         for (int k = 0; k < kOrderBins; ++k) {
           tally.Add(c * kTallySlots + 1 + k, kPi * orders[k]);
         }

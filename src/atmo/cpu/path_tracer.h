@@ -266,6 +266,11 @@ class PathTracer {
   struct Collision;
   class Rng;
   struct GuideTable;
+  // The deterministic parts of a segment estimate and of the guided view collision, and the view
+  // ray's of both per channel: the same for every path of a query, so made once (PlanViewRays).
+  struct SegmentPlan;
+  struct CollisionPlan;
+  struct ViewRayPlan;
   // Where x falls in the guide table: the four neighbouring positions (altitude, sun zenith
   // angle) with their bilinear weights, and x's local frame (up, towards the sun's azimuth, across).
   struct GuidePosition {
@@ -314,11 +319,24 @@ class PathTracer {
                                   double* out) const;
   // The view ray's collision at t drawn by the guide table's importance, with the weight factor
   // T / pdf that, times sigma_t there, keeps its expectation (view_collisions=guided); false: no
-  // collision.
-  bool GuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
-                           const Channel& c, std::size_t channel, Rng& rng, double& t, double& factor) const;
+  // collision. The proposal comes from PlanGuidedViewCollision on the same segment.
+  void PlanGuidedViewCollision(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                               const Channel& c, std::size_t channel, CollisionPlan& plan) const;
+  bool GuidedViewCollision(const CollisionPlan& plan, const glm::dvec3& p, const glm::dvec3& d, const Channel& c,
+                           Rng& rng, double& t, double& factor) const;
   double SegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
                          const Channel& c, Rng& rng) const;
+  // The same in two steps: the plan of the segment [p, p + length d], then one estimate from it.
+  void PlanSegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, double length, const glm::dvec3& sun,
+                           const Channel& c, SegmentPlan& plan) const;
+  double SegmentSunlight(const SegmentPlan& plan, const glm::dvec3& p, const glm::dvec3& d, const glm::dvec3& sun,
+                         const Channel& c, Rng& rng) const;
+  // The view ray's plan for channel c (segment estimate and guided collision, where TracePath's
+  // first segment takes them), and for every channel.
+  void PlanViewRay(const TraceQuery& query, const Channel& c, ViewRayPlan& plan) const;
+  std::vector<ViewRayPlan> PlanViewRays(const TraceQuery& query) const;
+  void TraceSerial(const TraceQuery& query, const std::vector<ViewRayPlan>& plans, std::uint64_t seed,
+                   std::uint64_t first, std::uint64_t count, PathTally& tally) const;
   // Density integrals along the sun ray from x to the top, from a small table (importance
   // sampling of SegmentSunlight only: its errors change the variance, never the mean).
   glm::dvec3 SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const;
@@ -351,8 +369,10 @@ class PathTracer {
   glm::dvec3 SampleGuide(const GuideTable& table, const GuidePosition& at, std::size_t channel, Rng& rng) const;
   double GuidePdf(const GuideTable& table, const GuidePosition& at, std::size_t channel, const glm::dvec3& w) const;
   double GuideImportance(const GuideTable& table, const GuidePosition& at, std::size_t channel) const;
-  // One path of one channel; adds its contributions per order bin to `orders`.
-  void TracePath(const TraceQuery& query, const Channel& c, Rng& rng, std::array<double, kOrderBins>& orders) const;
+  // One path of one channel, its view ray from `view_plan` (PlanViewRay of the same query and
+  // channel); adds its contributions per order bin to `orders`.
+  void TracePath(const TraceQuery& query, const Channel& c, const ViewRayPlan& view_plan, Rng& rng,
+                 std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].
   glm::dvec3 DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const;
   // Parameters t in (t0, t1) where p + t d crosses an altitude at which a density profile may
