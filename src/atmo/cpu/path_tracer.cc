@@ -1354,11 +1354,17 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
       // end scores nothing, the collision drawn by the guide table's importance.
       bool collided = false;
       glm::dvec3 densities(0.0);
-      const bool guided_collision = order == 0 && view_plan.collision_planned;
+      const bool guided_collision =
+          order == 0 ? view_plan.collision_planned
+                     : settings_.shadow_collisions == ShadowCollisions::kGuided &&
+                           settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
+                           !half_space_ && !end_scores && length < kInfinity && InShadow(p, query.sun);
       const double majorant = cross_to_ground || guided_collision ? 0.0 : Majorant(c, p, d, length);
       if (guided_collision) {
         double t, factor;
-        if (!GuidedViewCollision(view_plan.collision, p, d, c, rng, t, factor)) return;
+        CollisionPlan own;
+        if (order > 0) PlanGuidedViewCollision(p, d, length, query.sun, c, channel, own);
+        if (!GuidedViewCollision(order == 0 ? view_plan.collision : own, p, d, c, rng, t, factor)) return;
         p += t * d;
         densities = Densities(p);
         weight *= factor * OpticalDepth(c, densities);
@@ -1439,7 +1445,12 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
         // vertex's importance is n >= 2 times that at its first shadowed vertex goes on as n copies
         // of 1/n of the weight, each with its own direction (a sum of n unbiased continuations over
         // n); at most kMaxCopies at a vertex and kMaxWalks per path.
-        if (settings_.importance_splitting && shadowed && settings_.next_event != NextEventEstimation::kVertex) {
+        // A lit vertex of a path that has been in the shadow is weighed by its own importance too
+        // (the table's, large where the sun shines): against the last shadowed vertex's target, the
+        // roulette lifted the small weight of a rare lit vertex to that target, one path then
+        // carrying several per cent of an estimate (docs/models/reference.md).
+        if (settings_.importance_splitting && (shadowed || reference_importance > 0.0) &&
+            settings_.next_event != NextEventEstimation::kVertex) {
           const double importance = settings_.guiding == ShadowGuiding::kTable
                                         ? GuideImportance(Guide(), LocateGuide(Guide(), p, query.sun), channel)
                                         : ImportanceProxy(p, query.sun, c);

@@ -130,6 +130,13 @@ enum class ViewCollisions {
              // shadow_guiding > 0): by the guide table's importance along the ray
 };
 
+// How the collision on a segment that starts at a shadowed scattering vertex is drawn.
+enum class ShadowCollisions {
+  kTracked,  // delta tracking
+  kGuided,   // as the guided view collision (with kTable guiding and shadow_guiding > 0), on the
+             // segments whose end scores nothing
+};
+
 // What the guided draws at a shadowed vertex come from (see the file comment).
 enum class ShadowGuiding {
   kLobes,  // the lobe about the sun and the horizon lobe (horizon_lobe); ImportanceProxy
@@ -163,6 +170,7 @@ struct PathTracerSettings {
   // directions, from the table itself), so that shadowed air lit only by other air counts too.
   int guide_orders = 2;
   ViewCollisions view_collisions = ViewCollisions::kGuided;
+  ShadowCollisions shadow_collisions = ShadowCollisions::kGuided;
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).

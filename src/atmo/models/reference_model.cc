@@ -74,6 +74,10 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
       if (value == "guided") s.view_collisions = cpu::ViewCollisions::kGuided;
       else if (value == "tracked") s.view_collisions = cpu::ViewCollisions::kTracked;
       else throw Error("option view_collisions=" + value + ": expected guided or tracked");
+    } else if (key == "shadow_collisions") {
+      if (value == "guided") s.shadow_collisions = cpu::ShadowCollisions::kGuided;
+      else if (value == "tracked") s.shadow_collisions = cpu::ShadowCollisions::kTracked;
+      else throw Error("option shadow_collisions=" + value + ": expected guided or tracked");
     } else if (key == "quadrature_tolerance") {
       s.quadrature_tolerance = ParseDoubleOption(key, value, 1e-12, 0.1);
     } else if (key == "seed") {
@@ -81,8 +85,8 @@ ReferenceSettings ReferenceSettings::FromOptions(const ModelOptions& options) {
     } else {
       throw Error("unknown option '" + key + "' for model reference (known: samples, target_rel_error, "
                   "max_samples, max_vov, estimator, forced_collisions, nee, nee_samples, shadow_guiding, horizon_lobe, "
-                  "shadow_splits, importance_splitting, guiding, table_fraction, guide_orders, view_collisions, quadrature_tolerance, "
-                  "seed)");
+                  "shadow_splits, importance_splitting, guiding, table_fraction, guide_orders, view_collisions, shadow_collisions, "
+                  "quadrature_tolerance, seed)");
     }
   }
   if (!max_given) s.max_samples = std::max(s.max_samples, s.samples);
@@ -99,7 +103,8 @@ ReferenceModel::ReferenceModel(const AtmosphereParameters& parameters, const Ref
       tracer_(parameters, cpu::PathTracerSettings{settings.forced_collisions, 3, settings.next_event, settings.nee_samples,
                                       settings.shadow_guiding, settings.horizon_lobe, settings.shadow_splits,
                                       settings.importance_splitting, settings.guiding,
-                                      settings.table_fraction, settings.guide_orders, settings.view_collisions}) {}
+                                      settings.table_fraction, settings.guide_orders, settings.view_collisions,
+                                      settings.shadow_collisions}) {}
 
 std::unique_ptr<SkyView> ReferenceModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || (parameters().geometry == Geometry::kSpherical && altitude_m < 0.0)) {

@@ -36,6 +36,9 @@
 //   view_collisions=guided  guided: a view ray that starts in the planet's shadow draws its
 //                           collision by the guide table's importance (with guiding=table);
 //                           tracked: by delta tracking
+//   shadow_collisions=guided guided: the segments that leave a shadowed vertex draw their
+//                           collision as the guided view collision (end scoring nothing);
+//                           tracked: by delta tracking
 //   quadrature_tolerance=1e-6  relative tolerance of the single-scattering quadrature
 //   seed=0                  the common seed (`--seed`)
 // Observers may be above the top of the atmosphere (rays start where they enter it). Transmittance
@@ -76,6 +79,7 @@ struct ReferenceSettings {
   double table_fraction = 0.5;
   int guide_orders = 2;
   cpu::ViewCollisions view_collisions = cpu::ViewCollisions::kGuided;
+  cpu::ShadowCollisions shadow_collisions = cpu::ShadowCollisions::kGuided;
   double quadrature_tolerance = 1e-6;
   std::uint64_t seed = 0;
 
