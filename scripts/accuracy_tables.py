@@ -82,12 +82,12 @@ SAMPLED_REFERENCES = {
     # capped at 2^22 paths (the doubling also waits for max_vov, which a heavy tail can hold off).
     "twilight": ["--grid", "docs/data/source4d_twilight_grid.csv", "--target-rel-error", "0.01",
                  "--option", "max_samples=4194304", "--seed", "7"],
-    # Sun 98 and 100 degrees: 1 % per direction where the reference gets there within 2^20 paths.
+    # Sun 98 and 100 degrees: 1 % per direction, capped at 2^22 paths.
     "deep_twilight": ["--grid", "docs/data/source4d_deep_twilight_grid.csv", "--target-rel-error", "0.01",
-                      "--option", "max_samples=1048576", "--seed", "7"],
-    # Sun 104 and 108 degrees: 3 % per direction or 2^19 paths (enough for a 10 % target).
-    "night": ["--grid", "docs/data/source4d_night_grid.csv", "--target-rel-error", "0.03",
-              "--option", "max_samples=524288", "--seed", "7"],
+                      "--option", "max_samples=4194304", "--seed", "7"],
+    # Sun 104 and 108 degrees: 1 % per direction (capped at 2^22 paths, which no direction needs).
+    "night": ["--grid", "docs/data/source4d_night_grid.csv", "--target-rel-error", "0.01",
+              "--option", "max_samples=4194304", "--seed", "7"],
     # 2^16 paths: about 0.5 % with the sun up.
     "altitudes": ["--grid", "docs/data/source4d_altitude_grid.csv", "--samples", "65536", "--seed", "7"],
     "hazy": ["--config", "{hazy}", "--grid", "docs/data/source4d_media_grid.csv", "--samples", "65536",

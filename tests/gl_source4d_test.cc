@@ -52,8 +52,8 @@ void main() {
   float t_0;
   float t_1;
   bool shadow = GetSource4dShadowInterval(atmosphere, atmosphere.bottom_radius + 1.0, 0.3, mu_s, nu, 500.0, t_0, t_1);
-  imageStore(output_image, ivec2(i, 0), vec4(GetSource4dUnitSunZenith(mu_s), Source4dAcos(mu_s),
-      GetSource4dSunZenithFromUnit(float(i) / float(count - 1)), shadow ? t_1 - t_0 : -1.0));
+  imageStore(output_image, ivec2(i, 0), vec4(GetSource4dUnitSunZenith(mu_s, 48), Source4dAcos(mu_s),
+      GetSource4dSunZenithFromUnit(float(i) / float(count - 1), 48), shadow ? t_1 - t_0 : -1.0));
 }
 )glsl";
 
@@ -84,10 +84,10 @@ TEST(GlSource4d, SharedFunctionsCompileAndMatchCpu) {
     double t_0, t_1;
     const bool shadow =
         shared::GetSource4dShadowInterval(km, km.bottom_radius + 1.0, 0.3, mu_s, nu, 500.0, t_0, t_1);
-    max_unit = std::max(max_unit, std::abs(gl[4 * i] - shared::GetSource4dUnitSunZenith(mu_s)));
+    max_unit = std::max(max_unit, std::abs(gl[4 * i] - shared::GetSource4dUnitSunZenith(mu_s, 48)));
     max_angle = std::max(max_angle, std::abs(gl[4 * i + 1] - shared::Source4dAcos(mu_s)));
     max_angle = std::max(max_angle,
-                         std::abs(gl[4 * i + 2] - shared::GetSource4dSunZenithFromUnit(i / double(kCount - 1))));
+                         std::abs(gl[4 * i + 2] - shared::GetSource4dSunZenithFromUnit(i / double(kCount - 1), 48)));
     // A shadowed ray is shadowed on both; an unshadowed one gives -1.
     ASSERT_EQ(gl[4 * i + 3] >= 0.0f, shadow) << "mu_s " << mu_s;
     if (shadow) {
@@ -208,10 +208,14 @@ constexpr double kImageP99 = 1e-3;
 // matrix products summed in the CPU's order in float on both, and the orders inheriting the
 // differences of the order before. Measured on llvmpipe (Mesa 22.3.6, LLVM 15), earth with the
 // tail and atmosphere-plus without, orders 2 and 3: rel_mae <= 3.6e-5, p99 <= 7.6e-4,
-// max <= 2.5e-3 (Mie); the ground irradiance max 6.1e-4. The bounds leave a factor >= 4 on
-// rel_mae and p99, and bound the ground irradiance's maximum by the tables' p99.
+// max <= 2.5e-3 (Mie). The bounds leave a factor >= 4 on rel_mae and p99.
 constexpr double kTableRelMae = 1.5e-4;
 constexpr double kTableP99 = 3e-3;
+// The ground irradiance (16 sun-zenith rows): rel_mae <= 2.9e-4 and at most 1.6e-3 at every row but
+// one, earth's row at sun 98.3 degrees in red (E 1.5e-4 of its peak there), 8.6e-3 lower on the
+// GPU; with 24 gathering steps instead of 12 that row differs by 1.8e-2, so it is the float
+// gathering of that deep-twilight node, not the tables' sums. The bound leaves a factor 1.7.
+constexpr double kGroundIrradianceMax = 1.5e-2;
 
 void ExpectWithinBounds(const Context& context, const Difference& d, double rel_mae = kImageRelMae,
                         double p99 = kImageP99) {
@@ -375,7 +379,8 @@ void ExpectGpuTablesMatch(const Context& context, const std::string& preset, boo
     EXPECT_LT(d->rel_mae, slack * kTableRelMae);
     EXPECT_LT(d->p99, slack * kTableP99);
   }
-  EXPECT_LT(e.max, slack * kTableP99);
+  EXPECT_LT(e.rel_mae, slack * kTableRelMae * 4.0);
+  EXPECT_LT(e.max, slack * kGroundIrradianceMax);
   for (const char* pass : {"source4d_gather_1", "source4d_convolve_2", "source4d_gather_2", "source4d_convolve_3",
                            "source4d_sum"}) {
     EXPECT_GE(timings.LastMs(pass), 0.0) << pass;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -115,6 +116,58 @@ TEST(Source4dTables, SharedGeometryGatherEqualsThePerRayMarch) {
           << "order " << order << ", value " << k;
     }
   }
+}
+
+// The sun-zenith axis's knots (60, 84, 104 degrees) lie on rows for every table size, so that the
+// lookups' linear interpolation between two rows is linear in the sun zenith; and the mapping runs
+// monotonically from 0 (sun at the zenith) to 1 (120 degrees) and back.
+TEST(Source4dTables, SunZenithKnotsLieOnRows) {
+  for (int rows : {8, 11, 16, 21, 47, 48, 64, 100, 512}) {
+    for (double knot : {shared::kSource4dSunKnot1, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3}) {
+      const double row = shared::GetSource4dSunRow(rows, std::cos(knot)) - 0.5;
+      EXPECT_NEAR(row, std::round(row), 1e-4) << rows << " rows, knot " << glm::degrees(knot);
+      EXPECT_NEAR(shared::GetSource4dSunZenithFromUnit(std::round(row) / (rows - 1), rows), knot, 1e-12);
+    }
+    EXPECT_NEAR(shared::GetSource4dUnitFromSunZenith(0.0, rows), 0.0, 1e-12);
+    EXPECT_NEAR(shared::GetSource4dUnitFromSunZenith(shared::kSource4dMaxSunZenith, rows), 1.0, 1e-12);
+    double last = -1.0;
+    for (int j = 0; j < rows; ++j) {
+      const double theta = shared::GetSource4dSunZenithFromUnit(double(j) / (rows - 1), rows);
+      EXPECT_GT(theta, last) << rows << " rows, row " << j;
+      EXPECT_NEAR(shared::GetSource4dUnitFromSunZenith(theta, rows), double(j) / (rows - 1), 1e-12);
+      last = theta;
+    }
+  }
+}
+
+// The zenith sky between the table's rows, against a table of four times as many rows (the
+// defaults otherwise): looking up from the ground at sun 58-62, 82-86 and 102-106 degrees (the knots), where
+// the zenith sky falls by a decade per 2 degrees at 104. A knot between two rows made the
+// interpolation cross the kink and the zenith sky 12 % low at 104 degrees with the default 48 rows;
+// on rows, the largest difference is 1.6 % (blue, 104-106 degrees, rows 1.6 degrees apart).
+TEST(Source4dModel, SunZenithInterpolationIsSmoothAcrossTheKnots) {
+  const AtmosphereParameters p = Preset("earth");
+  const ModelOptions common = {{"sky_view", "off"}};
+  ModelOptions coarse_options = common, fine_options = common;
+  coarse_options["table"] = "16x24x48x8";  // the default
+  fine_options["table"] = "16x24x192x8";
+  const auto coarse = MakeSource4d(p, coarse_options);
+  const auto fine = MakeSource4d(p, fine_options);
+  const glm::dvec3 up(0.0, 0.0, 1.0);
+  double worst = 0.0;
+  for (double centre : {60.0, 84.0, 104.0}) {
+    for (double sun = centre - 2.0; sun <= centre + 2.0 + 1e-9; sun += 0.25) {
+      std::vector<double> a(3), b(3);
+      coarse->View(0.0, Direction(sun, 0.0))->Radiance(up, a);
+      fine->View(0.0, Direction(sun, 0.0))->Radiance(up, b);
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_GT(b[k], 0.0);
+        worst = std::max(worst, std::abs(a[k] / b[k] - 1.0));
+        EXPECT_NEAR(a[k], b[k], 0.03 * b[k]) << "sun " << sun << ", channel " << k;
+      }
+    }
+  }
+  std::printf("source4d: 48 against 192 sun-zenith rows, zenith sky at the knots: max |diff| %.2g\n", worst);
 }
 
 // Where the per-view march's 64 steps are short: a grazing ray from 10 km in deep twilight
@@ -298,6 +351,7 @@ TEST(Source4dModel, RefusesBadOptions) {
   const AtmosphereParameters p = Preset("earth");
   EXPECT_THROW(CreateModel("source4d", p, {{"table", "8x8x8"}}), Error);
   EXPECT_THROW(CreateModel("source4d", p, {{"table", "8x8x8x1"}}), Error);
+  EXPECT_THROW(CreateModel("source4d", p, {{"table", "8x8x7x8"}}), Error);  // fewer sun-zenith rows than pieces
   EXPECT_THROW(CreateModel("source4d", p, {{"gather", "2x9"}}), Error);
   EXPECT_THROW(CreateModel("source4d", p, {{"orders", "0"}}), Error);
   EXPECT_THROW(CreateModel("source4d", p, {{"tail", "maybe"}}), Error);

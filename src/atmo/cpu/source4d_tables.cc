@@ -37,7 +37,9 @@ struct Grid {
   const Source4dSettings& s;
   int nodes() const { return s.r_size * s.mu_s_size; }
   double r(int i) const { return shared::GetSource4dRFromUnit(atmosphere, double(i) / (s.r_size - 1)); }
-  double mu_s(int j) const { return std::cos(shared::GetSource4dSunZenithFromUnit(double(j) / (s.mu_s_size - 1))); }
+  double mu_s(int j) const {
+    return std::cos(shared::GetSource4dSunZenithFromUnit(double(j) / (s.mu_s_size - 1), s.mu_s_size));
+  }
 };
 
 // 1D table of a ground irradiance over the table's sun-zenith nodes.
@@ -171,17 +173,25 @@ inline float ExpFloat(float x) {
   return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
 }
 
+// The knots' unit coordinates of a table's sun-zenith axis (shared::GetSource4dSunUnit1..3).
+struct SunAxis {
+  explicit SunAxis(int mu_s_size)
+      : unit_1(shared::GetSource4dSunUnit1(mu_s_size)),
+        unit_2(shared::GetSource4dSunUnit2(mu_s_size)),
+        unit_3(shared::GetSource4dSunUnit3(mu_s_size)) {}
+  double unit_1, unit_2, unit_3;
+};
+
 // shared::GetSource4dUnitSunZenith of a clamped cosine, with the knots' branches as selects.
-inline double SunUnit(double mu_s) {
+inline double SunUnit(double mu_s, const SunAxis& axis) {
   const double theta = shared::Source4dAcos(mu_s);
-  const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, shared::kSource4dSunUnit1);
-  const double u_1 = shared::Source4dLerp(theta, shared::kSource4dSunKnot1, shared::kSource4dSunKnot2,
-                                          shared::kSource4dSunUnit1, shared::kSource4dSunUnit2);
-  const double u_2 = shared::Source4dLerp(theta, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3,
-                                          shared::kSource4dSunUnit2, shared::kSource4dSunUnit3);
-  const double u_3 = std::min(shared::Source4dLerp(theta, shared::kSource4dSunKnot3, shared::kSource4dMaxSunZenith,
-                                                   shared::kSource4dSunUnit3, 1.0),
-                              1.0);
+  const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, axis.unit_1);
+  const double u_1 =
+      shared::Source4dLerp(theta, shared::kSource4dSunKnot1, shared::kSource4dSunKnot2, axis.unit_1, axis.unit_2);
+  const double u_2 =
+      shared::Source4dLerp(theta, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3, axis.unit_2, axis.unit_3);
+  const double u_3 = std::min(
+      shared::Source4dLerp(theta, shared::kSource4dSunKnot3, shared::kSource4dMaxSunZenith, axis.unit_3, 1.0), 1.0);
   return theta < shared::kSource4dSunKnot1 ? u_0
          : theta < shared::kSource4dSunKnot2 ? u_1
          : theta < shared::kSource4dSunKnot3 ? u_2
@@ -304,6 +314,7 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
       }
     }
     std::fill(w.sum.begin(), w.sum.end(), 0.0f);
+    const SunAxis sun_axis(s.mu_s_size);
     for (const Step& step : steps) {
       Slice(rayleigh, mie, s.mu_s_size, step.y, step.layer, w.slice);
       // Every pair's sun-zenith row and azimuth at this step (vectorised).
@@ -322,7 +333,7 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
       float* __restrict w_x = w.w_x.data();
       for (int p = 0; p < pairs; ++p) {
         const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
-        const double row = SunUnit(mu_s_t) * row_scale;
+        const double row = SunUnit(mu_s_t, sun_axis) * row_scale;
         const double azimuth = Azimuth(mu_t, mu_s_t, nu[p]) * azimuth_scale;
         const int row_0 = std::min(static_cast<int>(row), last_row);
         const int x_0 = std::min(static_cast<int>(azimuth), last_x);

@@ -302,7 +302,9 @@ uniform int columns;
 
 float GetSource4dNodeAngle(int i, int n, float range) { return range * float(i) / float(n - 1); }
 float GetSource4dNodeR(int i) { return GetSource4dRFromUnit(atmosphere, float(i) / float(r_size - 1)); }
-float GetSource4dNodeMuS(int j) { return cos(GetSource4dSunZenithFromUnit(float(j) / float(mu_s_size - 1))); }
+float GetSource4dNodeMuS(int j) {
+  return cos(GetSource4dSunZenithFromUnit(float(j) / float(mu_s_size - 1), mu_s_size));
+}
 )glsl";
 
 // One invocation per gathering ray and node: order 1 single scattering and the ground's

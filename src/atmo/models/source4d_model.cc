@@ -50,6 +50,10 @@ Source4dModelSettings Source4dModelSettings::FromOptions(const ModelOptions& opt
       t.mu_size = n[1];
       t.mu_s_size = n[2];
       t.phi_size = n[3];
+      if (t.mu_s_size < shared::kSource4dMinSunZenithRows) {
+        throw Error("option table=" + value + ": the sun-zenith axis (the third size) needs at least " +
+                    std::to_string(shared::kSource4dMinSunZenithRows) + " rows, one per piece of its mapping");
+      }
     } else if (key == "gather") {
       const std::vector<int> n = ParseSizes(key, value, 2, 3, 512);
       t.gather_zeniths = n[0];

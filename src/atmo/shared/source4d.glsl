@@ -22,41 +22,56 @@
 
 // The sun zeniths the table covers; beyond it the table's last row (sun 120 degrees, where G is
 // about 1e-6 of its daytime value) is used. The axis is piecewise linear in the sun zenith with
-// knots at 60, 84 and 104 degrees (unit 0.15, 0.35, 0.78): G varies slowly with a high sun,
-// steepens as the sun nears the horizon, bends most between 84 and 104 degrees (43 % of the
-// rows, 1 degree apart with 48) and falls by decades into the night.
+// knots at 60, 84 and 104 degrees: G varies slowly with a high sun, steepens as the sun nears the
+// horizon, bends most between 84 and 104 degrees (21 of 48 rows, 0.95 degrees apart) and falls by
+// decades into the night.
+//
+// Each knot lies on a row: at 3/20, 7/20 and 39/50 of the rows, rounded to the nearest row in
+// integer arithmetic (the same on the CPU and the GPU). The lookups interpolate linearly in the
+// unit coordinate between two rows, which is linear in the sun zenith only if no knot lies
+// between them; with a knot between two rows the interpolation crossed the kink, and ln G, which
+// falls by a decade in 2 degrees at 104 degrees, came out 12 % low there (48 rows, the knot at
+// unit 0.78 between rows 36 and 37). Tables need at least 8 rows, where the four pieces have a
+// row each (kSource4dMinSunZenithRows).
 const Number kSource4dMaxSunZenith = 2.0943951023931953;  // 120 degrees
 const Number kSource4dSunKnot1 = 1.0471975511965976;      // 60 degrees
 const Number kSource4dSunKnot2 = 1.4660765716752369;      // 84 degrees
 const Number kSource4dSunKnot3 = 1.8151424220741028;      // 104 degrees
-const Number kSource4dSunUnit1 = 0.15;
-const Number kSource4dSunUnit2 = 0.35;
-const Number kSource4dSunUnit3 = 0.78;
+const int kSource4dMinSunZenithRows = 8;
+
+// The unit coordinate (0..1 over the rows' centres) of the knot at numerator / denominator of the
+// axis in a table of mu_s_size rows.
+Number GetSource4dSunKnotUnit(int numerator, int denominator, int mu_s_size) {
+  int rows = mu_s_size - 1;
+  return Number((numerator * rows + denominator / 2) / denominator) / Number(rows);
+}
+
+Number GetSource4dSunUnit1(int mu_s_size) { return GetSource4dSunKnotUnit(3, 20, mu_s_size); }
+Number GetSource4dSunUnit2(int mu_s_size) { return GetSource4dSunKnotUnit(7, 20, mu_s_size); }
+Number GetSource4dSunUnit3(int mu_s_size) { return GetSource4dSunKnotUnit(39, 50, mu_s_size); }
 
 Number Source4dLerp(Number x, Number x_0, Number x_1, Number y_0, Number y_1) {
   return y_0 + (y_1 - y_0) * (x - x_0) / (x_1 - x_0);
 }
 
-Number GetSource4dUnitFromSunZenith(Number theta_s) {
-  if (theta_s < kSource4dSunKnot1) return Source4dLerp(theta_s, 0.0, kSource4dSunKnot1, 0.0, kSource4dSunUnit1);
-  if (theta_s < kSource4dSunKnot2) {
-    return Source4dLerp(theta_s, kSource4dSunKnot1, kSource4dSunKnot2, kSource4dSunUnit1, kSource4dSunUnit2);
-  }
-  if (theta_s < kSource4dSunKnot3) {
-    return Source4dLerp(theta_s, kSource4dSunKnot2, kSource4dSunKnot3, kSource4dSunUnit2, kSource4dSunUnit3);
-  }
-  return min(Source4dLerp(theta_s, kSource4dSunKnot3, kSource4dMaxSunZenith, kSource4dSunUnit3, 1.0), 1.0);
+Number GetSource4dUnitFromSunZenith(Number theta_s, int mu_s_size) {
+  Number unit_1 = GetSource4dSunUnit1(mu_s_size);
+  Number unit_2 = GetSource4dSunUnit2(mu_s_size);
+  Number unit_3 = GetSource4dSunUnit3(mu_s_size);
+  if (theta_s < kSource4dSunKnot1) return Source4dLerp(theta_s, 0.0, kSource4dSunKnot1, 0.0, unit_1);
+  if (theta_s < kSource4dSunKnot2) return Source4dLerp(theta_s, kSource4dSunKnot1, kSource4dSunKnot2, unit_1, unit_2);
+  if (theta_s < kSource4dSunKnot3) return Source4dLerp(theta_s, kSource4dSunKnot2, kSource4dSunKnot3, unit_2, unit_3);
+  return min(Source4dLerp(theta_s, kSource4dSunKnot3, kSource4dMaxSunZenith, unit_3, 1.0), 1.0);
 }
 
-Number GetSource4dSunZenithFromUnit(Number x) {
-  if (x < kSource4dSunUnit1) return Source4dLerp(x, 0.0, kSource4dSunUnit1, 0.0, kSource4dSunKnot1);
-  if (x < kSource4dSunUnit2) {
-    return Source4dLerp(x, kSource4dSunUnit1, kSource4dSunUnit2, kSource4dSunKnot1, kSource4dSunKnot2);
-  }
-  if (x < kSource4dSunUnit3) {
-    return Source4dLerp(x, kSource4dSunUnit2, kSource4dSunUnit3, kSource4dSunKnot2, kSource4dSunKnot3);
-  }
-  return Source4dLerp(x, kSource4dSunUnit3, 1.0, kSource4dSunKnot3, kSource4dMaxSunZenith);
+Number GetSource4dSunZenithFromUnit(Number x, int mu_s_size) {
+  Number unit_1 = GetSource4dSunUnit1(mu_s_size);
+  Number unit_2 = GetSource4dSunUnit2(mu_s_size);
+  Number unit_3 = GetSource4dSunUnit3(mu_s_size);
+  if (x < unit_1) return Source4dLerp(x, 0.0, unit_1, 0.0, kSource4dSunKnot1);
+  if (x < unit_2) return Source4dLerp(x, unit_1, unit_2, kSource4dSunKnot1, kSource4dSunKnot2);
+  if (x < unit_3) return Source4dLerp(x, unit_2, unit_3, kSource4dSunKnot2, kSource4dSunKnot3);
+  return Source4dLerp(x, unit_3, 1.0, kSource4dSunKnot3, kSource4dMaxSunZenith);
 }
 
 // acos by Abramowitz and Stegun 4.4.46 (|error| <= 2e-8 rad): the table's three coordinates
@@ -75,8 +90,8 @@ Number Source4dAcos(Number x) {
   return x < 0.0 ? kPi - angle : angle;
 }
 
-Number GetSource4dUnitSunZenith(Number mu_s) {
-  return GetSource4dUnitFromSunZenith(Source4dAcos(ClampCosine(mu_s)));
+Number GetSource4dUnitSunZenith(Number mu_s, int mu_s_size) {
+  return GetSource4dUnitFromSunZenith(Source4dAcos(ClampCosine(mu_s)), mu_s_size);
 }
 
 Number GetSource4dUnitR(IN(AtmosphereParameters) atmosphere, Number r) {
@@ -112,7 +127,7 @@ Number GetSource4dZenithCoord(IN(Source4dTexture) rayleigh_texture, Number mu) {
 }
 
 Number GetSource4dSunRow(int mu_s_size, Number mu_s) {
-  return 0.5 + GetSource4dUnitSunZenith(mu_s) * Number(mu_s_size - 1);
+  return 0.5 + GetSource4dUnitSunZenith(mu_s, mu_s_size) * Number(mu_s_size - 1);
 }
 
 Number GetSource4dLayer(IN(AtmosphereParameters) atmosphere, IN(Source4dTexture) rayleigh_texture, int mu_s_size,
@@ -167,7 +182,7 @@ vec3 GetSource4dMultipleScattering(IN(AtmosphereParameters) atmosphere, IN(Sourc
 vec3 GetSource4dGroundIrradiance(IN(TransmittanceTexture) irradiance_texture, Number mu_s) {
   int width = textureSize(irradiance_texture, 0).x;
   return vec3(texture(irradiance_texture,
-                      vec2(GetTextureCoordFromUnitRange(GetSource4dUnitSunZenith(mu_s), width), 0.5)));
+                      vec2(GetTextureCoordFromUnitRange(GetSource4dUnitSunZenith(mu_s, width), width), 0.5)));
 }
 
 // The part [t_0, t_1] of [0, t_max] of the ray (r, mu) where the point is in the planet's shadow
