@@ -173,17 +173,8 @@ inline float ExpFloat(float x) {
   return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
 }
 
-// The knots' unit coordinates of a table's sun-zenith axis (shared::GetSource4dSunUnit1..3).
-struct SunAxis {
-  explicit SunAxis(int mu_s_size)
-      : unit_1(shared::GetSource4dSunUnit1(mu_s_size)),
-        unit_2(shared::GetSource4dSunUnit2(mu_s_size)),
-        unit_3(shared::GetSource4dSunUnit3(mu_s_size)) {}
-  double unit_1, unit_2, unit_3;
-};
-
 // shared::GetSource4dUnitSunZenith of a clamped cosine, with the knots' branches as selects.
-inline double SunUnit(double mu_s, const SunAxis& axis) {
+inline double SunUnit(double mu_s, const shared::Source4dSunAxis& axis) {
   const double theta = shared::Source4dAcos(mu_s);
   const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, axis.unit_1);
   const double u_1 =
@@ -314,7 +305,7 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
       }
     }
     std::fill(w.sum.begin(), w.sum.end(), 0.0f);
-    const SunAxis sun_axis(s.mu_s_size);
+    const shared::Source4dSunAxis sun_axis = shared::GetSource4dSunAxis(s.mu_s_size);
     for (const Step& step : steps) {
       Slice(rayleigh, mie, s.mu_s_size, step.y, step.layer, w.slice);
       // Every pair's sun-zenith row and azimuth at this step (vectorised).

@@ -46,32 +46,43 @@ Number GetSource4dSunKnotUnit(int numerator, int denominator, int mu_s_size) {
   return Number((numerator * rows + denominator / 2) / denominator) / Number(rows);
 }
 
-Number GetSource4dSunUnit1(int mu_s_size) { return GetSource4dSunKnotUnit(3, 20, mu_s_size); }
-Number GetSource4dSunUnit2(int mu_s_size) { return GetSource4dSunKnotUnit(7, 20, mu_s_size); }
-Number GetSource4dSunUnit3(int mu_s_size) { return GetSource4dSunKnotUnit(39, 50, mu_s_size); }
+// The knots' unit coordinates of a table of mu_s_size rows.
+struct Source4dSunAxis {
+  Number unit_1;
+  Number unit_2;
+  Number unit_3;
+};
+
+Source4dSunAxis GetSource4dSunAxis(int mu_s_size) {
+  Source4dSunAxis axis;
+  axis.unit_1 = GetSource4dSunKnotUnit(3, 20, mu_s_size);
+  axis.unit_2 = GetSource4dSunKnotUnit(7, 20, mu_s_size);
+  axis.unit_3 = GetSource4dSunKnotUnit(39, 50, mu_s_size);
+  return axis;
+}
 
 Number Source4dLerp(Number x, Number x_0, Number x_1, Number y_0, Number y_1) {
   return y_0 + (y_1 - y_0) * (x - x_0) / (x_1 - x_0);
 }
 
 Number GetSource4dUnitFromSunZenith(Number theta_s, int mu_s_size) {
-  Number unit_1 = GetSource4dSunUnit1(mu_s_size);
-  Number unit_2 = GetSource4dSunUnit2(mu_s_size);
-  Number unit_3 = GetSource4dSunUnit3(mu_s_size);
-  if (theta_s < kSource4dSunKnot1) return Source4dLerp(theta_s, 0.0, kSource4dSunKnot1, 0.0, unit_1);
-  if (theta_s < kSource4dSunKnot2) return Source4dLerp(theta_s, kSource4dSunKnot1, kSource4dSunKnot2, unit_1, unit_2);
-  if (theta_s < kSource4dSunKnot3) return Source4dLerp(theta_s, kSource4dSunKnot2, kSource4dSunKnot3, unit_2, unit_3);
-  return min(Source4dLerp(theta_s, kSource4dSunKnot3, kSource4dMaxSunZenith, unit_3, 1.0), 1.0);
+  Source4dSunAxis a = GetSource4dSunAxis(mu_s_size);
+  if (theta_s < kSource4dSunKnot1) return Source4dLerp(theta_s, 0.0, kSource4dSunKnot1, 0.0, a.unit_1);
+  if (theta_s < kSource4dSunKnot2) {
+    return Source4dLerp(theta_s, kSource4dSunKnot1, kSource4dSunKnot2, a.unit_1, a.unit_2);
+  }
+  if (theta_s < kSource4dSunKnot3) {
+    return Source4dLerp(theta_s, kSource4dSunKnot2, kSource4dSunKnot3, a.unit_2, a.unit_3);
+  }
+  return min(Source4dLerp(theta_s, kSource4dSunKnot3, kSource4dMaxSunZenith, a.unit_3, 1.0), 1.0);
 }
 
 Number GetSource4dSunZenithFromUnit(Number x, int mu_s_size) {
-  Number unit_1 = GetSource4dSunUnit1(mu_s_size);
-  Number unit_2 = GetSource4dSunUnit2(mu_s_size);
-  Number unit_3 = GetSource4dSunUnit3(mu_s_size);
-  if (x < unit_1) return Source4dLerp(x, 0.0, unit_1, 0.0, kSource4dSunKnot1);
-  if (x < unit_2) return Source4dLerp(x, unit_1, unit_2, kSource4dSunKnot1, kSource4dSunKnot2);
-  if (x < unit_3) return Source4dLerp(x, unit_2, unit_3, kSource4dSunKnot2, kSource4dSunKnot3);
-  return Source4dLerp(x, unit_3, 1.0, kSource4dSunKnot3, kSource4dMaxSunZenith);
+  Source4dSunAxis a = GetSource4dSunAxis(mu_s_size);
+  if (x < a.unit_1) return Source4dLerp(x, 0.0, a.unit_1, 0.0, kSource4dSunKnot1);
+  if (x < a.unit_2) return Source4dLerp(x, a.unit_1, a.unit_2, kSource4dSunKnot1, kSource4dSunKnot2);
+  if (x < a.unit_3) return Source4dLerp(x, a.unit_2, a.unit_3, kSource4dSunKnot2, kSource4dSunKnot3);
+  return Source4dLerp(x, a.unit_3, 1.0, kSource4dSunKnot3, kSource4dMaxSunZenith);
 }
 
 // acos by Abramowitz and Stegun 4.4.46 (|error| <= 2e-8 rad): the table's three coordinates
