@@ -33,18 +33,19 @@ std::string ErrorMessage(const std::function<void()>& f) {
 // Presets.
 
 TEST(Presets, NamesListThePresets) {
-  EXPECT_EQ(PresetNames(), (std::vector<std::string>{"earth", "earth-spectral", "atmosphere-plus", "simple"}));
+  EXPECT_EQ(PresetNames(), (std::vector<std::string>{"earth", "earth-spectral", "atmosphere-plus", "simple", "us-standard", "tropical", "midlatitude-summer", "midlatitude-winter", "subarctic-summer", "subarctic-winter"}));
   for (const std::string& name : PresetNames()) {
     const AtmosphereParameters p = Preset(name);
     EXPECT_EQ(p.name, name);
     EXPECT_NO_THROW(Validate(p)) << name;
-    EXPECT_EQ(p.channel_count(), name == "earth-spectral" ? 15u : 3u) << name;
+    const bool spectral = name != "earth" && name != "atmosphere-plus" && name != "simple";
+    EXPECT_EQ(p.channel_count(), spectral ? 15u : 3u) << name;
   }
 }
 
 TEST(Presets, UnknownNameListsKnownOnes) {
   EXPECT_EQ(ErrorMessage([] { Preset("x"); }),
-            "unknown preset 'x' (known: earth, earth-spectral, atmosphere-plus, simple)");
+            "unknown preset 'x' (known: earth, earth-spectral, atmosphere-plus, simple, us-standard, tropical, midlatitude-summer, midlatitude-winter, subarctic-summer, subarctic-winter)");
 }
 
 TEST(Presets, EarthMatchesDesignTable) {
@@ -447,7 +448,7 @@ TEST(ParametersJson, UnknownNamesListTheKnownOnes) {
   const std::string geometry = ErrorMessage([] { FromJson(R"({"geometry": "flat"})"); });
   EXPECT_NE(geometry.find("unknown geometry 'flat'"), std::string::npos) << geometry;
   EXPECT_EQ(ErrorMessage([] { FromJson(R"({"preset": "mars"})"); }),
-            "unknown preset 'mars' (known: earth, earth-spectral, atmosphere-plus, simple)");
+            "unknown preset 'mars' (known: earth, earth-spectral, atmosphere-plus, simple, us-standard, tropical, midlatitude-summer, midlatitude-winter, subarctic-summer, subarctic-winter)");
 }
 
 TEST(ParametersJson, ValuesAreValidated) {

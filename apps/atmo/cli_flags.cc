@@ -142,6 +142,23 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
                   "(docs/spectral.md)")
       ->check(kInteger)
       ->check(CLI::Range(3, 256));
+  // The aerosol knobs (docs/aerosols.md); their values are checked by atmo::ApplyAerosolRequest,
+  // whose one-line errors name the bounds.
+  app->add_option_function<std::string>(
+      "--aerosol", [&common](const std::string& v) { common.aerosol.type = v; },
+      "aerosol type (OPAC): " + JoinNames(atmo::AerosolTypeNames()) + "; replaces the preset's Mie medium");
+  app->add_option_function<double>(
+      "--aod", [&common](const double& v) { common.aerosol.aod_550 = v; },
+      "aerosol optical depth at 550 nm, in [0, 10] [default: the type's typical]");
+  app->add_option_function<double>(
+      "--angstrom", [&common](const double& v) { common.aerosol.angstrom_exponent = v; },
+      "Angstrom exponent in [-1, 4]: tau(lambda) = aod (lambda / 550 nm)^-alpha [default: the type's spectrum]");
+  app->add_option_function<double>(
+      "--visibility", [&common](const double& v) { common.aerosol.visibility_km = v; },
+      "meteorological visibility in km (Koschmieder): sets the aerosol optical depth");
+  app->add_option_function<double>(
+      "--turbidity", [&common](const double& v) { common.aerosol.linke_turbidity = v; },
+      "Linke turbidity factor (air mass 2, Ineichen 2008): sets the aerosol optical depth");
 }
 
 // --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.

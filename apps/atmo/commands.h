@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "atmo/aerosol.h"
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/image.h"
@@ -44,6 +45,9 @@ struct CommonOptions {
   // --spectral N: resample the parameters to N wavelengths over 360..830 nm (atmo::MakeSpectral);
   // 0: as they are.
   int spectral = 0;
+  // --aerosol, --aod, --angstrom, --visibility, --turbidity (atmo::ApplyAerosolRequest), applied
+  // after --spectral.
+  AerosolRequest aerosol;
 };
 
 // The parameters named by --preset or --config, made spectral by --spectral. Throws atmo::Error.

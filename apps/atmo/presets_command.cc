@@ -16,6 +16,12 @@ std::string PresetSource(const std::string& name) {
       {"earth-spectral", "earth at 15 wavelengths, each medium from its physics (docs/spectral.md)"},
       {"atmosphere-plus", "Earth as in the Atmosphere Plus seed"},
       {"simple", "homogeneous half-space of the simple seed"},
+      {"us-standard", "US Standard Atmosphere 1976 with OPAC continental-average aerosol (docs/validation.md)"},
+      {"tropical", "AFGL 1986 tropical air and ozone with OPAC continental-average aerosol"},
+      {"midlatitude-summer", "AFGL 1986 mid-latitude summer air and ozone with OPAC continental-average aerosol"},
+      {"midlatitude-winter", "AFGL 1986 mid-latitude winter air and ozone with OPAC continental-average aerosol"},
+      {"subarctic-summer", "AFGL 1986 sub-arctic summer air and ozone with OPAC continental-average aerosol"},
+      {"subarctic-winter", "AFGL 1986 sub-arctic winter air and ozone with OPAC continental-average aerosol"},
   };
   const auto found = kSources.find(name);
   return found == kSources.end() ? name : found->second;
@@ -23,8 +29,11 @@ std::string PresetSource(const std::string& name) {
 
 std::string PresetSummary(const AtmosphereParameters& p) {
   std::string channels;
-  for (std::size_t c = 0; c < p.wavelengths_nm.size(); ++c) {
-    channels += Format(c == 0 ? "%.10g" : ", %.10g", p.wavelengths_nm[c]);
+  const std::size_t n = p.wavelengths_nm.size();
+  if (n > 4) {  // a spectral preset: its range
+    channels = Format("%zu over %.10g-%.10g", n, p.wavelengths_nm.front(), p.wavelengths_nm.back());
+  } else {
+    for (std::size_t c = 0; c < n; ++c) channels += Format(c == 0 ? "%.10g" : ", %.10g", p.wavelengths_nm[c]);
   }
   if (p.geometry == Geometry::kHalfSpace) return "half-space; channels " + channels + " nm";
   std::string media;
@@ -48,7 +57,7 @@ int RunPresets(const CommonOptions& common, const PresetsCommand& command) {
   }
   for (const std::string& name : PresetNames()) {
     const AtmosphereParameters parameters = Preset(name);
-    std::printf("%-16s %s (%s)\n", name.c_str(), PresetSource(name).c_str(),
+    std::printf("%-18s %s (%s)\n", name.c_str(), PresetSource(name).c_str(),
                 PresetSummary(parameters).c_str());
   }
   return 0;

@@ -44,13 +44,28 @@ struct DensityLayer {
   bool operator==(const DensityLayer&) const = default;
 };
 
-// `lower` applies below altitude lower.width_m, `upper` above it.
+// One knot of a tabulated density profile.
+struct DensityKnot {
+  double altitude_m = 0.0;
+  double density = 0.0;  // in [0, 1]
+
+  bool operator==(const DensityKnot&) const = default;
+};
+
+// Either two layers (`lower` applies below altitude lower.width_m, `upper` above it), or, when
+// `table` is not empty, a tabulated profile: knots at strictly increasing altitudes, exponential
+// in altitude between two positive knots and linear where one of them is 0, held at the end knots'
+// values outside them (docs/parameters.md, "Tabulated profiles"). The layers are then unused.
 struct DensityProfile {
   DensityLayer lower;
   DensityLayer upper;
+  std::vector<DensityKnot> table;
 
+  bool tabulated() const { return !table.empty(); }
   // Density at altitude h in metres, in [0, 1].
   double Evaluate(double altitude_m) const;
+  // A tabulated profile through the given knots (checked by Validate, not here).
+  static DensityProfile Tabulated(std::vector<DensityKnot> knots);
   // A single exponential layer exp(-h / scale_height_m).
   static DensityProfile Exponential(double scale_height_m);
   // A tent: 0 at bottom_m, 1 at peak_m, 0 at top_m (the ozone layer of Bruneton 2017).

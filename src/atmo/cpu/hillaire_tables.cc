@@ -278,7 +278,12 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
         return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
       };
       // The density integrals do not depend on the channels: once per texel for every batch.
-      const vec3 integrals(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
+      vec3 integrals(0.0);
+      if (a.density_table_enabled) {
+        for (int i = 0; i < n; ++i) integrals += shared::GetTabulatedDensities(a, altitude[i]) * weight[i];
+      } else {
+        integrals = vec3(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
+      }
       for (std::size_t b = 0; b < batches.size(); ++b) {
         tables[b]->at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(batches[b], integrals)));
       }

@@ -248,11 +248,23 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   if (half_space_) {
     for (Channel& ch : channels_) ch.majorant = OpticalDepth(ch, half_space_densities_);
   }
+  if (atmosphere_.density_table_enabled) {
+    table_maximum_above_.resize(shared::kDensityTableSize);
+    glm::dvec3 maximum(0.0);
+    for (int i = shared::kDensityTableSize - 1; i >= 0; --i) {
+      const glm::dvec4& knot = atmosphere_.density_table[i];
+      // The margin covers the rounding of exp(mix(...)) between knots.
+      maximum = glm::max(maximum, glm::exp(glm::dvec3(knot.x, knot.y, knot.z)) * (1.0 + 1e-12));
+      table_maximum_above_[i] = maximum;
+    }
+  }
   // Altitudes where a profile may have a kink: layer boundaries, and where a linear layer meets
-  // the clamp at 0 or 1 (the ozone tent).
+  // the clamp at 0 or 1 (the ozone tent). A density table's knots are mild kinks (exponential on
+  // both sides) that the adaptive quadrature resolves without breakpoints.
   const double thickness = atmosphere_.top_radius - atmosphere_.bottom_radius;
   for (const shared::DensityProfile* profile :
        {&atmosphere_.rayleigh_density, &atmosphere_.mie_density, &atmosphere_.absorption_density}) {
+    if (atmosphere_.density_table_enabled) break;
     kink_altitudes_.push_back(profile->layers[0].width);
     for (const shared::DensityProfileLayer& layer : profile->layers) {
       if (layer.exp_term == 0.0 && layer.linear_term != 0.0) {
@@ -335,6 +347,11 @@ glm::dvec3 PathTracer::MaxDensities(const glm::dvec3& p, const glm::dvec3& d, do
   }
   const double top = atmosphere_.top_radius - atmosphere_.bottom_radius;
   const double h = std::max(r_min - atmosphere_.bottom_radius, 0.0);
+  if (atmosphere_.density_table_enabled) {
+    const double u = shared::GetDensityTableCoord(atmosphere_, h);
+    const int i = std::clamp(static_cast<int>(u), 0, shared::kDensityTableSize - 1);
+    return table_maximum_above_[static_cast<std::size_t>(i)];
+  }
   return glm::dvec3(ProfileMaximumAbove(atmosphere_.rayleigh_density, h, top),
                     ProfileMaximumAbove(atmosphere_.mie_density, h, top),
                     ProfileMaximumAbove(atmosphere_.absorption_density, h, top));

@@ -396,6 +396,9 @@ class PathTracer {
   double rayleigh_g_, mie_g_;
   bool half_space_;
   glm::dvec3 half_space_densities_;
+  // With a density table: entry i holds the largest densities of knots i .. kDensityTableSize - 1,
+  // which bound the (exponential between knots) densities above knot i.
+  std::vector<glm::dvec3> table_maximum_above_;
   std::vector<double> kink_altitudes_;
   glm::dvec3 max_extinction_;  // per medium, over channels: weights of the quadrature error
   PathTracerSettings settings_;

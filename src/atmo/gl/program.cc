@@ -1,6 +1,7 @@
 #include "gl/program.h"
 
 #include <string>
+#include <vector>
 
 #include <epoxy/gl.h>
 
@@ -102,6 +103,14 @@ void ComputeProgram::SetVec3(const std::string& name, const shared::vec3& value)
                      static_cast<float>(value.y), static_cast<float>(value.z));
 }
 
+void ComputeProgram::SetVec4Array(const std::string& name, const shared::vec4* values, int count) const {
+  std::vector<float> data(static_cast<std::size_t>(count) * 4);
+  for (int i = 0; i < count; ++i) {
+    for (int k = 0; k < 4; ++k) data[static_cast<std::size_t>(i) * 4 + k] = static_cast<float>(values[i][k]);
+  }
+  glProgramUniform4fv(program_, glGetUniformLocation(program_, name.c_str()), count, data.data());
+}
+
 namespace {
 
 void SetDensityProfile(const ComputeProgram& program, const std::string& name, const shared::DensityProfile& profile) {
@@ -140,6 +149,11 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   program.SetVec3(p + "wavelength", a.wavelength);
   program.SetInt(p + "sun_limb_darkening", a.sun_limb_darkening);
   program.SetVec3(p + "sun_centre_radiance", a.sun_centre_radiance);
+  program.SetInt(p + "density_table_enabled", a.density_table_enabled);
+  program.SetFloat(p + "density_table_top", a.density_table_top);
+  if (a.density_table_enabled) {
+    program.SetVec4Array(p + "density_table[0]", a.density_table, shared::kDensityTableSize);
+  }
 }
 
 // Every member of CameraParameters in definitions.glsl, in its order.

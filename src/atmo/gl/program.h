@@ -32,6 +32,8 @@ class ComputeProgram {
   void SetInt(const std::string& name, int value) const;
   void SetFloat(const std::string& name, double value) const;
   void SetVec3(const std::string& name, const shared::vec3& value) const;
+  // A uniform array of vec4 from its first element's name ("atmosphere.density_table[0]").
+  void SetVec4Array(const std::string& name, const shared::vec4* values, int count) const;
 
  private:
   unsigned program_ = 0;

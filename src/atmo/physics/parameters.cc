@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "atmo/error.h"
 
@@ -114,6 +115,27 @@ void ValidateLayer(const std::string& key, const DensityLayer& layer) {
   CheckRange(key + ".constant_term", layer.constant_term, -kMaxDensityTerm, kMaxDensityTerm, "");
 }
 
+// The most knots of a tabulated profile: a profile at 1 m steps through a 100 km atmosphere.
+constexpr std::size_t kMaxTableKnots = 100000;
+
+// Knots at strictly increasing finite altitudes within +-kMaxLength_m, densities in [0, 1].
+void ValidateTable(const std::string& key, const std::vector<DensityKnot>& table) {
+  if (table.size() < 2) Fail(key + " needs at least 2 knots (got " + std::to_string(table.size()) + ")");
+  if (table.size() > kMaxTableKnots) {
+    Fail(key + " has " + std::to_string(table.size()) + " knots, more than the " + std::to_string(kMaxTableKnots) +
+         " allowed");
+  }
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const std::string knot = Indexed(key, i);
+    CheckRange(knot + ".altitude_m", table[i].altitude_m, -kMaxLength_m, kMaxLength_m, "m");
+    CheckRange(knot + ".density", table[i].density, 0.0, 1.0, "");
+    if (i > 0 && !(table[i].altitude_m > table[i - 1].altitude_m)) {
+      Fail(key + " altitudes must increase strictly: knot " + std::to_string(i) + " is at " +
+           FormatNumber(table[i].altitude_m) + " m after " + FormatNumber(table[i - 1].altitude_m) + " m");
+    }
+  }
+}
+
 void ValidateMedium(const std::string& key, const Medium& medium, std::size_t channel_count) {
   CheckRangePerChannel(key + ".scattering_per_m", medium.scattering_per_m, channel_count, 0.0,
                        kMaxCoefficient_per_m, "per m");
@@ -123,15 +145,34 @@ void ValidateMedium(const std::string& key, const Medium& medium, std::size_t ch
     Fail(key + ".phase_g must satisfy |g| < 1 (got " + FormatNumber(medium.phase_g) + ")");
   }
   CheckRange(key + ".phase_g", medium.phase_g, -kMaxPhaseG, kMaxPhaseG, "");
-  ValidateLayer(key + ".density.lower", medium.density.lower);
-  ValidateLayer(key + ".density.upper", medium.density.upper);
+  if (medium.density.tabulated()) {
+    ValidateTable(key + ".density.table", medium.density.table);
+  } else {
+    ValidateLayer(key + ".density.lower", medium.density.lower);
+    ValidateLayer(key + ".density.upper", medium.density.upper);
+  }
 }
 
 }  // namespace
 
 // Bruneton 2017's layer: exp_term e^{exp_scale h} + linear_term h + constant_term, clamped to [0, 1].
 // A zero exp_term skips the exponential so that exp_scale may be anything without overflow.
+// A tabulated profile: exponential between two positive knots (linear in log density), linear
+// where one is 0, the end values outside.
 double DensityProfile::Evaluate(double altitude_m) const {
+  if (tabulated()) {
+    if (!(altitude_m > table.front().altitude_m)) return table.front().density;
+    if (altitude_m >= table.back().altitude_m) return table.back().density;
+    const auto upper_knot = std::upper_bound(table.begin(), table.end(), altitude_m,
+                                             [](double h, const DensityKnot& k) { return h < k.altitude_m; });
+    const DensityKnot& b = *upper_knot;
+    const DensityKnot& a = *(upper_knot - 1);
+    const double f = (altitude_m - a.altitude_m) / (b.altitude_m - a.altitude_m);
+    const double density = a.density > 0.0 && b.density > 0.0
+                                ? a.density * std::pow(b.density / a.density, f)
+                                : a.density + (b.density - a.density) * f;
+    return std::clamp(density, 0.0, 1.0);
+  }
   const DensityLayer& layer = altitude_m < lower.width_m ? lower : upper;
   const double exponential =
       layer.exp_term == 0.0 ? 0.0 : layer.exp_term * std::exp(layer.exp_scale_per_m * altitude_m);
@@ -145,7 +186,7 @@ DensityProfile DensityProfile::Exponential(double scale_height_m) {
   DensityLayer layer;
   layer.exp_term = 1.0;
   layer.exp_scale_per_m = -1.0 / scale_height_m;
-  return DensityProfile{layer, layer};
+  return DensityProfile{layer, layer, {}};
 }
 
 // Lower layer (h < peak): rises linearly from 0 at bottom to 1 at peak; upper layer falls from 1
@@ -164,10 +205,16 @@ DensityProfile DensityProfile::Tent(double bottom_m, double peak_m, double top_m
   return profile;
 }
 
+DensityProfile DensityProfile::Tabulated(std::vector<DensityKnot> knots) {
+  DensityProfile profile;
+  profile.table = std::move(knots);
+  return profile;
+}
+
 DensityProfile DensityProfile::Constant() {
   DensityLayer layer;
   layer.constant_term = 1.0;
-  return DensityProfile{layer, layer};
+  return DensityProfile{layer, layer, {}};
 }
 
 bool Medium::present() const {

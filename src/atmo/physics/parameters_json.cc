@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atmo/aerosol.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/parameters.h"
@@ -53,8 +54,14 @@ OrderedJson MediumToJson(const Medium& medium) {
   j["absorption_per_m"] = medium.absorption_per_m;
   j["phase_function"] = std::string(ToString(medium.phase));
   j["phase_g"] = medium.phase_g;
-  j["density"]["lower"] = LayerToJson(medium.density.lower);
-  j["density"]["upper"] = LayerToJson(medium.density.upper);
+  if (medium.density.tabulated()) {
+    OrderedJson table = OrderedJson::array();
+    for (const DensityKnot& knot : medium.density.table) table.push_back({knot.altitude_m, knot.density});
+    j["density"]["table"] = std::move(table);
+  } else {
+    j["density"]["lower"] = LayerToJson(medium.density.lower);
+    j["density"]["upper"] = LayerToJson(medium.density.upper);
+  }
   return j;
 }
 
@@ -120,6 +127,19 @@ void ReadLayer(const Json& object, const std::string& path, DensityLayer& layer)
   ReadNumber(object, path, "constant_term", layer.constant_term);
 }
 
+// [[altitude_m, density], ...]: at least one knot (Validate checks the rest).
+std::vector<DensityKnot> ReadTable(const Json& value, const std::string& path) {
+  const std::string type_error = path + " must be an array of [altitude_m, density] pairs";
+  if (!value.is_array() || value.empty()) Fail(type_error);
+  std::vector<DensityKnot> knots;
+  knots.reserve(value.size());
+  for (const Json& pair : value) {
+    if (!pair.is_array() || pair.size() != 2 || !pair[0].is_number() || !pair[1].is_number()) Fail(type_error);
+    knots.push_back(DensityKnot{pair[0].get<double>(), pair[1].get<double>()});
+  }
+  return knots;
+}
+
 PhaseFunction ParsePhaseFunction(const Json& value, const std::string& key) {
   if (!value.is_string()) Fail(key + " must be a string");
   const std::string name = value.get<std::string>();
@@ -156,7 +176,16 @@ void ReadMedium(const Json& object, const std::string& path, std::size_t channel
   if (const auto it = object.find("density"); it != object.end()) {
     const std::string density_path = Join(path, "density");
     CheckObject(*it, density_path);
-    CheckKeys(*it, density_path, {"lower", "upper"});
+    CheckKeys(*it, density_path, {"lower", "upper", "table"});
+    if (const auto table = it->find("table"); table != it->end()) {
+      if (it->contains("lower") || it->contains("upper")) {
+        Fail(density_path + " holds either a table or lower/upper layers, not both");
+      }
+      medium.density = DensityProfile::Tabulated(ReadTable(*table, Join(density_path, "table")));
+      return;
+    }
+    // Layers given for a medium whose profile was tabulated replace the table.
+    if (medium.density.tabulated()) medium.density = DensityProfile{};
     if (const auto lower = it->find("lower"); lower != it->end()) {
       ReadLayer(*lower, Join(density_path, "lower"), medium.density.lower);
     }
@@ -164,6 +193,31 @@ void ReadMedium(const Json& object, const std::string& path, std::size_t channel
       ReadLayer(*upper, Join(density_path, "upper"), medium.density.upper);
     }
   }
+}
+
+// {"type": "urban", "aod_550": 0.3, "angstrom_exponent": 1.2, "visibility_km": 20,
+//  "linke_turbidity": 3}: every key optional.
+AerosolRequest ReadAerosol(const Json& object) {
+  const std::string path = "aerosol";
+  CheckObject(object, path);
+  CheckKeys(object, path, {"type", "aod_550", "angstrom_exponent", "visibility_km", "linke_turbidity"});
+  AerosolRequest request;
+  if (const auto it = object.find("type"); it != object.end()) {
+    if (!it->is_string()) Fail("aerosol.type must be a string");
+    request.type = it->get<std::string>();
+  }
+  const auto read = [&](const char* key, std::optional<double>& out) {
+    if (object.contains(key)) {
+      double value = 0.0;
+      ReadNumber(object, path, key, value);
+      out = value;
+    }
+  };
+  read("aod_550", request.aod_550);
+  read("angstrom_exponent", request.angstrom_exponent);
+  read("visibility_km", request.visibility_km);
+  read("linke_turbidity", request.linke_turbidity);
+  return request;
 }
 
 // nlohmann's message without its "[json.exception.parse_error.101] " tag, on one line.
@@ -223,7 +277,7 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   CheckKeys(root, "",
             {"preset", "geometry", "ground_radius_m", "top_radius_m", "wavelengths_nm", "rayleigh",
              "mie", "ozone", "ground_albedo", "sun_angular_radius_rad", "sun_limb_darkening", "solar_irradiance",
-             "exposure", "observer_altitude_m"});
+             "exposure", "observer_altitude_m", "aerosol"});
 
   std::string preset_name(kDefaultPreset);
   if (const auto it = root.find("preset"); it != root.end()) {
@@ -260,6 +314,8 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   ReadPerChannel(root, "", "solar_irradiance", channel_count, p.solar_irradiance);
   ReadNumber(root, "", "exposure", p.exposure);
   ReadNumber(root, "", "observer_altitude_m", p.observer_altitude_m);
+  // "aerosol" replaces the Mie medium by an OPAC aerosol (docs/aerosols.md), after the other keys.
+  if (const auto it = root.find("aerosol"); it != root.end()) ApplyAerosolRequest(p, ReadAerosol(*it));
 
   // The name says which preset the values are: the preset's name when every value equals it
   // (whatever keys the document repeats), "custom" as soon as one differs.

@@ -9,6 +9,7 @@
 #include "printable.h"
 #include "atmo/parameters.h"
 #include "atmo/spectrum.h"
+#include "atmo/standard_atmosphere.h"
 
 namespace atmo {
 namespace {
@@ -133,6 +134,9 @@ AtmosphereParameters Preset(std::string_view name) {
   if (name == "earth-spectral") return EarthSpectral();
   if (name == "atmosphere-plus") return AtmospherePlus();
   if (name == "simple") return Simple();
+  for (Climatology c : AllClimatologies()) {
+    if (name == ToString(c)) return StandardSky(StandardSkySettings{.climatology = c});
+  }
   std::string known;
   for (const std::string& preset : PresetNames()) {
     known += (known.empty() ? "" : ", ") + preset;
@@ -140,6 +144,10 @@ AtmosphereParameters Preset(std::string_view name) {
   throw Error("unknown preset '" + Printable(name) + "' (known: " + known + ")");
 }
 
-std::vector<std::string> PresetNames() { return {"earth", "earth-spectral", "atmosphere-plus", "simple"}; }
+std::vector<std::string> PresetNames() {
+  std::vector<std::string> names = {"earth", "earth-spectral", "atmosphere-plus", "simple"};
+  for (Climatology c : AllClimatologies()) names.emplace_back(ToString(c));
+  return names;
+}
 
 }  // namespace atmo

@@ -1,6 +1,7 @@
 #include "physics/shared_parameters.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "atmo/error.h"
 
@@ -30,7 +31,32 @@ glm::dvec3 Batch(const std::vector<double>& values, std::size_t first, double sc
   return v;
 }
 
+// The log density of the shared table, floored at kDensityTableLogZero.
+double TableLogDensity(double density) {
+  return density > 0.0 ? std::max(std::log(density), shared::kDensityTableLogZero) : shared::kDensityTableLogZero;
+}
+
 }  // namespace
+
+void SetDensityTable(const AtmosphereParameters& p, double unit, shared::AtmosphereParameters& a) {
+  a.density_table_enabled =
+      p.rayleigh.density.tabulated() || p.mie.density.tabulated() || p.ozone.density.tabulated() ? 1 : 0;
+  // A half-space has no thickness; its table (a constant profile, if any) is then read at 0 only.
+  const double thickness_m = p.top_radius_m > p.ground_radius_m ? p.top_radius_m - p.ground_radius_m : unit;
+  a.density_table_top = thickness_m / unit;
+  for (int i = 0; i < shared::kDensityTableSize; ++i) {
+    if (!a.density_table_enabled) {
+      a.density_table[i] = shared::vec4(0.0);
+      continue;
+    }
+    // Every medium through the table (a layer profile too), so that one lookup serves all three.
+    const double x = static_cast<double>(i) / (shared::kDensityTableSize - 1);
+    const double altitude_m = thickness_m * x * x;
+    a.density_table[i] = shared::vec4(TableLogDensity(p.rayleigh.density.Evaluate(altitude_m)),
+                                      TableLogDensity(p.mie.density.Evaluate(altitude_m)),
+                                      TableLogDensity(p.ozone.density.Evaluate(altitude_m)), 0.0);
+  }
+}
 
 shared::vec3 BatchValues(std::span<const double> values, std::size_t batch) {
   if (values.empty()) throw Error("BatchValues needs at least one channel");
@@ -78,6 +104,7 @@ shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, s
     a.sun_centre_radiance[i] =
         shared::GetSunDiscCentreRadiance(a.wavelength[i], a.sun_angular_radius, p.sun_limb_darkening);
   }
+  SetDensityTable(p, unit, a);
   return a;
 }
 

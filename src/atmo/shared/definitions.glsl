@@ -29,6 +29,14 @@ struct DensityProfile {
   DensityProfileLayer layers[2];
 };
 
+// Knots of the tabulated densities (docs/parameters.md, "Tabulated profiles"): knot i sits at
+// altitude density_table_top * (i / (kDensityTableSize - 1))^2, dense near the ground where the
+// aerosol and the air change fastest (8 m apart at the ground, 1.6 km at the top of a 100 km
+// atmosphere). 128 vec4 are 512 uniform components, half of the 1024 that GL 4.3 guarantees.
+const int kDensityTableSize = 128;
+// The natural logarithm that stands for a density of 0 in the table (exp(-80) = 1.8e-35).
+const Number kDensityTableLogZero = -80.0;
+
 struct AtmosphereParameters {
   Number bottom_radius;           // ground sphere radius (length)
   Number top_radius;              // top of the atmosphere (length)
@@ -48,6 +56,14 @@ struct AtmosphereParameters {
   vec3 wavelength;                // nm, per channel (the sun's limb darkening, sun.glsl)
   int sun_limb_darkening;         // 1: Neckel and Labs 1994's limb darkening; 0: a uniform disc
   vec3 sun_centre_radiance;       // sr^-1 per unit irradiance: GetSunDiscCentreRadiance per channel
+  // 1: the three densities come from density_table and the three layer profiles above are unused
+  // (at least one medium has a tabulated profile); 0: the layer profiles.
+  int density_table_enabled;
+  Number density_table_top;       // altitude of the last knot (length): the atmosphere's thickness
+  // Knot i: the natural logarithms of the Rayleigh, Mie and absorbing densities (x, y, z; w unused),
+  // each at least kDensityTableLogZero; interpolated linearly in the knot coordinate, so that each
+  // density is exponential in altitude between knots.
+  vec4 density_table[kDensityTableSize];
 };
 
 // Cameras (camera.glsl turns a pixel into a view direction).

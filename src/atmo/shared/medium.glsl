@@ -12,9 +12,40 @@ Number GetProfileDensity(IN(DensityProfile) profile, Number altitude) {
                                             : GetLayerDensity(profile.layers[1], altitude);
 }
 
+// The knot coordinate of an altitude in the density table (0 at the ground, kDensityTableSize - 1
+// at density_table_top and above).
+Number GetDensityTableCoord(IN(AtmosphereParameters) atmosphere, Number altitude) {
+  Number x = ClampToRange(altitude / atmosphere.density_table_top, 0.0, 1.0);
+  return sqrt(x) * Number(kDensityTableSize - 1);
+}
+
+// The three densities from the table: exponential in altitude between knots (their logarithms
+// linear in altitude, not in the knot coordinate), with the end knots' values outside.
+vec3 GetTabulatedDensities(IN(AtmosphereParameters) atmosphere, Number altitude) {
+  Number u = GetDensityTableCoord(atmosphere, altitude);
+  Number lower = min(floor(u), Number(kDensityTableSize - 2));
+  int i = int(lower);
+  // Knot altitudes top * (k / (N - 1))^2 for k = i and i + 1.
+  Number scale = atmosphere.density_table_top / Number((kDensityTableSize - 1) * (kDensityTableSize - 1));
+  Number h_0 = scale * lower * lower;
+  Number h_1 = scale * (lower + 1.0) * (lower + 1.0);
+  Number f = ClampToRange((altitude - h_0) / (h_1 - h_0), 0.0, 1.0);
+  vec4 l_0 = atmosphere.density_table[i];
+  vec4 l_1 = atmosphere.density_table[i + 1];
+  vec4 log_density = mix(l_0, l_1, f);
+  vec3 density = exp(vec3(log_density.x, log_density.y, log_density.z));
+  // Linear in density next to a knot of density 0 (the edge of a layer), as the public profile.
+  Number zero = kDensityTableLogZero + 1.0;
+  if (min(l_0.x, l_1.x) < zero) density.x = mix(exp(l_0.x), exp(l_1.x), f);
+  if (min(l_0.y, l_1.y) < zero) density.y = mix(exp(l_0.y), exp(l_1.y), f);
+  if (min(l_0.z, l_1.z) < zero) density.z = mix(exp(l_0.z), exp(l_1.z), f);
+  return density;
+}
+
 // Densities (unitless, in [0, 1]) of the Rayleigh, Mie and absorbing media at radius r.
 vec3 GetDensities(IN(AtmosphereParameters) atmosphere, Number r) {
   Number altitude = max(r - atmosphere.bottom_radius, 0.0);
+  if (atmosphere.density_table_enabled != 0) return GetTabulatedDensities(atmosphere, altitude);
   return vec3(GetProfileDensity(atmosphere.rayleigh_density, altitude),
               GetProfileDensity(atmosphere.mie_density, altitude),
               GetProfileDensity(atmosphere.absorption_density, altitude));
