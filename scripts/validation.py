@@ -224,6 +224,7 @@ def illuminance_effects_table(atmo):
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
         ("ground albedo 0", ["--config", CONFIGS["albedo0"]]),
         ("ozone × 1.3", ["--config", CONFIGS["ozone13"]]),
+        ("+ the absorption missing against G-173 (experiment)", ["--config", CONFIGS["absorbers"]]),
         ("mid-latitude winter air and ozone", ["--preset", "midlatitude-winter"]),
         ("tropical air and ozone", ["--preset", "tropical"]),
         ("earth-spectral (textbook air and aerosol)", ["--preset", "earth-spectral"]),
@@ -235,7 +236,8 @@ def illuminance_effects_table(atmo):
     return table(["sky (one change from us-standard)"] + ["÷ USNO 1987 at %+d°" % x for x in elevations], rows)
 
 
-def astm_table(atmo):
+def astm_bins(atmo):
+    """(lo, hi, centre, etr, G-173 direct, model direct) for the 10 nm bins of 400-800 nm."""
     bins = read_csv("astm_g173_direct.csv")
     # G-173's atmosphere: USSA 1976 (our us-standard air and ozone, 344 DU against the standard's
     # 343.8), rural aerosol with tau_500 = 0.084: OPAC continental-clean scaled to that tau at 500 nm
@@ -249,28 +251,28 @@ def astm_table(atmo):
                      "--aod", "%.5f" % tau550, "--altitude", "0", "--sun-zenith", "%g" % sun_zenith,
                      "--view-zenith", "%g" % sun_zenith, "--azimuth", "0"])
     transmittance = {round(float(r["wavelength_nm"])): float(r["transmittance"]) for r in rows}
-    out = []
-    out_values = []
+    result = []
     for b in bins:
         lo, hi, centre = float(b["lambda_lo_nm"]), float(b["lambda_hi_nm"]), float(b["lambda_center_nm"])
-        if centre < 400 or centre > 800:
-            continue
-        t = math.sqrt(transmittance[round(lo)] * transmittance[round(hi)])
-        etr = float(b["extraterrestrial_W_m2_nm"])
-        measured = float(b["direct_circumsolar_W_m2_nm"])
-        model = etr * t
+        if 400 <= centre <= 800:
+            etr = float(b["extraterrestrial_W_m2_nm"])
+            t = math.sqrt(transmittance[round(lo)] * transmittance[round(hi)])
+            result.append((lo, hi, centre, etr, float(b["direct_circumsolar_W_m2_nm"]), etr * t))
+    return result
+
+
+def astm_table(atmo):
+    bins = astm_bins(atmo)
+    out = []
+    for lo, hi, centre, etr, measured, model in bins:
         ratio = model / measured
         ok = "yes" if abs(ratio - 1) <= 0.05 else "no"
         out.append(["%g–%g" % (lo, hi), "%.4f" % etr, "%.4f" % measured, "%.4f" % model, "**%.3f**" % ratio, ok])
-        out_values.append((lo, hi, measured, model))
     # What the missing absorbers do to light as the eye weighs it: the V(lambda)-weighted excess of
     # the direct beam over the bins (CIE 1931 y-bar at the bin centres, from atmo's own table).
     ybar = cie_ybar()
-    weight = lambda centre: ybar(centre)
-    excess = sum(weight(float(b["lambda_center_nm"])) * (float(r[3]) - float(b["direct_circumsolar_W_m2_nm"]))
-                 for b, r in zip([b for b in bins if 400 <= float(b["lambda_center_nm"]) <= 800], out_values))
-    total = sum(weight(float(b["lambda_center_nm"])) * float(b["direct_circumsolar_W_m2_nm"])
-                for b in bins if 400 <= float(b["lambda_center_nm"]) <= 800)
+    excess = sum(ybar(c) * (model - measured) for _, _, c, _, measured, model in bins)
+    total = sum(ybar(c) * measured for _, _, c, _, measured, _ in bins)
     out.append(["V(λ)-weighted, 400–800", "", "", "", "**%.3f**" % (1 + excess / total), ""])
     return table(["bin (nm)", "ETR (W m⁻² nm⁻¹)", "G-173 direct + circumsolar", "us-standard direct", "ratio",
                   "within 5 %"], out)
@@ -357,6 +359,29 @@ TABLE_DOCS = {"real-sky-solvers": os.path.join(ROOT, "docs", "accuracy.md")}
 CONFIGS = {}
 
 
+def missing_absorbers_config(atmo, base, path):
+    """An experiment, not a model: the absorption that the G-173 comparison finds missing at air
+    mass 1.5 (vertical optical depth ln(ratio) / 1.5 per bin, 0 where atmo is not brighter), put
+    into the air's absorption with the air's profile, at the preset's wavelengths."""
+    import json
+    points = [(c, max(math.log(model / measured) / 1.5, 0.0)) for _, _, c, _, measured, model in astm_bins(atmo)]
+
+    def at(nm):
+        if nm <= points[0][0]:
+            return points[0][1]
+        if nm >= points[-1][0]:
+            return points[-1][1]
+        for (a, x), (b, y) in zip(points, points[1:]):
+            if a <= nm <= b:
+                return x + (y - x) * (nm - a) / (b - a)
+    knots = base["rayleigh"]["density"]["table"]
+    height = sum(0.5 * (a[1] + b[1]) * (b[0] - a[0]) for a, b in zip(knots, knots[1:]))  # column / ground
+    p = json.loads(json.dumps(base))
+    p["rayleigh"]["absorption_per_m"] = [at(nm) / height for nm in p["wavelengths_nm"]]
+    with open(path, "w") as f:
+        json.dump(p, f)
+
+
 def write_configs(folder, atmo):
     """Config files for the one-change runs (derived from `atmo presets --dump us-standard`)."""
     import json
@@ -372,6 +397,8 @@ def write_configs(folder, atmo):
         with open(path, "w") as f:
             json.dump(p, f)
         CONFIGS[name] = path
+    CONFIGS["absorbers"] = os.path.join(folder, "absorbers.json")
+    missing_absorbers_config(atmo, base, CONFIGS["absorbers"])
 
 
 def replace_table(text, table_id, body):
