@@ -36,6 +36,7 @@
 
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
+#include "atmo/aerosol.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
@@ -97,7 +98,8 @@ class PyModel {
   // Exactly one source of parameters: a preset name, a JSON file or a JSON text (the Python layer
   // turns a dict into JSON text). spectral 0: as they are.
   PyModel(const std::string& name, const std::optional<std::string>& preset, const std::optional<std::string>& config_path,
-          const std::optional<std::string>& config_json, int spectral, const ModelOptions& options)
+          const std::optional<std::string>& config_json, int spectral, const ModelOptions& options,
+          const AerosolRequest& aerosol)
       : options_(options) {
     py::gil_scoped_release release;
     if (config_json) {
@@ -108,6 +110,7 @@ class PyModel {
       parameters_ = Preset(preset.value_or("earth"));
     }
     if (spectral != 0) parameters_ = MakeSpectral(parameters_, spectral);
+    ApplyAerosolRequest(parameters_, aerosol);  // after spectral, as the CLI's knobs
     model_ = CreateModel(name, parameters_, options_);
   }
 
@@ -657,10 +660,22 @@ PYBIND11_MODULE(_atmo, m) {
   });
 
   py::class_<PyModel>(m, "Model")
-      .def(py::init<const std::string&, const std::optional<std::string>&, const std::optional<std::string>&,
-                    const std::optional<std::string>&, int, const ModelOptions&>(),
+      .def(py::init([](const std::string& name, const std::optional<std::string>& preset,
+                       const std::optional<std::string>& config_path, const std::optional<std::string>& config_json,
+                       int spectral, const ModelOptions& options, const std::optional<std::string>& aerosol,
+                       std::optional<double> aod, std::optional<double> angstrom, std::optional<double> visibility,
+                       std::optional<double> turbidity) {
+             AerosolRequest request;
+             request.type = aerosol;
+             request.aod_550 = aod;
+             request.angstrom_exponent = angstrom;
+             request.visibility_km = visibility;
+             request.linke_turbidity = turbidity;
+             return std::make_unique<PyModel>(name, preset, config_path, config_json, spectral, options, request);
+           }),
            py::arg("name"), py::arg("preset"), py::arg("config_path"), py::arg("config_json"), py::arg("spectral"),
-           py::arg("options"))
+           py::arg("options"), py::arg("aerosol") = py::none(), py::arg("aod") = py::none(),
+           py::arg("angstrom") = py::none(), py::arg("visibility") = py::none(), py::arg("turbidity") = py::none())
       .def_property_readonly("name", [](const PyModel& s) { return std::string(s.model().name()); })
       .def_property_readonly("preset", [](const PyModel& s) { return s.parameters().name; })
       .def_property_readonly("channel_count", [](const PyModel& s) { return s.parameters().channel_count(); })
@@ -715,6 +730,7 @@ PYBIND11_MODULE(_atmo, m) {
   m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);
+  m.def("aerosol_types", &AerosolTypeNames);
   m.def("preset_json", [](const std::string& name) { return ToJson(Preset(name)); });
   m.attr("version") = ATMO_VERSION;
 }

@@ -40,6 +40,7 @@ __all__ = [
     "set_threads",
     "preset_names",
     "preset",
+    "aerosol_types",
     "CAMERAS",
     "UNITS",
 ]
@@ -116,12 +117,19 @@ class Model:
     Model("hillaire", options={"sky_view": "off"})      # `--option KEY=VALUE`
     Model("hillaire", preset="earth", spectral=16)      # `--spectral 16`: 16 wavelengths
     Model("reference", options={"samples": 4096}, seed=1)
+    Model("source4d", preset="us-standard", aerosol="urban", aod=0.4)   # `--aerosol urban --aod 0.4`
+
+    The aerosol keywords are the command line's knobs (docs/aerosols.md), applied after `spectral`:
+    aerosol (an OPAC type, atmo.aerosol_types()), aod (tau at 550 nm), angstrom, visibility (km)
+    and turbidity (Linke); at most one of aod, visibility and turbidity.
     """
 
     def __init__(self, name: str = "hillaire", preset: Optional[str] = None,
                  config: Union[None, str, os.PathLike, Mapping] = None,
                  options: Optional[Mapping[str, object]] = None, spectral: int = 0,
-                 seed: Optional[int] = None):
+                 seed: Optional[int] = None, aerosol: Optional[str] = None, aod: Optional[float] = None,
+                 angstrom: Optional[float] = None, visibility: Optional[float] = None,
+                 turbidity: Optional[float] = None):
         if preset is not None and config is not None:
             raise ValueError("give preset or config, not both")
         config_path = config_json = None
@@ -144,7 +152,15 @@ class Model:
             if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
                 raise ValueError(f"seed must be an integer in [0, 2^64 - 1] (got {seed!r})")
             texts["seed"] = str(int(seed))
-        self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts)
+        knobs = {}
+        for key, value in (("aod", aod), ("angstrom", angstrom), ("visibility", visibility), ("turbidity", turbidity)):
+            if value is not None:
+                if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                    raise ValueError(f"{key} must be a number (got {value!r})")
+                knobs[key] = float(value)
+        if aerosol is not None and not isinstance(aerosol, str):
+            raise ValueError(f"aerosol must be a type name (got {aerosol!r})")
+        self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts, aerosol=aerosol, **knobs)
         self._options = dict(texts)
 
     # --- what the model is ---------------------------------------------------------------------
@@ -409,6 +425,11 @@ def model_names() -> list:
 
 def preset_names() -> list:
     return list(_atmo.preset_names())
+
+
+def aerosol_types() -> list:
+    """The OPAC aerosol types of the `aerosol=` keyword (docs/aerosols.md)."""
+    return list(_atmo.aerosol_types())
 
 
 def preset(name: str) -> dict:

@@ -75,6 +75,70 @@ double IntegrateProfile(const shared::DensityProfile& profile, const double* alt
   return sum;
 }
 
+// shared::GetTabulatedDensities for many altitudes, in passes the compiler vectorises: the knot
+// index and fraction, a gather of the knots' log densities, the vector exp; then the linear
+// interpolation of the intervals next to a knot of density 0 (precomputed per interval).
+class TabulatedDensities {
+ public:
+  explicit TabulatedDensities(const shared::AtmosphereParameters& a) : a_(a) {
+    const double zero = shared::kDensityTableLogZero + 1.0;
+    for (int i = 0; i + 1 < shared::kDensityTableSize; ++i) {
+      for (int m = 0; m < 3; ++m) {
+        linear_[m][i] = std::min(a.density_table[i][m], a.density_table[i + 1][m]) < zero;
+        any_linear_[m] = any_linear_[m] || linear_[m][i];
+      }
+    }
+  }
+
+  // sum_j weight_j * densities(altitude_j), with scratch space for n samples.
+  vec3 Integrate(const double* altitude, const double* weight, int n, std::vector<double>& fraction,
+                 std::vector<int>& index, std::vector<double>& value) const {
+    constexpr int kLast = shared::kDensityTableSize - 1;
+    fraction.resize(n);
+    index.resize(n);
+    value.resize(n);
+    const double inverse_top = 1.0 / a_.density_table_top;
+    const double knot_scale = a_.density_table_top / double(kLast * kLast);
+    double* __restrict f = fraction.data();
+#pragma omp simd
+    for (int j = 0; j < n; ++j) {
+      const double u = std::sqrt(std::min(std::max(altitude[j] * inverse_top, 0.0), 1.0)) * kLast;
+      const double lower = std::min(std::floor(u), double(kLast - 1));
+      const double h_0 = knot_scale * lower * lower;
+      const double h_1 = knot_scale * (lower + 1.0) * (lower + 1.0);
+      f[j] = std::min(std::max((altitude[j] - h_0) / (h_1 - h_0), 0.0), 1.0);
+      index[j] = static_cast<int>(lower);
+    }
+    vec3 sum(0.0);
+    for (int m = 0; m < 3; ++m) {
+      double* __restrict v = value.data();
+      for (int j = 0; j < n; ++j) {
+        const double l_0 = a_.density_table[index[j]][m];
+        v[j] = l_0 + (a_.density_table[index[j] + 1][m] - l_0) * f[j];
+      }
+#pragma omp simd
+      for (int j = 0; j < n; ++j) v[j] = exp(v[j]);
+      if (any_linear_[m]) {
+        for (int j = 0; j < n; ++j) {
+          if (!linear_[m][index[j]]) continue;
+          const double d_0 = std::exp(a_.density_table[index[j]][m]);
+          v[j] = d_0 + (std::exp(a_.density_table[index[j] + 1][m]) - d_0) * f[j];
+        }
+      }
+      double total = 0.0;
+#pragma omp simd reduction(+ : total)
+      for (int j = 0; j < n; ++j) total += weight[j] * v[j];
+      sum[m] = total;
+    }
+    return sum;
+  }
+
+ private:
+  const shared::AtmosphereParameters& a_;
+  bool linear_[3][shared::kDensityTableSize] = {};
+  bool any_linear_[3] = {};
+};
+
 // For the samples (t_i, r_i) of a ray and a sun with r mu_s = r_mu_s, nu = cos(ray, sun): whether
 // the sun is above each sample's horizon (lit, 1 or 0), and the texel columns of the
 // transmittance (Bruneton's x_mu) and multiple-scattering (mu_s) tables. Kept out of line, on
@@ -250,11 +314,14 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
                                 std::span<shared::Texture2D* const> tables) {
   const shared::AtmosphereParameters& a = batches.front();  // the geometry and profiles of all
   const shared::ivec2 size(tables.front()->width, tables.front()->height);
+  const TabulatedDensities tabulated(a);
   ForEachRow(size.y, [&](int y) {
     std::vector<double> altitude(sample_count + 1);
     std::vector<double> weight(sample_count + 1);
     std::vector<double> lower(sample_count + 1);
     std::vector<double> upper(sample_count + 1);
+    std::vector<double> fraction, value;
+    std::vector<int> index;
     for (int x = 0; x < size.x; ++x) {
       double r, mu;
       shared::GetRMuFromTransmittanceTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), r, mu);
@@ -280,7 +347,7 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
       // The density integrals do not depend on the channels: once per texel for every batch.
       vec3 integrals(0.0);
       if (a.density_table_enabled) {
-        for (int i = 0; i < n; ++i) integrals += shared::GetTabulatedDensities(a, altitude[i]) * weight[i];
+        integrals = tabulated.Integrate(altitude.data(), weight.data(), n, fraction, index, value);
       } else {
         integrals = vec3(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
       }
