@@ -259,6 +259,26 @@ const BadInput kBadInputs[] = {
     {"AltitudeTooFar", "render --altitude 1e12" ATMO_TINY, "--altitude"},
     {"GridAltitudeTooFar", "sample --grid far.csv --out out.csv", "far.csv:2: altitude_m 1e+12 is outside"},
     // Accepted garbage and undefined conversions.
+    // The real sky's knobs and tables (docs/aerosols.md, docs/parameters.md).
+    {"AodTooLarge", "render --preset us-standard --aod 11" ATMO_TINY, "aerosol optical depth 11 at 550 nm is outside [0, 10]"},
+    {"AodNegative", "sample --aod -0.1" ATMO_ONE " --out out.csv", "aerosol optical depth -0.1 at 550 nm is outside [0, 10]"},
+    {"AodNan", "illuminance --aod nan --sun-elevation 30", "aerosol optical depth nan at 550 nm is outside [0, 10]"},
+    {"AngstromNan", "render --angstrom nan" ATMO_TINY, "Angstrom exponent nan is outside [-1, 4]"},
+    {"AngstromTooLarge", "render --angstrom 4.5" ATMO_TINY, "Angstrom exponent 4.5 is outside [-1, 4]"},
+    {"AngstromTooSmall", "sample --angstrom -2" ATMO_ONE " --out out.csv", "Angstrom exponent -2 is outside [-1, 4]"},
+    {"VisibilityZero", "render --visibility 0" ATMO_TINY, "visibility 0 km must be positive and finite"},
+    {"VisibilityBeyondAir", "sample --visibility 500" ATMO_ONE " --out out.csv", "km that the air alone allows"},
+    {"TurbidityTooClean", "render --preset us-standard --turbidity 1" ATMO_TINY, "Linke turbidity 1 is below the"},
+    {"UnknownAerosol", "render --aerosol smog" ATMO_TINY, "unknown aerosol type 'smog' (known: continental-clean"},
+    {"TwoAerosolAmounts", "render --aod 0.1 --visibility 20" ATMO_TINY, "at most one of --aod, --visibility and --turbidity"},
+    {"AerosolOnAHalfSpace", "render --model simple --preset simple --aod 0.1" ATMO_TINY, "spherical"},
+    {"TableNotIncreasing", "render --config table_order.json" ATMO_TINY,
+     "mie.density.table altitudes must increase strictly: knot 1 is at 0 m after 1000 m"},
+    {"TableNegativeDensity", "sample --config table_negative.json" ATMO_ONE " --out out.csv",
+     "rayleigh.density.table[1].density must be in [0, 1] (got -0.5)"},
+    {"TableAndLayers", "sample --config table_and_layers.json" ATMO_ONE " --out out.csv",
+     "ozone.density holds either a table or lower/upper layers, not both"},
+    {"ConfigAerosolKey", "render --config aerosol_key.json" ATMO_TINY, "unknown key 'aerosol.tau'"},
     {"NulInConfig", "sample --config nul.json" ATMO_ONE " --out out.csv", "NUL byte"},
     {"NulInGrid", "sample --grid nul.csv --out out.csv", "NUL byte"},
     {"ExposureBeyondDouble", "render --config exposure.json" ATMO_TINY, "config 'exposure.json': malformed JSON"},
@@ -340,6 +360,10 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   WriteFile(dir_ / "nul.csv", std::string(kGridHeader) + "\n0,30,60,90\n" + '\0' + "garbage\n");
   WriteFile(dir_ / "exposure.json", R"({"exposure": 1e400})");
   WriteFile(dir_ / "sky.json", "{}");
+  WriteFile(dir_ / "table_order.json", R"({"mie": {"density": {"table": [[1000, 1], [0, 0.5]]}}})");
+  WriteFile(dir_ / "table_negative.json", R"({"rayleigh": {"density": {"table": [[0, 1], [1000, -0.5]]}}})");
+  WriteFile(dir_ / "table_and_layers.json", R"({"ozone": {"density": {"table": [[0, 1], [1, 0]], "lower": {}}}})");
+  WriteFile(dir_ / "aerosol_key.json", R"({"aerosol": {"tau": 0.2}})");
   ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
   fs::create_directory(dir_ / "folder");
   fs::create_symlink("missing/target.png", dir_ / "dangling.png");

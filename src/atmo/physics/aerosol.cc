@@ -301,7 +301,10 @@ void ApplyAerosolRequest(AtmosphereParameters& p, const AerosolRequest& r) {
   AerosolSettings settings;
   if (r.type) settings.type = *r.type;
   FindType(settings.type);
-  if (r.angstrom_exponent) settings.angstrom_exponent = *r.angstrom_exponent;
+  if (r.angstrom_exponent) {
+    if (std::isnan(*r.angstrom_exponent)) throw Error("Angstrom exponent nan is outside [-1, 4]");
+    settings.angstrom_exponent = *r.angstrom_exponent;
+  }
   if (r.aod_550) {
     if (std::isnan(*r.aod_550)) throw Error("aerosol optical depth nan at 550 nm is outside [0, 10]");
     settings.aod_550 = *r.aod_550;
