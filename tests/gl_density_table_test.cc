@@ -21,22 +21,8 @@
 namespace atmo::gl {
 namespace {
 
+using testing::MeanRelative;
 using testing::SamplerSlack;
-
-// The mean relative difference of two images over values above 1e-4 of the largest.
-double MeanRelative(const Image& a, const Image& b) {
-  EXPECT_EQ(a.pixels.size(), b.pixels.size());
-  const float peak = *std::max_element(b.pixels.begin(), b.pixels.end());
-  double sum = 0.0;
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < std::min(a.pixels.size(), b.pixels.size()); ++i) {
-    if (b.pixels[i] > 1e-4f * peak) {
-      sum += std::abs(double(a.pixels[i]) - b.pixels[i]) / b.pixels[i];
-      ++count;
-    }
-  }
-  return count > 0 ? sum / count : 0.0;
-}
 
 // us-standard at three wavelengths (one batch), and a perspective frame at sunset towards the sun.
 AtmosphereParameters UsStandard3() { return MakeSpectral(Preset("us-standard"), 3); }

@@ -23,6 +23,7 @@
 namespace atmo::gl {
 namespace {
 
+using testing::MeanRelative;
 using testing::SamplerSlack;
 
 // Directions over the sky and below the horizon, around the sun's azimuth and away from it.
@@ -45,21 +46,6 @@ double MaxRelative(const std::vector<double>& a, const std::vector<double>& b, d
     if (b[i] > floor * peak) max_rel = std::max(max_rel, std::abs(a[i] - b[i]) / b[i]);
   }
   return max_rel;
-}
-
-// The mean relative difference of two images over values above 1e-4 of the largest.
-double MeanRelative(const Image& a, const Image& b) {
-  EXPECT_EQ(a.pixels.size(), b.pixels.size());
-  const float peak = *std::max_element(b.pixels.begin(), b.pixels.end());
-  double sum = 0.0;
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < std::min(a.pixels.size(), b.pixels.size()); ++i) {
-    if (b.pixels[i] > 1e-4f * peak) {
-      sum += std::abs(double(a.pixels[i]) - b.pixels[i]) / b.pixels[i];
-      ++count;
-    }
-  }
-  return count > 0 ? sum / count : 0.0;
 }
 
 // Small tables that differ from every default, and the seed, which CreateModel accepts.

@@ -2,12 +2,15 @@
 // sampler slack of a hardware GPU.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "atmo/error.h"
+#include "atmo/image.h"
 #include "gl/context.h"
 
 namespace atmo::gl::testing {
@@ -39,6 +42,21 @@ inline SharedContext& GetSharedContext() {
 // are loosened by this factor.
 inline double SamplerSlack(const Context& context) {
   return context.renderer().find("llvmpipe") != std::string::npos ? 1.0 : 20.0;
+}
+
+// The mean relative difference of two images over values above 1e-4 of the largest.
+inline double MeanRelative(const Image& a, const Image& b) {
+  EXPECT_EQ(a.pixels.size(), b.pixels.size());
+  const float peak = *std::max_element(b.pixels.begin(), b.pixels.end());
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < std::min(a.pixels.size(), b.pixels.size()); ++i) {
+    if (b.pixels[i] > 1e-4f * peak) {
+      sum += std::abs(double(a.pixels[i]) - b.pixels[i]) / b.pixels[i];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : 0.0;
 }
 
 }  // namespace atmo::gl::testing
