@@ -13,10 +13,12 @@
 #include <gtest/gtest.h>
 #include <oneapi/tbb/global_control.h>
 
+#include "atmo/aerosol.h"
 #include "atmo/error.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"
+#include "atmo/spectrum.h"
 #include "cpu/path_tracer.h"
 #include "models/reference_model.h"
 #include "shared/shared.h"
@@ -157,12 +159,17 @@ TEST(ReferencePathTracer, FirstOrderMatchesSingleScatteringQuadrature) {
   hg.mie.phase_g = 0.6;
   AtmosphereParameters plus = Preset("atmosphere-plus");
   plus.rayleigh.phase = PhaseFunction::kModifiedRayleigh;
+  AtmosphereParameters hazy = Preset("us-standard");
+  ApplyAerosol(hazy, {"continental-polluted", 0.6});
   const std::vector<std::pair<AtmosphereParameters, std::vector<Configuration>>> cases = {
       {Preset("earth"),
        {{0.0, 45.0, 60.0, 90.0}, {0.0, 80.0, 88.0, 10.0}, {2000.0, 30.0, 120.0, 150.0}, {5000.0, 94.0, 85.0, 0.0},
         {40e3, 60.0, 20.0, 45.0}, {300e3, 30.0, 110.0, 30.0}}},
       {hg, {{1000.0, 50.0, 70.0, 20.0}}},
       {plus, {{0.0, 70.0, 75.0, 40.0}}},
+      // The real-sky media: tabulated air, ozone and OPAC aerosol layers, and a tau 0.6 haze.
+      {MakeSpectral(Preset("us-standard"), 3), {{0.0, 80.0, 88.0, 10.0}, {2635.0, 60.0, 0.0, 0.0}}},
+      {MakeSpectral(hazy, 3), {{1800.0, 40.0, 95.0, 120.0}}},
   };
   for (const auto& [parameters, configurations] : cases) {
     auto model = MakeReference(parameters, {{"seed", "1"}});

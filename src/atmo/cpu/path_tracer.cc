@@ -259,9 +259,14 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     }
   }
   // Altitudes where a profile may have a kink: layer boundaries, and where a linear layer meets
-  // the clamp at 0 or 1 (the ozone tent). A density table's knots are mild kinks (exponential on
-  // both sides) that the adaptive quadrature resolves without breakpoints.
+  // the clamp at 0 or 1 (the ozone tent); with a density table, its knots (the densities'
+  // slopes change there: without the breakpoints the adaptive quadrature spent its whole budget of
+  // evaluations on them).
   const double thickness = atmosphere_.top_radius - atmosphere_.bottom_radius;
+  if (atmosphere_.density_table_enabled) {
+    constexpr int kLast = shared::kDensityTableSize - 1;
+    for (int i = 1; i < kLast; ++i) kink_altitudes_.push_back(atmosphere_.density_table_top * i * i / (kLast * kLast));
+  }
   for (const shared::DensityProfile* profile :
        {&atmosphere_.rayleigh_density, &atmosphere_.mie_density, &atmosphere_.absorption_density}) {
     if (atmosphere_.density_table_enabled) break;
@@ -1721,13 +1726,15 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
     return adapt(a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + adapt(m, b, fm, frm, fb, right, 0.5 * eps, depth - 1);
   };
   glm::dvec3 total(0.0);
-  constexpr int kPanels = 4;  // per piece, so that no feature hides between the first samples
+  // Panels per piece, so that no feature hides between the first samples; a ray cut by many
+  // breakpoints (a density table's knots) is sampled closely enough by them.
+  const int panels = ts.size() > 9 ? 1 : 4;
   for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
-    const double h = (ts[i + 1] - ts[i]) / kPanels;
+    const double h = (ts[i + 1] - ts[i]) / panels;
     if (!(h > 0.0)) continue;
-    for (int k = 0; k < kPanels; ++k) {
+    for (int k = 0; k < panels; ++k) {
       const double a = ts[i] + k * h;
-      const double b = k + 1 == kPanels ? ts[i + 1] : a + h;
+      const double b = k + 1 == panels ? ts[i + 1] : a + h;
       const glm::dvec3 fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
       total += adapt(a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), kOpticalDepthTolerance,
                      kMaxQuadratureDepth);
