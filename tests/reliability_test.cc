@@ -259,6 +259,19 @@ const BadInput kBadInputs[] = {
     {"AltitudeTooFar", "render --altitude 1e12" ATMO_TINY, "--altitude"},
     {"GridAltitudeTooFar", "sample --grid far.csv --out out.csv", "far.csv:2: altitude_m 1e+12 is outside"},
     // Accepted garbage and undefined conversions.
+    // Cube-map products checked before any work: a refused command replaced sky.exr and sky.png.
+    {"CubeKtx2MissingFolder", "render --camera cubemap --face-size 8 --ktx2 nodir/c.ktx2",
+     "cannot write 'nodir/c.ktx2': folder 'nodir' does not exist"},
+    {"CubeSpecularLevels", "render --camera cubemap --face-size 8 --specular s.ktx2",
+     "--specular-levels must be in 1..4 for --face-size 8 (got 6)"},
+    {"CubeKtx2IsTheExr", "render --camera cubemap --face-size 8 --ktx2 sky.exr",
+     "--exr and --ktx2 name the same file 'sky.exr'"},
+    {"CubeShIsTheKtx2", "render --camera cubemap --face-size 8 --sh c.json --ktx2 c.json",
+     "--ktx2 and --sh name the same file 'c.json'"},
+    {"CubeIrradianceIsTheSpecular", "render --camera cubemap --face-size 8 --irradiance i.ktx2 --specular i.ktx2",
+     "--irradiance and --specular name the same file 'i.ktx2'"},
+    {"CubeMipsWithoutKtx2", "render --camera cubemap --face-size 8 --mips", "--mips makes the --ktx2 file's mip chain"},
+    {"CubeSpecularIsAFolder", "render --camera cubemap --face-size 8 --specular folder", "it is a folder"},
     // The real sky's knobs and tables (docs/aerosols.md, docs/parameters.md).
     {"AodTooLarge", "render --preset us-standard --aod 11" ATMO_TINY, "aerosol optical depth 11 at 550 nm is outside [0, 10]"},
     {"AodNegative", "sample --aod -0.1" ATMO_ONE " --out out.csv", "aerosol optical depth -0.1 at 550 nm is outside [0, 10]"},

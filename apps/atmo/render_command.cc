@@ -5,6 +5,7 @@
 // pixel in passes of 4, 8, 16, ... paths, with a progress bar on stderr when it is a terminal;
 // the outputs are rewritten (atomically) after every pass, so they always hold the latest pass,
 // and the EXR has the per-pixel standard errors as channels R.stderr, G.stderr, B.stderr.
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -233,8 +234,12 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   double view_s = 0.0;
   double frame_s = 0.0;
   CheckBackend(common, /*command_has_gl=*/true);
-  CheckOutputsApart(common, {},
-                    {{"--exr", command.exr_path}, {"--png", command.png_path}, {"--mp4", command.sun.mp4_path}});
+  // Every file the command may write, apart from the inputs and from each other.
+  const std::vector<NamedPath> output_paths = {
+      {"--exr", command.exr_path},         {"--png", command.png_path},      {"--mp4", command.sun.mp4_path},
+      {"--ktx2", command.ktx2_path},       {"--sh", command.sh_path},        {"--irradiance", command.irradiance_path},
+      {"--specular", command.specular_path}};
+  CheckOutputsApart(common, {}, output_paths);
   const bool on_gl = common.backend == "gl";
   RenderPlan plan = PlanRender(common, command);
   const AtmosphereParameters& parameters = plan.parameters;
@@ -255,9 +260,22 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     throw Error("--ktx2, --sh, --irradiance and --specular need --camera cubemap");
   }
 
-  // Fail fast, before precomputing anything, when an output cannot be written.
-  if (!command.exr_path.empty()) CheckOutputWritable(command.exr_path);
-  if (!command.png_path.empty()) CheckOutputWritable(command.png_path);
+  // Fail fast, before precomputing anything, when an output cannot be written, so that a refused
+  // command changes nothing on disk (the cube-map products were checked only when written, after
+  // the EXR and PNG had replaced the old ones).
+  for (const NamedPath& output : output_paths) {
+    if (output.flag != "--mp4" && !output.path.empty()) CheckOutputWritable(output.path);
+  }
+  if (command.mips && command.ktx2_path.empty()) throw Error("--mips makes the --ktx2 file's mip chain; give --ktx2");
+  if (!command.specular_path.empty()) {
+    // PrefilterSpecular's bound on the levels, checked here rather than after the other files are
+    // written (the sizes and samples are bounded by their flags).
+    const int max_levels = std::bit_width(static_cast<unsigned>(command.face_size));
+    if (command.specular_levels < 1 || command.specular_levels > max_levels) {
+      throw Error("--specular-levels must be in 1.." + std::to_string(max_levels) + " for --face-size " +
+                  std::to_string(command.face_size) + " (got " + std::to_string(command.specular_levels) + ")");
+    }
+  }
   CheckExtension("--exr", command.exr_path, ".exr");
   CheckExtension("--png", command.png_path, ".png");
   if (IsTimeLapse(command.sun)) TimeLapseInstants(command.sun, command.png_path);  // --until, --step, --mp4
