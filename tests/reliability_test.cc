@@ -272,6 +272,15 @@ const BadInput kBadInputs[] = {
      "--irradiance and --specular name the same file 'i.ktx2'"},
     {"CubeMipsWithoutKtx2", "render --camera cubemap --face-size 8 --mips", "--mips makes the --ktx2 file's mip chain"},
     {"CubeSpecularIsAFolder", "render --camera cubemap --face-size 8 --specular folder", "it is a folder"},
+    // Time-lapse frames checked before the first one is written.
+    {"TimeLapseFrameIsTheConfig",
+     "render --config frame_0001.png --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min "
+     "--latitude 46.5 --longitude 7.9" ATMO_TINY " --png frame.png",
+     "--png frame 1 'frame_0001.png' is the --config input"},
+    {"TimeLapseFrameIsAFolder",
+     "render --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min --latitude 46.5 "
+     "--longitude 7.9" ATMO_TINY " --png shot.png --exr shot.exr",
+     "cannot write 'shot_0002.exr': it is a folder"},
     // The real sky's knobs and tables (docs/aerosols.md, docs/parameters.md).
     {"AodTooLarge", "render --preset us-standard --aod 11" ATMO_TINY, "aerosol optical depth 11 at 550 nm is outside [0, 10]"},
     {"AodNegative", "sample --aod -0.1" ATMO_ONE " --out out.csv", "aerosol optical depth -0.1 at 550 nm is outside [0, 10]"},
@@ -377,6 +386,8 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   WriteFile(dir_ / "table_negative.json", R"({"rayleigh": {"density": {"table": [[0, 1], [1000, -0.5]]}}})");
   WriteFile(dir_ / "table_and_layers.json", R"({"ozone": {"density": {"table": [[0, 1], [1, 0]], "lower": {}}}})");
   WriteFile(dir_ / "aerosol_key.json", R"({"aerosol": {"tau": 0.2}})");
+  WriteFile(dir_ / "frame_0001.png", "{}");  // a config named like a time-lapse frame
+  fs::create_directory(dir_ / "shot_0002.exr");
   ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
   fs::create_directory(dir_ / "folder");
   fs::create_symlink("missing/target.png", dir_ / "dangling.png");
@@ -392,8 +403,10 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   EXPECT_TRUE(fs::is_directory(dir_ / "folder"));
   EXPECT_TRUE(fs::is_empty(dir_ / "folder"));
   EXPECT_TRUE(fs::is_symlink(dir_ / "dangling.png"));
-  // No export without a name (precompute --out "" wrote .json, .exr and .raw).
-  for (const char* name : {".json", ".exr", ".raw", "_transmittance.raw", "sky_transmittance.raw", "folder.json"}) {
+  // No export without a name (precompute --out "" wrote .json, .exr and .raw), nor a time-lapse
+  // frame before the one that is refused.
+  for (const char* name : {".json", ".exr", ".raw", "_transmittance.raw", "sky_transmittance.raw", "folder.json",
+                           "shot_0000.png", "shot_0000.exr", "frame_0000.png"}) {
     EXPECT_FALSE(fs::exists(dir_ / name)) << name;
   }
 }

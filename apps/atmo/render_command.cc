@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <numbers>
 #include <optional>
+#include <string>
+#include <utility>
 
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
@@ -278,7 +280,21 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   }
   CheckExtension("--exr", command.exr_path, ".exr");
   CheckExtension("--png", command.png_path, ".png");
-  if (IsTimeLapse(command.sun)) TimeLapseInstants(command.sun, command.png_path);  // --until, --step, --mp4
+  if (IsTimeLapse(command.sun)) {
+    // --until, --step, --mp4; then every frame's files, which are the outputs: each writable and
+    // none an input (a frame named like --config replaced it; a frame that could not be written
+    // failed the series after the earlier frames had replaced their files).
+    const std::size_t count = TimeLapseInstants(command.sun, command.png_path).size();
+    for (std::size_t frame = 0; frame < count; ++frame) {
+      for (const auto& [flag, path] : {std::pair<std::string, std::string>{"--exr", command.exr_path},
+                                       std::pair<std::string, std::string>{"--png", command.png_path}}) {
+        if (path.empty()) continue;
+        const std::string frame_path = FramePath(path, frame, count);
+        CheckOutputsApart(common, {}, {{flag + " frame " + std::to_string(frame), frame_path}});
+        CheckOutputWritable(frame_path);
+      }
+    }
+  }
 
   // --spp is the path count of a Monte Carlo model; deterministic models have nothing to sample.
   if (command.spp && common.model != "reference") {
