@@ -245,12 +245,19 @@ class Model:
         dtype = np.dtype(dtype)
         if dtype not in (np.float64, np.float32):
             raise ValueError(f"dtype must be float64 or float32 (got {dtype})")
+        inputs = (altitude_m, sun_zenith_deg, view_zenith_deg, azimuth_deg)
         try:
-            arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64)
-                                           for a in (altitude_m, sun_zenith_deg, view_zenith_deg, azimuth_deg)))
+            shape = np.broadcast_shapes(*(np.shape(a) for a in inputs))
         except ValueError as error:
             raise ValueError(f"sample: the arguments do not broadcast together ({error})") from None
-        shape = arrays[0].shape
+        # Bounded before any copy: the four inputs as contiguous doubles and the three results.
+        points = int(np.prod(shape, dtype=np.float64))
+        needed = points * 8.0 * (4 + 3 * self.channel_count)
+        limit = _memory_limit_bytes()
+        if needed > limit:
+            raise ValueError(f"sample: {points} points ({shape}) need {needed / 2**30:.1f} GiB, more than the "
+                             f"{limit / 2**30:.1f} GiB allowed (half of this machine's memory); sample in pieces")
+        arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in inputs))
         flat = [np.ascontiguousarray(a).reshape(-1) for a in arrays]
         radiance, transmittance, standard_error = self._model.sample(*flat, unit, list(shape))
         channels = radiance.shape[1]
@@ -425,6 +432,14 @@ def model_names() -> list:
 
 def preset_names() -> list:
     return list(_atmo.preset_names())
+
+
+def _memory_limit_bytes() -> float:
+    """Half of the physical memory (the bound of Model.sample's arrays); 8 GiB where unknown."""
+    try:
+        return 0.5 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 8.0 * 2**30
 
 
 def aerosol_types() -> list:

@@ -269,3 +269,13 @@ def test_results_do_not_depend_on_the_thread_count(earth):
     np.testing.assert_array_equal(one, everywhere)
     with pytest.raises(ValueError, match="threads"):
         atmo.set_threads(-1)
+
+
+def test_a_huge_broadcast_is_refused_before_it_is_copied(earth):
+    # 50000 x 50000 points: 2.5e9, which the copies of the broadcast inputs alone would need 80 GB
+    # for (a 20 GB address-space allocation before this bound).
+    a = np.zeros(50000)
+    with pytest.raises(ValueError) as error:
+        earth.sample(a, 30.0, a[:, None], 0.0)
+    assert "2500000000 points" in str(error.value) and "GiB" in str(error.value)
+    assert "\n" not in str(error.value)
