@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "atmo/error.h"
+#include "atmo/parameters.h"
 #include "cpu/camera.h"
 #include "shared/shared.h"
 
@@ -15,28 +16,44 @@ namespace atmo::viewer {
 
 namespace {
 
-// A field of ViewState that scripts reach by name.
+// A field of ViewState that scripts reach by name, and its bounds: the command line's for the
+// same quantity (apps/atmo/cli_flags.cc, docs/parameters.md), open at an end where `open` says so.
 struct NumberKey {
   const char* name;
   double ViewState::*field;
+  double min;
+  double max;
+  bool open = false;  // (min, max) instead of [min, max]
 };
 
+constexpr double kNoBound = 1e300;
+
 constexpr NumberKey kNumberKeys[] = {
-    {"yaw", &ViewState::yaw_deg},
-    {"pitch", &ViewState::pitch_deg},
-    {"fov", &ViewState::fov_deg},
-    {"altitude", &ViewState::altitude_m},
-    {"sun-elevation", &ViewState::sun_elevation_deg},
-    {"sun-azimuth", &ViewState::sun_azimuth_deg},
-    {"ev", &ViewState::ev100},
-    {"date-hours", &ViewState::date_hours},
-    {"rayleigh-density", &ViewState::rayleigh_density},
-    {"mie-density", &ViewState::mie_density},
-    {"ozone-density", &ViewState::ozone_density},
-    {"mie-g", &ViewState::mie_g},
-    {"ground-albedo", &ViewState::ground_albedo},
-    {"ground-radius", &ViewState::ground_radius_m},
+    {"yaw", &ViewState::yaw_deg, -kNoBound, kNoBound},
+    {"pitch", &ViewState::pitch_deg, -90.0, 90.0},
+    {"fov", &ViewState::fov_deg, 0.0, 180.0, true},
+    {"altitude", &ViewState::altitude_m, -kMaxAltitude_m, kMaxAltitude_m},
+    {"sun-elevation", &ViewState::sun_elevation_deg, -90.0, 90.0},
+    {"sun-azimuth", &ViewState::sun_azimuth_deg, -kNoBound, kNoBound},
+    {"ev", &ViewState::ev100, -32.0, 32.0},
+    {"date-hours", &ViewState::date_hours, -kNoBound, kNoBound},
+    {"rayleigh-density", &ViewState::rayleigh_density, 0.0, 1e3},
+    {"mie-density", &ViewState::mie_density, 0.0, 1e3},
+    {"ozone-density", &ViewState::ozone_density, 0.0, 1e3},
+    {"mie-g", &ViewState::mie_g, -0.999, 0.999},
+    {"ground-albedo", &ViewState::ground_albedo, 0.0, 1.0},
+    {"ground-radius", &ViewState::ground_radius_m, 1.0, 1e10},
 };
+
+// "KEY must be in [MIN, MAX] (got VALUE)" for a value outside the key's bounds.
+void CheckBounds(const NumberKey& k, double value) {
+  const bool inside = k.open ? value > k.min && value < k.max : value >= k.min && value <= k.max;
+  if (inside) return;
+  std::ostringstream message;
+  message << k.name << " must be in " << (k.open ? "(" : "[") << k.min << ", " << k.max << (k.open ? ")" : "]")
+          << " (got " << value << ")";
+  throw Error(message.str());
+}
 
 bool ParseNumber(std::string_view text, double& value) {
   const std::string copy(text);
@@ -119,6 +136,7 @@ void SetViewValue(ViewState& state, std::string_view key, std::string_view value
   double number = 0.0;
   if (!ParseNumber(value, number))
     throw Error(std::string(key) + " takes a finite number, got '" + std::string(value) + "'");
+  CheckBounds(*k, number);
   state.*(k->field) = number;
   if (key == "ev") state.auto_exposure = false;  // a fixed EV100, as --ev
 }
@@ -171,6 +189,12 @@ ViewerScript ParseViewerScript(std::string_view text, const std::string& name) {
       }
       if (!ParseNumber(w[4], command.from) || !ParseNumber(w[5], command.to)) {
         throw Error(where + "a ramp's FROM and TO must be finite numbers");
+      }
+      try {  // the bounds are intervals: the frames between the ends stay inside them
+        CheckBounds(*FindNumberKey(command.key), command.from);
+        CheckBounds(*FindNumberKey(command.key), command.to);
+      } catch (const Error& error) {
+        throw Error(where + error.what());
       }
     } else if (w[0] == "screenshot") {
       if (w.size() != 3) throw Error(where + "expected 'screenshot FRAME PATH'");

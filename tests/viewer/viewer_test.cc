@@ -80,6 +80,16 @@ TEST(ViewerScript, BadLinesNameTheirLine) {
       {"ramp 5 5 yaw 0 10\n", "LAST frame must come after FIRST"},
       {"ramp 0 5 camera 0 1\n", "'camera' cannot ramp"},
       {"screenshot 3\n", "expected 'screenshot FRAME PATH'"},
+      // The command line's bounds (the audit's N6: the viewer took what atmo refuses).
+      {"at 0 altitude 1e300\n", "test.txt:1: altitude must be in [-1e+11, 1e+11] (got 1e+300)"},
+      {"at 0 sun-elevation 100\n", "sun-elevation must be in [-90, 90] (got 100)"},
+      {"at 0 fov 0\n", "fov must be in (0, 180) (got 0)"},
+      {"at 0 fov 180\n", "fov must be in (0, 180) (got 180)"},
+      {"at 0 ev 40\n", "ev must be in [-32, 32]"},
+      {"at 0 mie-g 1\n", "mie-g must be in [-0.999, 0.999]"},
+      {"at 0 ground-albedo 1.5\n", "ground-albedo must be in [0, 1]"},
+      {"at 0 mie-density -1\n", "mie-density must be in [0, 1000]"},
+      {"ramp 0 10 pitch 0 120\n", "test.txt:1: pitch must be in [-90, 90] (got 120)"},
   };
   for (const auto& c : cases) {
     try {
