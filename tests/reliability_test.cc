@@ -272,6 +272,9 @@ const BadInput kBadInputs[] = {
      "--irradiance and --specular name the same file 'i.ktx2'"},
     {"CubeMipsWithoutKtx2", "render --camera cubemap --face-size 8 --mips", "--mips makes the --ktx2 file's mip chain"},
     {"CubeSpecularIsAFolder", "render --camera cubemap --face-size 8 --specular folder", "it is a folder"},
+    // A samples file with a configuration twice (each was counted twice in compare's statistics).
+    {"SamplesRepeatAConfiguration", "compare --against-samples repeated.csv --csv out.csv",
+     "repeated.csv:5: the configuration of line 2 again: each configuration once"},
     // Time-lapse frames checked before the first one is written.
     {"TimeLapseFrameIsTheConfig",
      "render --config frame_0001.png --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min "
@@ -387,6 +390,14 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   WriteFile(dir_ / "table_and_layers.json", R"({"ozone": {"density": {"table": [[0, 1], [1, 0]], "lower": {}}}})");
   WriteFile(dir_ / "aerosol_key.json", R"({"aerosol": {"tau": 0.2}})");
   WriteFile(dir_ / "frame_0001.png", "{}");  // a config named like a time-lapse frame
+  {
+    std::string repeated = "altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg,wavelength_nm,radiance,"
+                           "transmittance,stderr\n";
+    for (int copy = 0; copy < 2; ++copy) {
+      for (const char* wavelength : {"680", "550", "440"}) repeated += std::string("0,30,60,90,") + wavelength + ",0.1,0.5,0\n";
+    }
+    WriteFile(dir_ / "repeated.csv", repeated);
+  }
   fs::create_directory(dir_ / "shot_0002.exr");
   ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
   fs::create_directory(dir_ / "folder");

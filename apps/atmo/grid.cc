@@ -7,8 +7,10 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string_view>
+#include <tuple>
 #include <utility>
 
 #include "atmo/error.h"
@@ -168,10 +170,18 @@ SampleTable ParseSamples(std::string_view text, const std::string& path, const s
   const std::size_t channels = wavelengths_nm.size();
   std::size_t channel = 0;  // of the next row
   std::string first_where;  // of the configuration being read
+  // Each configuration once: a repeated one counted twice in every statistic of `compare`.
+  std::map<std::tuple<double, double, double, double>, int> seen;
   ParseNumberRows(text, path, kSamplesHeader, 8, [&](const std::vector<double>& v, const std::string& where, int line) {
     const SamplePoint point{v[0], v[1], v[2], v[3], path + ":" + std::to_string(line)};
     CheckPoint(point, where);
     if (channel == 0) {
+      const auto [it, inserted] =
+          seen.emplace(std::tuple{point.altitude_m, point.sun_zenith_deg, point.view_zenith_deg, point.azimuth_deg}, line);
+      if (!inserted) {
+        throw Error(where + "the configuration of line " + std::to_string(it->second) +
+                    " again: each configuration once (merge repeated reference runs before comparing)");
+      }
       table.points.push_back(point);
       first_where = where;
     } else {
