@@ -351,8 +351,25 @@ class Model:
 
 
 # --- files -------------------------------------------------------------------------------------
+# The command line's largest image side; an OpenEXR cube map stacks six faces of up to that size.
+_MAX_IMAGE_SIDE = 16384
+
+
+def _real_array(values, what: str) -> np.ndarray:
+    """values as an array, refused (before any copy to float32) when complex, not numeric or too large."""
+    a = np.asarray(values)
+    if np.iscomplexobj(a):
+        raise ValueError(f"{what} must be real numbers (got {a.dtype})")
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{what} must be numbers (got {a.dtype})")
+    if a.ndim >= 2 and (a.shape[0] > 6 * _MAX_IMAGE_SIDE or a.shape[1] > _MAX_IMAGE_SIDE):
+        raise ValueError(f"{what} of {a.shape[1]} x {a.shape[0]} pixels is too large: at most {_MAX_IMAGE_SIDE} "
+                         f"wide and {6 * _MAX_IMAGE_SIDE} high (a cube map's six faces)")
+    return a
+
+
 def _image_array(image) -> np.ndarray:
-    a = np.asarray(image, dtype=np.float32)
+    a = _real_array(image, "an image").astype(np.float32, copy=False)
     if a.ndim == 2:
         a = a[:, :, None]
     if a.ndim != 3:
@@ -361,7 +378,7 @@ def _image_array(image) -> np.ndarray:
 
 
 def _alpha_array(alpha) -> Optional[np.ndarray]:
-    return None if alpha is None else np.ascontiguousarray(np.asarray(alpha, dtype=np.float32))
+    return None if alpha is None else np.ascontiguousarray(_real_array(alpha, "alpha").astype(np.float32, copy=False))
 
 
 def write_exr(path: Union[str, os.PathLike], image, *, alpha=None, channel_names: Optional[Sequence[str]] = None,

@@ -119,3 +119,19 @@ def test_bad_images_raise_value_error(tmp_path):
         atmo.write_png(tmp_path / "x.png", np.ones((2, 2, 3), np.float32), tonemap="filmic")
     with pytest.raises(ValueError, match="bits"):
         atmo.write_png(tmp_path / "x.png", np.ones((2, 2, 3), np.float32), bits=12)
+
+
+@pytest.mark.parametrize("image,message", [
+    (np.zeros((2, 3, 3), dtype=np.complex64), "an image must be real numbers (got complex64)"),
+    (np.array([["a", "b"]]), "an image must be numbers"),
+    (np.broadcast_to(np.float32(0), (4, 16385, 3)), "an image of 16385 x 4 pixels is too large"),
+    (np.broadcast_to(np.float32(0), (6 * 16384 + 1, 4, 3)), "at most 16384 wide and 98304 high"),
+])
+def test_writers_refuse_complex_and_oversized_images_before_copying(tmp_path, image, message):
+    # The audit's N7: complex input was cast with a warning, images wider than 16384 were written.
+    for write in (atmo.write_exr, atmo.write_png):
+        target = tmp_path / ("x.exr" if write is atmo.write_exr else "x.png")
+        with pytest.raises(ValueError) as error:
+            write(target, image)
+        assert message in str(error.value)
+        assert not target.exists()
