@@ -8,6 +8,7 @@
 
 #include "atmo/error.h"
 #include "atmo/standard_atmosphere.h"
+#include "physics/density_interpolation.h"
 #include "physics/data/aerosol_types.h"
 #include "printable.h"
 
@@ -133,11 +134,7 @@ AerosolProfile BuildProfile(const std::vector<Layer>& layers, double top_m) {
     const double dz = std::min(b.altitude_m, top_m) - a.altitude_m;
     if (!(dz > 0.0)) break;
     const double f = dz / (b.altitude_m - a.altitude_m);  // the part below the top
-    const double end = a.density > 0.0 && b.density > 0.0 ? a.density * std::pow(b.density / a.density, f)
-                                                           : a.density + (b.density - a.density) * f;
-    profile.column_m += a.density > 0.0 && end > 0.0 && std::abs(end - a.density) > 1e-12 * a.density
-                            ? dz * (end - a.density) / std::log(end / a.density)
-                            : 0.5 * (a.density + end) * dz;
+    profile.column_m += IntegrateDensity(a.density, InterpolateDensity(a.density, b.density, f), dz);
   }
   if (profile.knots.back().altitude_m < top_m) {
     profile.column_m += profile.knots.back().density * (top_m - profile.knots.back().altitude_m);

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "atmo/error.h"
+#include "physics/density_interpolation.h"
 
 namespace atmo {
 namespace {
@@ -168,10 +169,7 @@ double DensityProfile::Evaluate(double altitude_m) const {
     const DensityKnot& b = *upper_knot;
     const DensityKnot& a = *(upper_knot - 1);
     const double f = (altitude_m - a.altitude_m) / (b.altitude_m - a.altitude_m);
-    const double density = a.density > 0.0 && b.density > 0.0
-                                ? a.density * std::pow(b.density / a.density, f)
-                                : a.density + (b.density - a.density) * f;
-    return std::clamp(density, 0.0, 1.0);
+    return std::clamp(InterpolateDensity(a.density, b.density, f), 0.0, 1.0);
   }
   const DensityLayer& layer = altitude_m < lower.width_m ? lower : upper;
   const double exponential =

@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "atmo/spectrum.h"
+#include "physics/density_interpolation.h"
 #include "physics/data/afgl_profiles.h"
 #include "printable.h"
 
@@ -108,17 +109,6 @@ std::span<const data::AfglLevel> AfglTable(Climatology climatology) {
     case Climatology::kSubarcticWinter: return data::kAfglSubarcticWinter;
   }
   return data::kAfglUsStandard;
-}
-
-// Exponential between two positive values, linear when one is 0.
-double InterpolateDensity(double a, double b, double f) {
-  return a > 0.0 && b > 0.0 ? a * std::pow(b / a, f) : a + (b - a) * f;
-}
-
-// The integral over [z0, z1] of the density interpolated as InterpolateDensity does.
-double IntegrateDensity(double a, double b, double dz) {
-  if (a > 0.0 && b > 0.0 && std::fabs(a - b) > 1e-12 * a) return dz * (b - a) / std::log(b / a);
-  return 0.5 * (a + b) * dz;
 }
 
 // A table's level at any altitude (held at the end levels outside it).
