@@ -12,8 +12,9 @@ and this script knows, for every ID, the `atmo` commands that produce it and the
 it compares with (docs/data/validation/*.csv, each with its citation). Everything else on the page
 is left alone. Only the Python standard library is used.
 
-    scripts/validation.py                  # every table (about 10 minutes on 2 cores)
-                                           # (real-sky-solvers goes to docs/accuracy.md)
+    scripts/validation.py                  # every table: about 5 minutes on 2 cores (measured:
+                                           # 145 s for validation.md's tables, 144 s for
+                                           # real-sky-solvers, which goes to docs/accuracy.md)
     scripts/validation.py --only illuminance twilight
     scripts/validation.py --list
 
@@ -25,6 +26,7 @@ The machine, its load and the date are written into the page's `run` table.
 import argparse
 import csv
 import io
+import json
 import math
 import os
 import platform
@@ -363,7 +365,6 @@ def missing_absorbers_config(atmo, base, path):
     """An experiment, not a model: the absorption that the G-173 comparison finds missing at air
     mass 1.5 (vertical optical depth ln(ratio) / 1.5 per bin, 0 where atmo is not brighter), put
     into the air's absorption with the air's profile, at the preset's wavelengths."""
-    import json
     points = [(c, max(math.log(model / measured) / 1.5, 0.0)) for _, _, c, _, measured, model in astm_bins(atmo)]
 
     def at(nm):
@@ -384,7 +385,6 @@ def missing_absorbers_config(atmo, base, path):
 
 def write_configs(folder, atmo):
     """Config files for the one-change runs (derived from `atmo presets --dump us-standard`)."""
-    import json
     base = json.loads(atmo.run(["presets", "--dump", "us-standard"]))
     variants = {
         "albedo0": lambda p: p.update(ground_albedo=0.0),

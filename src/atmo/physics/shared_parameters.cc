@@ -36,8 +36,9 @@ double TableLogDensity(double density) {
   return density > 0.0 ? std::max(std::log(density), shared::kDensityTableLogZero) : shared::kDensityTableLogZero;
 }
 
-}  // namespace
-
+// Fills the density table of `a` (density_table_enabled, _top, density_table) from the profiles
+// of `p`: enabled when at least one medium is tabulated, every medium then sampled at the table's
+// knots; `unit` as for ToSharedParameters.
 void SetDensityTable(const AtmosphereParameters& p, double unit, shared::AtmosphereParameters& a) {
   a.density_table_enabled =
       p.rayleigh.density.tabulated() || p.mie.density.tabulated() || p.ozone.density.tabulated() ? 1 : 0;
@@ -57,6 +58,8 @@ void SetDensityTable(const AtmosphereParameters& p, double unit, shared::Atmosph
                                       TableLogDensity(p.ozone.density.Evaluate(altitude_m)), 0.0);
   }
 }
+
+}  // namespace
 
 shared::vec3 BatchValues(std::span<const double> values, std::size_t batch) {
   if (values.empty()) throw Error("BatchValues needs at least one channel");

@@ -33,11 +33,6 @@ shared::vec3 BatchValues(std::span<const double> values, std::size_t batch);
 // with fewer than three channels repeats its last one. `length_unit_m` is the length unit of the
 // result in metres (1 on the CPU, 1000 for the km of the GPU). Throws atmo::Error for what the
 // common subset cannot express (a scattering ozone layer).
-// Fills the density table of `a` (density_table_enabled, _top, density_table) from the profiles
-// of `p`: enabled when at least one medium is tabulated, every medium then sampled at the table's
-// knots; `unit` as for ToSharedParameters.
-void SetDensityTable(const AtmosphereParameters& p, double unit, shared::AtmosphereParameters& a);
-
 shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& parameters, std::size_t batch,
                                                 double length_unit_m = 1.0);
 
