@@ -96,10 +96,10 @@ void CheckPoint(double altitude_m, double sun_zenith_deg, double view_zenith_deg
 class PyModel {
  public:
   // Exactly one source of parameters: a preset name, a JSON file or a JSON text (the Python layer
-  // turns a dict into JSON text). spectral 0: as they are.
+  // turns a dict into JSON text). spectral 0 and no wavelengths: as they are.
   PyModel(const std::string& name, const std::optional<std::string>& preset, const std::optional<std::string>& config_path,
-          const std::optional<std::string>& config_json, int spectral, const ModelOptions& options,
-          const AerosolRequest& aerosol)
+          const std::optional<std::string>& config_json, int spectral, const std::vector<double>& wavelengths,
+          const ModelOptions& options, const AerosolRequest& aerosol)
       : options_(options) {
     py::gil_scoped_release release;
     if (config_json) {
@@ -110,6 +110,7 @@ class PyModel {
       parameters_ = Preset(preset.value_or("earth"));
     }
     if (spectral != 0) parameters_ = MakeSpectral(parameters_, spectral);
+    if (!wavelengths.empty()) parameters_ = MakeSpectral(parameters_, wavelengths);
     ApplyAerosolRequest(parameters_, aerosol);  // after spectral, as the CLI's knobs
     model_ = CreateModel(name, parameters_, options_);
   }
@@ -664,18 +665,20 @@ PYBIND11_MODULE(_atmo, m) {
                        const std::optional<std::string>& config_path, const std::optional<std::string>& config_json,
                        int spectral, const ModelOptions& options, const std::optional<std::string>& aerosol,
                        std::optional<double> aod, std::optional<double> angstrom, std::optional<double> visibility,
-                       std::optional<double> turbidity) {
+                       std::optional<double> turbidity, const std::vector<double>& wavelengths) {
              AerosolRequest request;
              request.type = aerosol;
              request.aod_550 = aod;
              request.angstrom_exponent = angstrom;
              request.visibility_km = visibility;
              request.linke_turbidity = turbidity;
-             return std::make_unique<PyModel>(name, preset, config_path, config_json, spectral, options, request);
+             return std::make_unique<PyModel>(name, preset, config_path, config_json, spectral, wavelengths, options,
+                                              request);
            }),
            py::arg("name"), py::arg("preset"), py::arg("config_path"), py::arg("config_json"), py::arg("spectral"),
            py::arg("options"), py::arg("aerosol") = py::none(), py::arg("aod") = py::none(),
-           py::arg("angstrom") = py::none(), py::arg("visibility") = py::none(), py::arg("turbidity") = py::none())
+           py::arg("angstrom") = py::none(), py::arg("visibility") = py::none(), py::arg("turbidity") = py::none(),
+           py::arg("wavelengths") = std::vector<double>{})
       .def_property_readonly("name", [](const PyModel& s) { return std::string(s.model().name()); })
       .def_property_readonly("preset", [](const PyModel& s) { return s.parameters().name; })
       .def_property_readonly("channel_count", [](const PyModel& s) { return s.parameters().channel_count(); })

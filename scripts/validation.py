@@ -226,7 +226,8 @@ def illuminance_effects_table(atmo):
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
         ("ground albedo 0", ["--config", CONFIGS["albedo0"]]),
         ("ozone × 1.3", ["--config", CONFIGS["ozone13"]]),
-        ("+ the absorption missing against G-173 (experiment)", ["--config", CONFIGS["absorbers"]]),
+        ("no O₂, O₂–O₂ or water vapour", ["--config", CONFIGS["nogases"]]),
+        ("no aerosol above 2.5 km (free troposphere, stratosphere)", ["--config", CONFIGS["lowaerosol"]]),
         ("mid-latitude winter air and ozone", ["--preset", "midlatitude-winter"]),
         ("tropical air and ozone", ["--preset", "tropical"]),
         ("earth-spectral (textbook air and aerosol)", ["--preset", "earth-spectral"]),
@@ -244,12 +245,13 @@ def astm_bins(atmo):
     # G-173's atmosphere: USSA 1976 (our us-standard air and ozone, 344 DU against the standard's
     # 343.8), rural aerosol with tau_500 = 0.084: OPAC continental-clean scaled to that tau at 500 nm
     # (tau_550 = 0.084 (550/500)^-1.35), air mass 1.5 (sun zenith 48.236 deg). Transmittance along the
-    # sun at 48 wavelengths 10 nm apart (360-830 nm): the bin centres' by the geometric mean of the
-    # edges.
+    # sun at the bins' centres (--wavelengths 405,415,...,795: each channel stands for its 10 nm bin,
+    # which the gases' absorption averages).
     sun_zenith = 48.236
     tau550 = 0.084 * (550.0 / 500.0) ** -1.35
+    centres = ",".join("%d" % c for c in range(405, 800, 10))
     rows = atmo.csv(["sample", "--model", atmo.model, "--option", "orders=1",
-                     "--preset", "us-standard", "--spectral", "48", "--aerosol", "continental-clean",
+                     "--preset", "us-standard", "--wavelengths", centres, "--aerosol", "continental-clean",
                      "--aod", "%.5f" % tau550, "--altitude", "0", "--sun-zenith", "%g" % sun_zenith,
                      "--view-zenith", "%g" % sun_zenith, "--azimuth", "0"])
     transmittance = {round(float(r["wavelength_nm"])): float(r["transmittance"]) for r in rows}
@@ -258,7 +260,7 @@ def astm_bins(atmo):
         lo, hi, centre = float(b["lambda_lo_nm"]), float(b["lambda_hi_nm"]), float(b["lambda_center_nm"])
         if 400 <= centre <= 800:
             etr = float(b["extraterrestrial_W_m2_nm"])
-            t = math.sqrt(transmittance[round(lo)] * transmittance[round(hi)])
+            t = transmittance[round(centre)]
             result.append((lo, hi, centre, etr, float(b["direct_circumsolar_W_m2_nm"]), etr * t))
     return result
 
@@ -270,7 +272,7 @@ def astm_table(atmo):
         ratio = model / measured
         ok = "yes" if abs(ratio - 1) <= 0.05 else "no"
         out.append(["%g–%g" % (lo, hi), "%.4f" % etr, "%.4f" % measured, "%.4f" % model, "**%.3f**" % ratio, ok])
-    # What the missing absorbers do to light as the eye weighs it: the V(lambda)-weighted excess of
+    # The direct beam as the eye weighs it: the V(lambda)-weighted excess of
     # the direct beam over the bins (CIE 1931 y-bar at the bin centres, from atmo's own table).
     ybar = cie_ybar()
     excess = sum(ybar(c) * (model - measured) for _, _, c, _, measured, model in bins)
@@ -361,34 +363,16 @@ TABLE_DOCS = {"real-sky-solvers": os.path.join(ROOT, "docs", "accuracy.md")}
 CONFIGS = {}
 
 
-def missing_absorbers_config(atmo, base, path):
-    """An experiment, not a model: the absorption that the G-173 comparison finds missing at air
-    mass 1.5 (vertical optical depth ln(ratio) / 1.5 per bin, 0 where atmo is not brighter), put
-    into the air's absorption with the air's profile, at the preset's wavelengths."""
-    points = [(c, max(math.log(model / measured) / 1.5, 0.0)) for _, _, c, _, measured, model in astm_bins(atmo)]
-
-    def at(nm):
-        if nm <= points[0][0]:
-            return points[0][1]
-        if nm >= points[-1][0]:
-            return points[-1][1]
-        for (a, x), (b, y) in zip(points, points[1:]):
-            if a <= nm <= b:
-                return x + (y - x) * (nm - a) / (b - a)
-    knots = base["rayleigh"]["density"]["table"]
-    height = sum(0.5 * (a[1] + b[1]) * (b[0] - a[0]) for a, b in zip(knots, knots[1:]))  # column / ground
-    p = json.loads(json.dumps(base))
-    p["rayleigh"]["absorption_per_m"] = [at(nm) / height for nm in p["wavelengths_nm"]]
-    with open(path, "w") as f:
-        json.dump(p, f)
-
-
 def write_configs(folder, atmo):
     """Config files for the one-change runs (derived from `atmo presets --dump us-standard`)."""
     base = json.loads(atmo.run(["presets", "--dump", "us-standard"]))
     variants = {
         "albedo0": lambda p: p.update(ground_albedo=0.0),
         "ozone13": lambda p: p["ozone"].update(absorption_per_m=[1.3 * x for x in p["ozone"]["absorption_per_m"]]),
+        "nogases": lambda p: (p["rayleigh"].update(absorption_per_m=[0.0] * len(p["wavelengths_nm"])),
+                              p["water_vapor"].update(absorption_per_m=[0.0] * len(p["wavelengths_nm"]))),
+        "lowaerosol": lambda p: p["mie"]["density"].update(
+            table=[[h, d if h <= 2500.0 else 0.0] for h, d in p["mie"]["density"]["table"]]),
     }
     for name, change in variants.items():
         p = json.loads(json.dumps(base))
@@ -397,8 +381,6 @@ def write_configs(folder, atmo):
         with open(path, "w") as f:
             json.dump(p, f)
         CONFIGS[name] = path
-    CONFIGS["absorbers"] = os.path.join(folder, "absorbers.json")
-    missing_absorbers_config(atmo, base, CONFIGS["absorbers"])
 
 
 def replace_table(text, table_id, body):

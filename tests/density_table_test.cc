@@ -114,7 +114,7 @@ TEST(DensityTable, SharedTableFollowsThePublicProfile) {
   ASSERT_EQ(a.density_table_enabled, 1);
   EXPECT_DOUBLE_EQ(a.density_table_top, 100e3);
   for (double h = 0.0; h <= 100e3; h += 137.0) {
-    const shared::vec3 d = shared::GetDensities(a, a.bottom_radius + h);
+    const shared::vec4 d = shared::GetDensities(a, a.bottom_radius + h);
     EXPECT_NEAR(d.x, p.rayleigh.density.Evaluate(h), 2e-4 * p.rayleigh.density.Evaluate(h)) << h;
     EXPECT_NEAR(d.y, p.mie.density.Evaluate(h), 2e-4 * p.mie.density.Evaluate(h) + 1e-30) << h;
     EXPECT_NEAR(d.z, p.ozone.density.Evaluate(h), 0.025) << h;

@@ -142,6 +142,12 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
                   "(docs/spectral.md)")
       ->check(kInteger)
       ->check(CLI::Range(3, 256));
+  app->add_option("--wavelengths", common.wavelengths,
+                  "resample the atmosphere to these wavelengths in nm (increasing, within 360-830; each channel "
+                  "stands for the band halfway to its neighbours), each medium by its physics (docs/spectral.md)")
+      ->expected(1, 256)
+      ->delimiter(',')
+      ->excludes("--spectral");
   // The aerosol knobs (docs/aerosols.md); their values are checked by atmo::ApplyAerosolRequest,
   // whose one-line errors name the bounds.
   app->add_option_function<std::string>(

@@ -45,6 +45,8 @@ struct CommonOptions {
   // --spectral N: resample the parameters to N wavelengths over 360..830 nm (atmo::MakeSpectral);
   // 0: as they are.
   int spectral = 0;
+  // --wavelengths W...: resample to these wavelengths instead (the other form of MakeSpectral).
+  std::vector<double> wavelengths;
   // --aerosol, --aod, --angstrom, --visibility, --turbidity (atmo::ApplyAerosolRequest), applied
   // after --spectral.
   AerosolRequest aerosol;

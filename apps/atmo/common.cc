@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 AtmosphereParameters LoadParameters(const CommonOptions& common) {
   AtmosphereParameters parameters = common.config.empty() ? Preset(common.preset) : LoadParametersFile(common.config);
   if (common.spectral != 0) parameters = MakeSpectral(parameters, common.spectral);
+  if (!common.wavelengths.empty()) parameters = MakeSpectral(parameters, common.wavelengths);
   ApplyAerosolRequest(parameters, common.aerosol);
   return parameters;
 }

@@ -66,7 +66,7 @@ void PrintError(const std::string& message) {
 void GroupFlags(CLI::App* app) {
   static const std::pair<const char*, const char*> kGroups[] = {
       {"--model", "Model and atmosphere"}, {"--preset", "Model and atmosphere"}, {"--config", "Model and atmosphere"},
-      {"--option", "Model and atmosphere"}, {"--spectral", "Model and atmosphere"}, {"--table", "Model and atmosphere"},
+      {"--option", "Model and atmosphere"}, {"--spectral", "Model and atmosphere"}, {"--wavelengths", "Model and atmosphere"}, {"--table", "Model and atmosphere"},
       {"--aerosol", "Model and atmosphere"}, {"--aod", "Model and atmosphere"}, {"--angstrom", "Model and atmosphere"},
       {"--visibility", "Model and atmosphere"}, {"--turbidity", "Model and atmosphere"},
       {"--backend", "Execution"}, {"--threads", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},

@@ -16,12 +16,12 @@ std::string PresetSource(const std::string& name) {
       {"earth-spectral", "earth at 15 wavelengths, each medium from its physics (docs/spectral.md)"},
       {"atmosphere-plus", "Earth as in the Atmosphere Plus seed"},
       {"simple", "homogeneous half-space of the simple seed"},
-      {"us-standard", "US Standard Atmosphere 1976 with OPAC continental-average aerosol (docs/validation.md)"},
-      {"tropical", "AFGL 1986 tropical air and ozone with OPAC continental-average aerosol"},
-      {"midlatitude-summer", "AFGL 1986 mid-latitude summer air and ozone with OPAC continental-average aerosol"},
-      {"midlatitude-winter", "AFGL 1986 mid-latitude winter air and ozone with OPAC continental-average aerosol"},
-      {"subarctic-summer", "AFGL 1986 sub-arctic summer air and ozone with OPAC continental-average aerosol"},
-      {"subarctic-winter", "AFGL 1986 sub-arctic winter air and ozone with OPAC continental-average aerosol"},
+      {"us-standard", "US Standard Atmosphere 1976 air, ozone, water vapour and O2 with OPAC continental-average aerosol (docs/validation.md)"},
+      {"tropical", "AFGL 1986 tropical air, ozone, water vapour and O2 with OPAC continental-average aerosol"},
+      {"midlatitude-summer", "AFGL 1986 mid-latitude summer air, ozone, water vapour and O2 with OPAC continental-average aerosol"},
+      {"midlatitude-winter", "AFGL 1986 mid-latitude winter air, ozone, water vapour and O2 with OPAC continental-average aerosol"},
+      {"subarctic-summer", "AFGL 1986 sub-arctic summer air, ozone, water vapour and O2 with OPAC continental-average aerosol"},
+      {"subarctic-winter", "AFGL 1986 sub-arctic winter air, ozone, water vapour and O2 with OPAC continental-average aerosol"},
   };
   const auto found = kSources.find(name);
   return found == kSources.end() ? name : found->second;
@@ -39,7 +39,8 @@ std::string PresetSummary(const AtmosphereParameters& p) {
   std::string media;
   for (const auto& [name, medium] : {std::pair<const char*, const Medium*>{"rayleigh", &p.rayleigh},
                                      {"mie", &p.mie},
-                                     {"ozone", &p.ozone}}) {
+                                     {"ozone", &p.ozone},
+                                     {"water_vapor", &p.water_vapor}}) {
     if (medium->present()) media += std::string(media.empty() ? "" : "+") + name;
   }
   return Format("ground %.10g km, top %.10g km; channels %s nm; %s", p.ground_radius_m / 1e3,

@@ -100,6 +100,10 @@ struct AtmosphereParameters {
   Medium rayleigh;
   Medium mie;
   Medium ozone;
+  // Water vapour: absorbing only, with its own profile (docs/parameters.md, "Gases"). Absent, with
+  // empty vectors, in every preset that predates it; when present its vectors have one value per
+  // channel like the other media's.
+  Medium water_vapor;
   std::vector<double> ground_albedo;  // per channel, in [0, 1]
   double sun_angular_radius_rad = 0.004675;
   // The sun disc's limb darkening: Neckel and Labs 1994's per-wavelength centre-to-limb law

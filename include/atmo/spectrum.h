@@ -12,6 +12,7 @@
 // outside it. Sources and units are in src/atmo/physics/data/spectral_tables.h and docs/spectral.md.
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -84,5 +85,9 @@ AtmosphereParameters EarthSpectral(const SpectralEarthSettings& settings = {});
 // A half-space atmosphere (preset simple) has no physical medium: its coefficients follow the
 // Angstrom fit for every medium. Throws atmo::Error for count outside [3, 256].
 AtmosphereParameters MakeSpectral(const AtmosphereParameters& parameters, int count);
+// The same at the given wavelengths: 1 to 256, increasing, within [360, 830] nm (throws
+// atmo::Error naming the first that is not). Each channel stands for the band halfway to its
+// neighbours (ChannelBands, include/atmo/gas_absorption.h), which the gases' absorption averages.
+AtmosphereParameters MakeSpectral(const AtmosphereParameters& parameters, std::span<const double> wavelengths_nm);
 
 }  // namespace atmo

@@ -77,10 +77,12 @@ Columns ClimatologyColumns(Climatology climatology);
 // A spectral sky on a standard atmosphere (the presets us-standard, tropical, ...): the air of the
 // climatology with Rayleigh scattering from RayleighCrossSection, its ozone with OzoneCrossSection
 // (233 K), both as tabulated profiles up to 100 km over a planet of the Earth's mean radius
-// (6371 km), an OPAC aerosol, a grey Lambertian ground and the solar spectrum. Water vapour and
-// the O2 bands are left out (docs/validation.md measures what that changes).
+// (6371 km), an OPAC aerosol, a grey Lambertian ground and the solar spectrum; with `gases`, the
+// absorption of O2, O2-O2 and water vapour (include/atmo/gas_absorption.h), water vapour with the
+// climatology's profile.
 struct StandardSkySettings {
   Climatology climatology = Climatology::kUsStandard1976;
+  bool gases = true;
   int wavelength_count = 15;
   AerosolSettings aerosol;        // continental-average at its typical tau_550 (0.13)
   double ground_albedo = 0.2;     // a typical land surface (grass, soil)

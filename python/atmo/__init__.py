@@ -116,6 +116,7 @@ class Model:
     Model("hillaire", config={"preset": "earth", "mie": {"phase_g": 0.7}})   # a dict: the same JSON
     Model("hillaire", options={"sky_view": "off"})      # `--option KEY=VALUE`
     Model("hillaire", preset="earth", spectral=16)      # `--spectral 16`: 16 wavelengths
+    Model("source4d", preset="us-standard", wavelengths=[755, 765, 775])   # `--wavelengths 755,765,775`
     Model("reference", options={"samples": 4096}, seed=1)
     Model("source4d", preset="us-standard", aerosol="urban", aod=0.4)   # `--aerosol urban --aod 0.4`
 
@@ -129,7 +130,7 @@ class Model:
                  options: Optional[Mapping[str, object]] = None, spectral: int = 0,
                  seed: Optional[int] = None, aerosol: Optional[str] = None, aod: Optional[float] = None,
                  angstrom: Optional[float] = None, visibility: Optional[float] = None,
-                 turbidity: Optional[float] = None):
+                 turbidity: Optional[float] = None, wavelengths: Optional[Sequence[float]] = None):
         if preset is not None and config is not None:
             raise ValueError("give preset or config, not both")
         config_path = config_json = None
@@ -143,6 +144,15 @@ class Model:
             raise ValueError(f"spectral must be an integer (got {spectral!r})")
         if spectral != 0 and not 3 <= spectral <= 256:
             raise ValueError(f"spectral {spectral}: the wavelength count must be in [3, 256]")
+        wavelength_list = []
+        if wavelengths is not None:
+            if spectral != 0:
+                raise ValueError("give spectral or wavelengths, not both")
+            array = np.asarray(wavelengths)
+            if array.ndim != 1 or array.size == 0 or not np.issubdtype(array.dtype, np.number) or \
+                    np.iscomplexobj(array):
+                raise ValueError(f"wavelengths must be a non-empty sequence of numbers in nm (got {wavelengths!r})")
+            wavelength_list = [float(x) for x in array]
         texts = {}
         for key, value in (options or {}).items():
             texts[str(key)] = _option_text(str(key), value)
@@ -160,7 +170,8 @@ class Model:
                 knobs[key] = float(value)
         if aerosol is not None and not isinstance(aerosol, str):
             raise ValueError(f"aerosol must be a type name (got {aerosol!r})")
-        self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts, aerosol=aerosol, **knobs)
+        self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts, aerosol=aerosol,
+                                  wavelengths=wavelength_list, **knobs)
         self._options = dict(texts)
 
     # --- what the model is ---------------------------------------------------------------------

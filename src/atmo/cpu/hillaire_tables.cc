@@ -20,6 +20,7 @@ namespace {
 
 using shared::vec2;
 using shared::vec3;
+using shared::vec4;
 
 template <typename RowFunction>
 void ForEachRow(int rows, const RowFunction& row_function) {
@@ -83,15 +84,18 @@ class TabulatedDensities {
   explicit TabulatedDensities(const shared::AtmosphereParameters& a) : a_(a) {
     const double zero = shared::kDensityTableLogZero + 1.0;
     for (int i = 0; i + 1 < shared::kDensityTableSize; ++i) {
-      for (int m = 0; m < 3; ++m) {
+      for (int m = 0; m < 4; ++m) {
         linear_[m][i] = std::min(a.density_table[i][m], a.density_table[i + 1][m]) < zero;
         any_linear_[m] = any_linear_[m] || linear_[m][i];
       }
     }
+    for (int i = 0; i < shared::kDensityTableSize; ++i) {
+      for (int m = 0; m < 4; ++m) present_[m] = present_[m] || a.density_table[i][m] > shared::kDensityTableLogZero;
+    }
   }
 
   // sum_j weight_j * densities(altitude_j), with scratch space for n samples.
-  vec3 Integrate(const double* altitude, const double* weight, int n, std::vector<double>& fraction,
+  vec4 Integrate(const double* altitude, const double* weight, int n, std::vector<double>& fraction,
                  std::vector<int>& index, std::vector<double>& value) const {
     constexpr int kLast = shared::kDensityTableSize - 1;
     fraction.resize(n);
@@ -109,8 +113,9 @@ class TabulatedDensities {
       f[j] = std::min(std::max((altitude[j] - h_0) / (h_1 - h_0), 0.0), 1.0);
       index[j] = static_cast<int>(lower);
     }
-    vec3 sum(0.0);
-    for (int m = 0; m < 3; ++m) {
+    vec4 sum(0.0);
+    for (int m = 0; m < 4; ++m) {
+      if (!present_[m]) continue;  // a medium absent from the table (no water vapour): 0
       double* __restrict v = value.data();
       for (int j = 0; j < n; ++j) {
         const double l_0 = a_.density_table[index[j]][m];
@@ -135,8 +140,9 @@ class TabulatedDensities {
 
  private:
   const shared::AtmosphereParameters& a_;
-  bool linear_[3][shared::kDensityTableSize] = {};
-  bool any_linear_[3] = {};
+  bool linear_[4][shared::kDensityTableSize] = {};
+  bool any_linear_[4] = {};
+  bool present_[4] = {};  // some knot above kDensityTableLogZero
 };
 
 // For the samples (t_i, r_i) of a ray and a sun with r mu_s = r_mu_s, nu = cos(ray, sun): whether
@@ -345,11 +351,11 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
         return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
       };
       // The density integrals do not depend on the channels: once per texel for every batch.
-      vec3 integrals(0.0);
+      vec4 integrals(0.0);
       if (a.density_table_enabled) {
         integrals = tabulated.Integrate(altitude.data(), weight.data(), n, fraction, index, value);
       } else {
-        integrals = vec3(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density));
+        integrals = vec4(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density), 0.0);
       }
       for (std::size_t b = 0; b < batches.size(); ++b) {
         tables[b]->at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(batches[b], integrals)));

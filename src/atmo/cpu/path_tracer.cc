@@ -228,7 +228,7 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   mie_phase_ = atmosphere_.mie_phase;
   rayleigh_g_ = parameters.rayleigh.phase_g;
   mie_g_ = parameters.mie.phase_g;
-  max_extinction_ = glm::dvec3(0.0);
+  max_extinction_ = glm::dvec4(0.0);
   for (std::size_t c = 0; c < parameters.channel_count(); ++c) {
     Channel ch;
     ch.rayleigh_scattering = parameters.rayleigh.scattering_per_m[c];
@@ -236,12 +236,14 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
     ch.mie_scattering = parameters.mie.scattering_per_m[c];
     ch.mie_extinction = parameters.mie.extinction_per_m(c);
     ch.ozone_extinction = parameters.ozone.extinction_per_m(c);
+    ch.water_vapor_extinction = parameters.water_vapor.present() ? parameters.water_vapor.extinction_per_m(c) : 0.0;
     // Densities are clamped to [0, 1] (shared/medium.glsl), so this bounds sigma_t everywhere.
-    ch.majorant = ch.rayleigh_extinction + ch.mie_extinction + ch.ozone_extinction;
+    ch.majorant = ch.rayleigh_extinction + ch.mie_extinction + ch.ozone_extinction + ch.water_vapor_extinction;
     ch.albedo = half_space_ ? 0.0 : parameters.ground_albedo[c];
     channels_.push_back(ch);
     max_extinction_ = glm::max(max_extinction_,
-                               glm::dvec3(ch.rayleigh_extinction, ch.mie_extinction, ch.ozone_extinction));
+                               glm::dvec4(ch.rayleigh_extinction, ch.mie_extinction, ch.ozone_extinction,
+                                                          ch.water_vapor_extinction));
   }
   // The half-space is homogeneous: the media at the density of altitude 0.
   half_space_densities_ = shared::GetDensities(atmosphere_, atmosphere_.bottom_radius);
@@ -250,11 +252,11 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   }
   if (atmosphere_.density_table_enabled) {
     table_maximum_above_.resize(shared::kDensityTableSize);
-    glm::dvec3 maximum(0.0);
+    glm::dvec4 maximum(0.0);
     for (int i = shared::kDensityTableSize - 1; i >= 0; --i) {
       const glm::dvec4& knot = atmosphere_.density_table[i];
       // The margin covers the rounding of exp(mix(...)) between knots.
-      maximum = glm::max(maximum, glm::exp(glm::dvec3(knot.x, knot.y, knot.z)) * (1.0 + 1e-12));
+      maximum = glm::max(maximum, glm::exp(knot) * (1.0 + 1e-12));
       table_maximum_above_[i] = maximum;
     }
   }
@@ -319,7 +321,7 @@ glm::dvec3 PathTracer::ObserverPosition(double altitude_m) const {
   return glm::dvec3(0.0, 0.0, half_space_ ? altitude_m : atmosphere_.bottom_radius + altitude_m);
 }
 
-glm::dvec3 PathTracer::Densities(const glm::dvec3& p) const {
+glm::dvec4 PathTracer::Densities(const glm::dvec3& p) const {
   return half_space_ ? half_space_densities_ : shared::GetDensities(atmosphere_, glm::length(p));
 }
 
@@ -341,7 +343,7 @@ double ProfileMaximumAbove(const shared::DensityProfile& profile, double h, doub
 
 }  // namespace
 
-glm::dvec3 PathTracer::MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const {
+glm::dvec4 PathTracer::MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const {
   // Lowest point of the segment: its perigee when inside, else the nearer end.
   const double b = glm::dot(p, d);
   double r_min;
@@ -357,9 +359,10 @@ glm::dvec3 PathTracer::MaxDensities(const glm::dvec3& p, const glm::dvec3& d, do
     const int i = std::clamp(static_cast<int>(u), 0, shared::kDensityTableSize - 1);
     return table_maximum_above_[static_cast<std::size_t>(i)];
   }
-  return glm::dvec3(ProfileMaximumAbove(atmosphere_.rayleigh_density, h, top),
+  // Water vapour exists only in the table: its density is 0 here.
+  return glm::dvec4(ProfileMaximumAbove(atmosphere_.rayleigh_density, h, top),
                     ProfileMaximumAbove(atmosphere_.mie_density, h, top),
-                    ProfileMaximumAbove(atmosphere_.absorption_density, h, top));
+                    ProfileMaximumAbove(atmosphere_.absorption_density, h, top), 0.0);
 }
 
 void PathTracer::Segment(const glm::dvec3& p, const glm::dvec3& d, double& length, bool& ground) const {
@@ -516,12 +519,12 @@ void PathTracer::ShadowInterval(const glm::dvec3& p, const glm::dvec3& d, double
   }
 }
 
-glm::dvec3 PathTracer::DensityIntegralToTop(double r, double mu) const {
+glm::dvec4 PathTracer::DensityIntegralToTop(double r, double mu) const {
   const double d = shared::DistanceToTopAtmosphereBoundary(atmosphere_, r, mu);
   const double t_low = std::clamp(-r * mu, 0.0, d);
   const double x_0 = -std::sqrt(t_low);
   const double dx = (std::sqrt(d - t_low) - x_0) / kSunProxyIntervals;
-  glm::dvec3 sum(0.0);
+  glm::dvec4 sum(0.0);
   for (int i = 0; i <= kSunProxyIntervals; ++i) {
     const double x = x_0 + i * dx;
     const double t = t_low + x * std::abs(x);
@@ -532,7 +535,7 @@ glm::dvec3 PathTracer::DensityIntegralToTop(double r, double mu) const {
   return sum * dx;
 }
 
-glm::dvec3 PathTracer::SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const {
+glm::dvec4 PathTracer::SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const {
   const double rg = atmosphere_.bottom_radius;
   const double rt = atmosphere_.top_radius;
   const double r = std::clamp(glm::length(x), rg, rt);
@@ -623,7 +626,7 @@ void PathTracer::PlanSegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, d
   double g_max = 0.0;
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 x = p + ts[i] * d;
-    const glm::dvec3 densities = Densities(x);
+    const glm::dvec4 densities = Densities(x);
     const double sigma = OpticalDepth(c, densities);
     if (i > 0) tau_view += 0.5 * (sigma_previous + sigma) * (ts[i] - ts[i - 1]);
     sigma_previous = sigma;
@@ -725,7 +728,7 @@ double PathTracer::SegmentSunlight(const SegmentPlan& plan, const glm::dvec3& p,
   double estimate = 0.0;
   for (int j = 0; j < k; ++j) {
     const glm::dvec3 x = p + tj[j] * d;
-    const glm::dvec3 densities = Densities(x);
+    const glm::dvec4 densities = Densities(x);
     const double s = plan.rayleigh * densities.x + plan.mie * densities.y;
     if (s > 0.0) estimate += wj[j] * transmittance[j] * s * ResidualSunTransmittance(x, sun, c, rng);
   }
@@ -903,7 +906,7 @@ double PathTracer::ImportanceProxy(const glm::dvec3& x, const glm::dvec3& sun, c
   for (int i = 0; i <= kSegmentIntervals; ++i) {
     const double t = ts[i];
     const glm::dvec3 y = x + t * a;
-    const glm::dvec3 densities = Densities(y);
+    const glm::dvec4 densities = Densities(y);
     const double sigma = OpticalDepth(c, densities);
     if (i > 0) tau += 0.5 * (sigma_previous + sigma) * (t - t_previous);
     const bool lit = !(shadow_begin < shadow_end && t > shadow_begin && t < shadow_end);
@@ -969,13 +972,13 @@ void PathTracer::RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, cons
   }
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 y = x + ts[i] * w;
-    const glm::dvec3 densities = Densities(y);
+    const glm::dvec4 densities = Densities(y);
     const bool lit_before = i > 0 && !(shadow && 0.5 * (ts[i - 1] + ts[i]) > shadow_begin &&
                                        0.5 * (ts[i - 1] + ts[i]) < shadow_end);
     const bool lit_after = i + 1 < n && !(shadow && 0.5 * (ts[i] + ts[i + 1]) > shadow_begin &&
                                           0.5 * (ts[i] + ts[i + 1]) < shadow_end);
     const bool needed = lit_before || lit_after;
-    const glm::dvec3 sun_densities = needed ? SunDensityProxy(y, sun) : glm::dvec3(0.0);
+    const glm::dvec4 sun_densities = needed ? SunDensityProxy(y, sun) : glm::dvec4(0.0);
     for (std::size_t c = 0; c < channels; ++c) {
       const Channel& ch = channels_[c];
       const double sigma = OpticalDepth(ch, densities);
@@ -1007,7 +1010,7 @@ void PathTracer::RayNextOrderProxy(const GuideTable& table, const std::vector<do
   for (int i = 0; i <= kSegmentIntervals; ++i) {
     const double t = ts[i];
     const glm::dvec3 y = x + t * w;
-    const glm::dvec3 densities = Densities(y);
+    const glm::dvec4 densities = Densities(y);
     const GuidePosition at = LocateGuide(table, y, sun);
     for (std::size_t c = 0; c < channels; ++c) {
       const Channel& ch = channels_[c];
@@ -1375,7 +1378,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
       // the segment where allowed; or, on a view ray that starts in the planet's shadow and whose
       // end scores nothing, the collision drawn by the guide table's importance.
       bool collided = false;
-      glm::dvec3 densities(0.0);
+      glm::dvec4 densities(0.0);
       const bool guided_collision =
           order == 0 ? view_plan.collision_planned
                      : settings_.shadow_collisions == ShadowCollisions::kGuided &&
@@ -1697,8 +1700,8 @@ void PathTracer::AddBreakpoints(const glm::dvec3& p, const glm::dvec3& d, double
   }
 }
 
-glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const {
-  if (!(t1 > t0)) return glm::dvec3(0.0);
+glm::dvec4 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const {
+  if (!(t1 > t0)) return glm::dvec4(0.0);
   if (half_space_) return half_space_densities_ * (t1 - t0);
   std::vector<double> ts = {t0, t1};
   AddBreakpoints(p, d, t0, t1, ts);
@@ -1707,17 +1710,17 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
   // Adaptive Simpson; the error of a panel is measured as an optical depth (weights: the largest
   // extinction of each medium), and the Richardson term is added to the result.
   int evaluations = 0;  // of f by adapt, for this integral
-  std::function<glm::dvec3(double, double, const glm::dvec3&, const glm::dvec3&, const glm::dvec3&,
-                           const glm::dvec3&, double, int)>
-      adapt = [&](double a, double b, const glm::dvec3& fa, const glm::dvec3& fm, const glm::dvec3& fb,
-                  const glm::dvec3& whole, double eps, int depth) -> glm::dvec3 {
+  std::function<glm::dvec4(double, double, const glm::dvec4&, const glm::dvec4&, const glm::dvec4&,
+                           const glm::dvec4&, double, int)>
+      adapt = [&](double a, double b, const glm::dvec4& fa, const glm::dvec4& fm, const glm::dvec4& fb,
+                  const glm::dvec4& whole, double eps, int depth) -> glm::dvec4 {
     const double m = 0.5 * (a + b);
-    const glm::dvec3 flm = f(0.5 * (a + m));
-    const glm::dvec3 frm = f(0.5 * (m + b));
-    const glm::dvec3 left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-    const glm::dvec3 right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+    const glm::dvec4 flm = f(0.5 * (a + m));
+    const glm::dvec4 frm = f(0.5 * (m + b));
+    const glm::dvec4 left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
+    const glm::dvec4 right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
     evaluations += 2;
-    const glm::dvec3 delta = left + right - whole;
+    const glm::dvec4 delta = left + right - whole;
     const double error = glm::dot(glm::abs(delta), max_extinction_);
     const double rounding = kQuadratureRelativeFloor * glm::dot(glm::abs(left + right), max_extinction_);
     if (depth <= 0 || evaluations >= kMaxQuadratureEvaluations || error <= 15.0 * std::max(eps, rounding)) {
@@ -1725,7 +1728,7 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
     }
     return adapt(a, m, fa, flm, fm, left, 0.5 * eps, depth - 1) + adapt(m, b, fm, frm, fb, right, 0.5 * eps, depth - 1);
   };
-  glm::dvec3 total(0.0);
+  glm::dvec4 total(0.0);
   // Panels per piece, so that no feature hides between the first samples; a ray cut by many
   // breakpoints (a density table's knots) is sampled closely enough by them.
   const int panels = ts.size() > 9 ? 1 : 4;
@@ -1735,7 +1738,7 @@ glm::dvec3 PathTracer::DensityIntegral(const glm::dvec3& p, const glm::dvec3& d,
     for (int k = 0; k < panels; ++k) {
       const double a = ts[i] + k * h;
       const double b = k + 1 == panels ? ts[i + 1] : a + h;
-      const glm::dvec3 fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
+      const glm::dvec4 fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
       total += adapt(a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), kOpticalDepthTolerance,
                      kMaxQuadratureDepth);
     }
@@ -1756,7 +1759,7 @@ void PathTracer::Transmittance(const glm::dvec3& origin, const glm::dvec3& view,
     std::fill(out.begin(), out.end(), 0.0);
     return;
   }
-  const glm::dvec3 densities = DensityIntegral(p, view, 0.0, length);
+  const glm::dvec4 densities = DensityIntegral(p, view, 0.0, length);
   for (std::size_t c = 0; c < channels_.size(); ++c) out[c] = std::exp(-OpticalDepth(channels_[c], densities));
 }
 
@@ -1804,7 +1807,7 @@ void PathTracer::SingleScattering(const glm::dvec3& origin, const glm::dvec3& vi
   const auto integrate = [&](int panels) {
     std::vector<double> result(n, 0.0);
     double t_previous = 0.0;
-    glm::dvec3 view_densities(0.0);  // density integrals from p to t_previous
+    glm::dvec4 view_densities(0.0);  // density integrals from p to t_previous
     for (std::size_t i = 0; i + 1 < breaks.size(); ++i) {
       const double h = (breaks[i + 1] - breaks[i]) / panels;
       if (!(h > 0.0)) continue;
@@ -1820,8 +1823,8 @@ void PathTracer::SingleScattering(const glm::dvec3& origin, const glm::dvec3& vi
           bool sun_ground;
           Segment(x, sun, sun_length, sun_ground);
           if (sun_ground || sun_length == kInfinity) continue;
-          const glm::dvec3 sun_densities = DensityIntegral(x, sun, 0.0, sun_length);
-          const glm::dvec3 densities = Densities(x);
+          const glm::dvec4 sun_densities = DensityIntegral(x, sun, 0.0, sun_length);
+          const glm::dvec4 densities = Densities(x);
           for (std::size_t c = 0; c < n; ++c) {
             const Channel& ch = channels_[c];
             const double scattering = ch.rayleigh_scattering * densities.x * rayleigh_phase +

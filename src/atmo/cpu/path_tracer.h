@@ -268,6 +268,7 @@ class PathTracer {
     double rayleigh_scattering, rayleigh_extinction;
     double mie_scattering, mie_extinction;
     double ozone_extinction;
+    double water_vapor_extinction;
     double majorant;
     double albedo;
   };
@@ -287,10 +288,10 @@ class PathTracer {
     glm::dvec3 up, towards, across;
   };
 
-  glm::dvec3 Densities(const glm::dvec3& p) const;
+  glm::dvec4 Densities(const glm::dvec3& p) const;
   // Upper bounds of the three densities on the segment [p, p + length d]: the profiles' maxima
   // over the altitudes at or above the segment's lowest point.
-  glm::dvec3 MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const;
+  glm::dvec4 MaxDensities(const glm::dvec3& p, const glm::dvec3& d, double length) const;
   double Majorant(const Channel& c, const glm::dvec3& p, const glm::dvec3& d, double length) const {
     return half_space_ ? c.majorant : OpticalDepth(c, MaxDensities(p, d, length));
   }
@@ -347,9 +348,9 @@ class PathTracer {
                    std::uint64_t first, std::uint64_t count, PathTally& tally) const;
   // Density integrals along the sun ray from x to the top, from a small table (importance
   // sampling of SegmentSunlight only: its errors change the variance, never the mean).
-  glm::dvec3 SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const;
+  glm::dvec4 SunDensityProxy(const glm::dvec3& x, const glm::dvec3& sun) const;
   // The same by the trapezoidal rule along (r, mu) (the table's entries).
-  glm::dvec3 DensityIntegralToTop(double r, double mu) const;
+  glm::dvec4 DensityIntegralToTop(double r, double mu) const;
   // The new direction at a scattering vertex x in the planet's shadow, reached along d, scattered
   // by the phase function (kind, g): drawn from the mixture of the phase function and the guiding
   // lobes; `mis_weight` is set to phase / mixture pdf (<= 1 / (1 - shadow_guiding)).
@@ -382,12 +383,13 @@ class PathTracer {
   void TracePath(const TraceQuery& query, const Channel& c, const ViewRayPlan& view_plan, Rng& rng,
                  std::array<double, kOrderBins>& orders) const;
   // Integrals of the three densities along p + t d over [t0, t1].
-  glm::dvec3 DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const;
+  glm::dvec4 DensityIntegral(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1) const;
   // Parameters t in (t0, t1) where p + t d crosses an altitude at which a density profile may
   // have a kink, and the ray's lowest point.
   void AddBreakpoints(const glm::dvec3& p, const glm::dvec3& d, double t0, double t1, std::vector<double>& t) const;
-  double OpticalDepth(const Channel& c, const glm::dvec3& densities) const {
-    return c.rayleigh_extinction * densities.x + c.mie_extinction * densities.y + c.ozone_extinction * densities.z;
+  double OpticalDepth(const Channel& c, const glm::dvec4& densities) const {
+    return c.rayleigh_extinction * densities.x + c.mie_extinction * densities.y + c.ozone_extinction * densities.z +
+           c.water_vapor_extinction * densities.w;
   }
 
   shared::AtmosphereParameters atmosphere_;  // profiles and radii (channels come from channels_)
@@ -395,14 +397,14 @@ class PathTracer {
   int rayleigh_phase_, mie_phase_;
   double rayleigh_g_, mie_g_;
   bool half_space_;
-  glm::dvec3 half_space_densities_;
+  glm::dvec4 half_space_densities_;
   // With a density table: entry i holds the largest densities of knots i .. kDensityTableSize - 1,
   // which bound the (exponential between knots) densities above knot i.
-  std::vector<glm::dvec3> table_maximum_above_;
+  std::vector<glm::dvec4> table_maximum_above_;
   std::vector<double> kink_altitudes_;
-  glm::dvec3 max_extinction_;  // per medium, over channels: weights of the quadrature error
+  glm::dvec4 max_extinction_;  // per medium, over channels: weights of the quadrature error
   PathTracerSettings settings_;
-  std::vector<glm::dvec3> sun_proxy_;  // [r index * kSunProxyMu + mu index], see SunDensityProxy
+  std::vector<glm::dvec4> sun_proxy_;  // [r index * kSunProxyMu + mu index], see SunDensityProxy
   // Built on first use by a shadowed vertex (Guide()); shared by copies of the tracer.
   std::shared_ptr<GuideTable> guide_;
 };

@@ -144,6 +144,7 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   program.SetFloat(p + "mie_g", a.mie_g);
   SetDensityProfile(program, p + "absorption_density", a.absorption_density);
   program.SetVec3(p + "absorption_extinction", a.absorption_extinction);
+  program.SetVec3(p + "water_vapor_extinction", a.water_vapor_extinction);
   program.SetVec3(p + "ground_albedo", a.ground_albedo);
   program.SetFloat(p + "sun_angular_radius", a.sun_angular_radius);
   program.SetVec3(p + "wavelength", a.wavelength);

@@ -56,8 +56,10 @@ SimpleModel::SimpleModel(const AtmosphereParameters& parameters, const ModelOpti
     throw Error("model simple needs the half-space geometry (preset simple); preset '" + parameters.name +
                 "' is spherical: use model hillaire for it");
   }
-  const std::pair<const Medium*, const char*> media[] = {
-      {&parameters.rayleigh, "rayleigh"}, {&parameters.mie, "mie"}, {&parameters.ozone, "ozone"}};
+  const std::pair<const Medium*, const char*> media[] = {{&parameters.rayleigh, "rayleigh"},
+                                                         {&parameters.mie, "mie"},
+                                                         {&parameters.ozone, "ozone"},
+                                                         {&parameters.water_vapor, "water_vapor"}};
   for (std::size_t b = 0; b < ChannelBatchCount(parameters.channel_count()); ++b) {
     Batch batch;
     batch.extinction = shared::vec3(0.0);

@@ -156,7 +156,9 @@ double RayleighExtinction550AtGround(const AtmosphereParameters& p) {
     if (std::abs(p.wavelengths_nm[c] - 550.0) < std::abs(p.wavelengths_nm[nearest] - 550.0)) nearest = c;
   }
   const double ratio = p.wavelengths_nm[nearest] / 550.0;
-  return p.rayleigh.extinction_per_m(nearest) * ratio * ratio * ratio * ratio * p.rayleigh.density.Evaluate(0.0);
+  // Scattering only: it follows lambda^-4; the air's gas absorption (O2, O2-O2) is band-shaped and
+  // negligible at 550 nm, but a channel's band may hold the 577 nm O2-O2 band.
+  return p.rayleigh.scattering_per_m[nearest] * ratio * ratio * ratio * ratio * p.rayleigh.density.Evaluate(0.0);
 }
 
 std::string Format(double value) {

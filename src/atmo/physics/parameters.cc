@@ -263,6 +263,15 @@ void Validate(const AtmosphereParameters& p) {
   ValidateMedium("rayleigh", p.rayleigh, channel_count);
   ValidateMedium("mie", p.mie, channel_count);
   ValidateMedium("ozone", p.ozone, channel_count);
+  // Water vapour is optional: empty vectors mean none.
+  if (!p.water_vapor.scattering_per_m.empty() || !p.water_vapor.absorption_per_m.empty()) {
+    ValidateMedium("water_vapor", p.water_vapor, channel_count);
+    for (std::size_t i = 0; i < channel_count; ++i) {
+      if (p.water_vapor.scattering_per_m[i] != 0.0) {
+        Fail(Indexed("water_vapor.scattering_per_m", i) + " must be 0: water vapour only absorbs in this model");
+      }
+    }
+  }
 
   CheckChannelCount("ground_albedo", p.ground_albedo, channel_count);
   for (std::size_t i = 0; i < channel_count; ++i) {

@@ -245,6 +245,9 @@ std::string ToJson(const AtmosphereParameters& p) {
   j["rayleigh"] = MediumToJson(p.rayleigh);
   j["mie"] = MediumToJson(p.mie);
   j["ozone"] = MediumToJson(p.ozone);
+  // Only when given (the presets without water vapour have empty vectors), so that the seed
+  // presets' JSON and hashes stay what they were.
+  if (!p.water_vapor.absorption_per_m.empty()) j["water_vapor"] = MediumToJson(p.water_vapor);
   j["ground_albedo"] = p.ground_albedo;
   j["sun_angular_radius_rad"] = p.sun_angular_radius_rad;
   j["sun_limb_darkening"] = p.sun_limb_darkening;
@@ -276,7 +279,7 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   if (!root.is_object()) Fail("the parameters must be a JSON object");
   CheckKeys(root, "",
             {"preset", "geometry", "ground_radius_m", "top_radius_m", "wavelengths_nm", "rayleigh",
-             "mie", "ozone", "ground_albedo", "sun_angular_radius_rad", "sun_limb_darkening", "solar_irradiance",
+             "mie", "ozone", "water_vapor", "ground_albedo", "sun_angular_radius_rad", "sun_limb_darkening", "solar_irradiance",
              "exposure", "observer_altitude_m", "aerosol"});
 
   std::string preset_name(kDefaultPreset);
@@ -304,6 +307,14 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   }
   if (const auto it = root.find("ozone"); it != root.end()) {
     ReadMedium(*it, "ozone", channel_count, p.ozone);
+  }
+  if (const auto it = root.find("water_vapor"); it != root.end()) {
+    // A preset without water vapour has empty vectors: none in every channel until given.
+    if (p.water_vapor.absorption_per_m.empty()) {
+      p.water_vapor.scattering_per_m.assign(channel_count, 0.0);
+      p.water_vapor.absorption_per_m.assign(channel_count, 0.0);
+    }
+    ReadMedium(*it, "water_vapor", channel_count, p.water_vapor);
   }
   ReadPerChannel(root, "", "ground_albedo", channel_count, p.ground_albedo);
   ReadNumber(root, "", "sun_angular_radius_rad", p.sun_angular_radius_rad);

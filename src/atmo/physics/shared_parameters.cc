@@ -40,8 +40,11 @@ double TableLogDensity(double density) {
 // of `p`: enabled when at least one medium is tabulated, every medium then sampled at the table's
 // knots; `unit` as for ToSharedParameters.
 void SetDensityTable(const AtmosphereParameters& p, double unit, shared::AtmosphereParameters& a) {
-  a.density_table_enabled =
-      p.rayleigh.density.tabulated() || p.mie.density.tabulated() || p.ozone.density.tabulated() ? 1 : 0;
+  // Water vapour's density lives only in the table (w).
+  a.density_table_enabled = p.rayleigh.density.tabulated() || p.mie.density.tabulated() ||
+                                    p.ozone.density.tabulated() || p.water_vapor.present()
+                                ? 1
+                                : 0;
   // A half-space has no thickness; its table (a constant profile, if any) is then read at 0 only.
   const double thickness_m = p.top_radius_m > p.ground_radius_m ? p.top_radius_m - p.ground_radius_m : unit;
   a.density_table_top = thickness_m / unit;
@@ -50,12 +53,14 @@ void SetDensityTable(const AtmosphereParameters& p, double unit, shared::Atmosph
       a.density_table[i] = shared::vec4(0.0);
       continue;
     }
-    // Every medium through the table (a layer profile too), so that one lookup serves all three.
+    // Every medium through the table (a layer profile too), so that one lookup serves all four.
     const double x = static_cast<double>(i) / (shared::kDensityTableSize - 1);
     const double altitude_m = thickness_m * x * x;
     a.density_table[i] = shared::vec4(TableLogDensity(p.rayleigh.density.Evaluate(altitude_m)),
                                       TableLogDensity(p.mie.density.Evaluate(altitude_m)),
-                                      TableLogDensity(p.ozone.density.Evaluate(altitude_m)), 0.0);
+                                      TableLogDensity(p.ozone.density.Evaluate(altitude_m)),
+                                      p.water_vapor.present() ? TableLogDensity(p.water_vapor.density.Evaluate(altitude_m))
+                                                              : shared::kDensityTableLogZero);
   }
 }
 
@@ -97,6 +102,8 @@ shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, s
   a.mie_g = p.mie.phase_g;
   a.absorption_density = ToSharedProfile(p.ozone.density, unit);
   a.absorption_extinction = Batch(p.ozone.absorption_per_m, first, unit);
+  a.water_vapor_extinction =
+      p.water_vapor.present() ? Batch(p.water_vapor.absorption_per_m, first, unit) : shared::vec3(0.0);
   a.ground_albedo = Batch(p.ground_albedo, first, 1.0);
   a.sun_angular_radius = p.sun_angular_radius_rad;
   // The sun's limb darkening is evaluated from each channel's wavelength (sun.glsl), and its

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <string>
 
 #include "atmo/error.h"
+#include "physics/gases.h"
 #include "physics/data/spectral_tables.h"
 
 namespace atmo {
@@ -201,13 +203,38 @@ AtmosphereParameters EarthSpectral(const SpectralEarthSettings& s) {
   return p;
 }
 
+static std::string FormatNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
 AtmosphereParameters MakeSpectral(const AtmosphereParameters& in, int count) {
   if (count < 3 || count > 256) {
     throw Error("--spectral " + std::to_string(count) + ": the wavelength count must be in [3, 256]");
   }
+  return MakeSpectral(in, SpectralWavelengths(count));
+}
+
+AtmosphereParameters MakeSpectral(const AtmosphereParameters& in, std::span<const double> wavelengths_nm) {
+  if (wavelengths_nm.empty() || wavelengths_nm.size() > 256) {
+    throw Error("--wavelengths: between 1 and 256 wavelengths are needed (got " +
+                std::to_string(wavelengths_nm.size()) + ")");
+  }
+  for (std::size_t i = 0; i < wavelengths_nm.size(); ++i) {
+    const double w = wavelengths_nm[i];
+    if (!(w >= kSpectrumMinNm && w <= kSpectrumMaxNm)) {
+      throw Error("--wavelengths: " + FormatNumber(w) + " nm is outside [" + FormatNumber(kSpectrumMinNm) + ", " +
+                  FormatNumber(kSpectrumMaxNm) + "] nm, the range of atmo's spectral data");
+    }
+    if (i > 0 && !(w > wavelengths_nm[i - 1])) {
+      throw Error("--wavelengths must increase (" + FormatNumber(wavelengths_nm[i - 1]) + " nm, then " +
+                  FormatNumber(w) + " nm)");
+    }
+  }
   Validate(in);
   AtmosphereParameters p = in;
-  p.wavelengths_nm = SpectralWavelengths(count);
+  p.wavelengths_nm.assign(wavelengths_nm.begin(), wavelengths_nm.end());
   const std::vector<double>& from = in.wavelengths_nm;
   const std::vector<double>& to = p.wavelengths_nm;
   const std::size_t n = to.size();
@@ -245,6 +272,17 @@ AtmosphereParameters MakeSpectral(const AtmosphereParameters& in, int count) {
   resample(in.rayleigh, p.rayleigh, /*rayleigh_like=*/true, false);
   resample(in.mie, p.mie, false, false);
   resample(in.ozone, p.ozone, false, /*ozone_like=*/true);
+  // The gases' bands are narrower than the channels: recomputed for the new channels' bands from
+  // the amounts the old channels imply (include/atmo/gas_absorption.h), not interpolated.
+  const bool gases = physical && (in.water_vapor.present() ||
+                                  std::any_of(in.rayleigh.absorption_per_m.begin(),
+                                              in.rayleigh.absorption_per_m.end(), [](double a) { return a > 0.0; }));
+  if (gases) {
+    const GasAmounts amounts = InferGasAmounts(in);
+    SetGasAbsorption(p, amounts.ground_air_per_m3, amounts.water_peak_per_m3);
+  } else if (!in.water_vapor.absorption_per_m.empty()) {
+    resample(in.water_vapor, p.water_vapor, false, false);
+  }
   p.ground_albedo.assign(n, 0.0);
   p.solar_irradiance.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {

@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "atmo/spectrum.h"
+#include "physics/gases.h"
 #include "physics/density_interpolation.h"
 #include "physics/data/afgl_profiles.h"
 #include "printable.h"
@@ -265,6 +266,17 @@ AtmosphereParameters StandardSky(const StandardSkySettings& s) {
     p.rayleigh.absorption_per_m[c] = 0.0;
     p.ozone.scattering_per_m[c] = 0.0;
     p.ozone.absorption_per_m[c] = OzoneCrossSection(lambda) * ozone_peak;
+  }
+  if (s.gases) {
+    // Water vapour at the climatology's levels, normalised to its peak (at the ground).
+    double water_peak = 0.0;
+    for (const AtmosphereLevel& l : levels) water_peak = std::max(water_peak, l.water_per_m3);
+    std::vector<DensityKnot> water;
+    for (const AtmosphereLevel& l : levels) {
+      if (l.altitude_m <= top_m) water.push_back({l.altitude_m, l.water_per_m3 / water_peak});
+    }
+    p.water_vapor.density = DensityProfile::Tabulated(std::move(water));
+    SetGasAbsorption(p, ground_air, water_peak);
   }
   ApplyAerosol(p, s.aerosol);
   Validate(p);

@@ -51,16 +51,19 @@ struct AtmosphereParameters {
   Number mie_g;                   // asymmetry, g > 0: forward peak towards the sun
   DensityProfile absorption_density;
   vec3 absorption_extinction;     // ozone absorption per length, at density 1
+  // Water vapour absorption per length, at density 1: its density exists only in the table (w), so
+  // it is 0 unless density_table_enabled.
+  vec3 water_vapor_extinction;
   vec3 ground_albedo;             // Lambertian, unitless
   Number sun_angular_radius;      // radians
   vec3 wavelength;                // nm, per channel (the sun's limb darkening, sun.glsl)
   int sun_limb_darkening;         // 1: Neckel and Labs 1994's limb darkening; 0: a uniform disc
   vec3 sun_centre_radiance;       // sr^-1 per unit irradiance: GetSunDiscCentreRadiance per channel
-  // 1: the three densities come from density_table and the three layer profiles above are unused
-  // (at least one medium has a tabulated profile); 0: the layer profiles.
+  // 1: the four densities come from density_table and the three layer profiles above are unused
+  // (at least one medium has a tabulated profile, or there is water vapour); 0: the layer profiles.
   int density_table_enabled;
   Number density_table_top;       // altitude of the last knot (length): the atmosphere's thickness
-  // Knot i: the natural logarithms of the Rayleigh, Mie and absorbing densities (x, y, z; w unused),
+  // Knot i: the natural logarithms of the Rayleigh, Mie, ozone and water vapour densities (x, y, z, w),
   // each at least kDensityTableLogZero; interpolated linearly in the knot coordinate, so that each
   // density is exponential in altitude between knots.
   vec4 density_table[kDensityTableSize];

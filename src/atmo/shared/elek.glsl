@@ -101,7 +101,7 @@ struct ElekRayNode {
   Number weight;         // trapezoidal weight (length)
   Number r;              // distance from the planet centre
   Number mu;             // cosine of the view zenith angle at the node
-  vec3 densities;        // Rayleigh, Mie, absorbing medium
+  vec4 densities;        // Rayleigh, Mie, ozone, water vapour
   vec3 extinction;       // per length
 };
 

@@ -19,9 +19,9 @@ Number GetDensityTableCoord(IN(AtmosphereParameters) atmosphere, Number altitude
   return sqrt(x) * Number(kDensityTableSize - 1);
 }
 
-// The three densities from the table: exponential in altitude between knots (their logarithms
+// The four densities from the table: exponential in altitude between knots (their logarithms
 // linear in altitude, not in the knot coordinate), with the end knots' values outside.
-vec3 GetTabulatedDensities(IN(AtmosphereParameters) atmosphere, Number altitude) {
+vec4 GetTabulatedDensities(IN(AtmosphereParameters) atmosphere, Number altitude) {
   Number u = GetDensityTableCoord(atmosphere, altitude);
   Number lower = min(floor(u), Number(kDensityTableSize - 2));
   int i = int(lower);
@@ -33,28 +33,30 @@ vec3 GetTabulatedDensities(IN(AtmosphereParameters) atmosphere, Number altitude)
   vec4 l_0 = atmosphere.density_table[i];
   vec4 l_1 = atmosphere.density_table[i + 1];
   vec4 log_density = mix(l_0, l_1, f);
-  vec3 density = exp(vec3(log_density.x, log_density.y, log_density.z));
+  vec4 density = exp(log_density);
   // Linear in density next to a knot of density 0 (the edge of a layer), as the public profile.
   Number zero = kDensityTableLogZero + 1.0;
   if (min(l_0.x, l_1.x) < zero) density.x = mix(exp(l_0.x), exp(l_1.x), f);
   if (min(l_0.y, l_1.y) < zero) density.y = mix(exp(l_0.y), exp(l_1.y), f);
   if (min(l_0.z, l_1.z) < zero) density.z = mix(exp(l_0.z), exp(l_1.z), f);
+  if (min(l_0.w, l_1.w) < zero) density.w = mix(exp(l_0.w), exp(l_1.w), f);
   return density;
 }
 
-// Densities (unitless, in [0, 1]) of the Rayleigh, Mie and absorbing media at radius r.
-vec3 GetDensities(IN(AtmosphereParameters) atmosphere, Number r) {
+// Densities (unitless, in [0, 1]) of the Rayleigh, Mie, ozone and water vapour media at radius r
+// (water vapour only through the table: 0 with layer profiles).
+vec4 GetDensities(IN(AtmosphereParameters) atmosphere, Number r) {
   Number altitude = max(r - atmosphere.bottom_radius, 0.0);
   if (atmosphere.density_table_enabled != 0) return GetTabulatedDensities(atmosphere, altitude);
-  return vec3(GetProfileDensity(atmosphere.rayleigh_density, altitude),
+  return vec4(GetProfileDensity(atmosphere.rayleigh_density, altitude),
               GetProfileDensity(atmosphere.mie_density, altitude),
-              GetProfileDensity(atmosphere.absorption_density, altitude));
+              GetProfileDensity(atmosphere.absorption_density, altitude), 0.0);
 }
 
-// Extinction (per length) from the three densities.
-vec3 GetExtinctionFromDensities(IN(AtmosphereParameters) atmosphere, IN(vec3) densities) {
+// Extinction (per length) from the four densities.
+vec3 GetExtinctionFromDensities(IN(AtmosphereParameters) atmosphere, IN(vec4) densities) {
   return atmosphere.rayleigh_extinction * densities.x + atmosphere.mie_extinction * densities.y +
-      atmosphere.absorption_extinction * densities.z;
+      atmosphere.absorption_extinction * densities.z + atmosphere.water_vapor_extinction * densities.w;
 }
 
 struct MediumSample {
@@ -65,7 +67,7 @@ struct MediumSample {
 };
 
 MediumSample SampleMedium(IN(AtmosphereParameters) atmosphere, Number r) {
-  vec3 densities = GetDensities(atmosphere, r);
+  vec4 densities = GetDensities(atmosphere, r);
   MediumSample medium;
   medium.rayleigh_scattering = atmosphere.rayleigh_scattering * densities.x;
   medium.mie_scattering = atmosphere.mie_scattering * densities.y;

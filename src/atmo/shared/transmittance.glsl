@@ -16,8 +16,8 @@ vec3 ComputeOpticalDepthToTopAtmosphereBoundary(IN(AtmosphereParameters) atmosph
   Number t_low = ClampToRange(-r * mu, 0.0, d);
   Number x_0 = -sqrt(t_low);
   Number dx = (sqrt(d - t_low) - x_0) / Number(sample_count);
-  // The integrals of the three densities, combined with the coefficients once at the end.
-  vec3 density_integrals = vec3(0.0);
+  // The integrals of the four densities, combined with the coefficients once at the end.
+  vec4 density_integrals = vec4(0.0);
   for (int i = 0; i <= sample_count; ++i) {
     Number x = x_0 + Number(i) * dx;
     Number t = t_low + x * abs(x);
