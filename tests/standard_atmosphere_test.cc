@@ -246,7 +246,7 @@ TEST(StandardPresets, HoldTheirColumns) {
 
 // The path tracer and source4d on the new media: tabulated air, ozone and OPAC aerosol layers.
 // Measured (docs/accuracy.md, "On real-sky media"): on us-standard (tau_550 0.13) source4d's
-// defaults are within 0.6-0.7 % in median and 2.2-2.7 % at p95 at 595 and 830 nm; in a
+// defaults are within 0.8-0.9 % in median and 1.9-2.0 % at p95 at 595 and 830 nm; in a
 // continental-polluted haze of tau 0.6 its 16 altitude rows are too few for the mixing layer (up to
 // 6.4 % low beside the sun; 64 rows: 1.8 % there, too slow for this test under the sanitizers).
 // Bounds: 3 standard errors plus 3 % on us-standard, plus 8 % in the haze.
