@@ -13,7 +13,7 @@ it compares with (docs/data/validation/*.csv, each with its citation). Everythin
 is left alone. Only the Python standard library is used.
 
     scripts/validation.py                  # every table: about 5 minutes on 2 cores (measured:
-                                           # 145 s for validation.md's tables, 144 s for
+                                           # 145 s for validation.md's tables, 148 s for
                                            # real-sky-solvers, which goes to docs/accuracy.md)
     scripts/validation.py --only illuminance twilight
     scripts/validation.py --list

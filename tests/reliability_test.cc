@@ -284,6 +284,20 @@ const BadInput kBadInputs[] = {
      "render --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min --latitude 46.5 "
      "--longitude 7.9" ATMO_TINY " --png shot.png --exr shot.exr",
      "cannot write 'shot_0002.exr': it is a folder"},
+    // Sizes over the memory limit, refused before any work with their estimate (docs/reliability.md).
+    {"MaxMemoryMalformed", "render --max-memory 4X" ATMO_TINY,
+     "memory size '4X': expected a number of bytes with an optional K, M, G or T, e.g. 4G"},
+    {"MaxMemoryTooSmall", "render --max-memory 1000" ATMO_TINY, "memory size '1000' is outside [1M, 1024T]"},
+    {"RenderOverMemory", "render --width 4096 --height 4096 --max-memory 64M --exr sky.exr --png sky.png",
+     "a 4096x4096 render would need about 640.0 MB, more than the memory limit of 64.0 MB (--max-memory)"},
+    {"CubeOverMemory", "render --camera cubemap --face-size 2048 --max-memory 64M --exr sky.exr",
+     "a cube map of 2048-texel faces would need about 960.0 MB"},
+    {"ElekOverMemory", "sample --model elek --option size=1024x4096x1024 --max-memory 1G" ATMO_ONE " --out out.csv",
+     "elek tables of size=1024x4096x1024 at 3 channels would need about 512.0 GB"},
+    {"Source4dOverMemory", "sample --model source4d --option table=64x64x64x64 --max-memory 256M" ATMO_ONE " --out out.csv",
+     "source4d tables of table=64x64x64x64 at 3 channels would need about 1.0 GB"},
+    {"AerialOverMemory", "precompute --model hillaire --aerial-size 512x512x512 --max-memory 1G --out sky",
+     "an aerial-perspective volume of 512x512x512 at 3 channels would need about 3.0 GB"},
     // The real sky's knobs and tables (docs/aerosols.md, docs/parameters.md).
     {"AodTooLarge", "render --preset us-standard --aod 11" ATMO_TINY, "aerosol optical depth 11 at 550 nm is outside [0, 10]"},
     {"AodNegative", "sample --aod -0.1" ATMO_ONE " --out out.csv", "aerosol optical depth -0.1 at 550 nm is outside [0, 10]"},

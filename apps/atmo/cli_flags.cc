@@ -117,6 +117,9 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option("--threads", common.threads, "worker threads (default: all cores)")
       ->check(kInteger)
       ->check(CLI::Range(1, 1024));
+  app->add_option("--max-memory", common.max_memory,
+                  "refuse work whose tables and images would need more memory than SIZE (e.g. 4G, 512M; "
+                  "default: half of this machine's memory; docs/reliability.md)");
   // Read as text: CLI11's unsigned conversion wrapped -1 to 2^64 - 1 and refused 20-digit seeds.
   app->add_option_function<std::string>(
          "--seed",

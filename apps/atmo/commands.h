@@ -37,6 +37,7 @@ struct CommonOptions {
   std::string config;  // a JSON parameters file; when set, `preset` is not used
   std::string backend = "cpu";
   int threads = 0;  // 0: oneTBB's default
+  std::string max_memory;  // --max-memory SIZE (atmo::ParseByteSize); empty: half the machine's memory
   // Accepted for every model. Deterministic models ignore it; a Monte Carlo model will receive it
   // (see CreateModelFor).
   std::uint64_t seed = 0;

@@ -32,6 +32,7 @@
 
 #include "atmo/error.h"
 #include "atmo/interrupt.h"
+#include "atmo/memory.h"
 #include "atmo/render.h"
 #include "cli_flags.h"
 #include "commands.h"
@@ -69,7 +70,7 @@ void GroupFlags(CLI::App* app) {
       {"--option", "Model and atmosphere"}, {"--spectral", "Model and atmosphere"}, {"--wavelengths", "Model and atmosphere"}, {"--table", "Model and atmosphere"},
       {"--aerosol", "Model and atmosphere"}, {"--aod", "Model and atmosphere"}, {"--angstrom", "Model and atmosphere"},
       {"--visibility", "Model and atmosphere"}, {"--turbidity", "Model and atmosphere"},
-      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
+      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
       {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
       {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},
       {"--yaw", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
@@ -357,6 +358,7 @@ int main(int argc, char** argv) {
       thread_limit.emplace(oneapi::tbb::global_control::max_allowed_parallelism,
                            static_cast<std::size_t>(common.threads));
     }
+    if (!common.max_memory.empty()) atmo::SetMemoryLimitBytes(atmo::ParseByteSize(common.max_memory));
     if (render_app->parsed()) return atmo::cli::RunRender(common, render);
     if (sample_app->parsed()) return atmo::cli::RunSample(common, sample);
     if (compare_app->parsed()) return atmo::cli::RunCompare(common, compare);
@@ -367,6 +369,12 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const atmo::Error& error) {
     PrintError(error.what());
+  } catch (const std::bad_alloc&) {
+    // Sizes are checked against --max-memory before the large allocations; this is what the
+    // machine refused below that limit.
+    PrintError("out of memory: the machine refused an allocation below the --max-memory limit of " +
+               atmo::FormatBytes(static_cast<double>(atmo::MemoryLimitBytes())) +
+               " (lower --max-memory, or the sizes asked for)");
   } catch (const std::exception& error) {
     PrintError(error.what());
   }

@@ -17,6 +17,7 @@
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/error.h"
+#include "atmo/memory.h"
 #include "atmo/image.h"
 #include "atmo/render.h"
 #include "commands.h"
@@ -301,6 +302,13 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     throw Error("--spp is the number of Monte Carlo paths per pixel of model reference; model '" + common.model +
                 "' is deterministic and takes no --spp");
   }
+  // The image buffers before any work: measured 36-37 bytes per pixel (the frame, its display
+  // conversion and the writers' rows), whatever the channel count (docs/reliability.md, "Memory").
+  const double pixels = cubemap ? 6.0 * command.face_size * static_cast<double>(command.face_size)
+                             : static_cast<double>(command.width) * command.height;
+  CheckMemory(cubemap ? Format("a cube map of %d-texel faces", command.face_size)
+                   : Format("a %dx%d render", command.width, command.height),
+              40.0 * pixels);
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const auto precompute_start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, model_parameters);

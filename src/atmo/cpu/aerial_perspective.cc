@@ -9,6 +9,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "atmo/memory.h"
 #include "cpu/camera.h"
 
 namespace atmo {
@@ -32,6 +33,11 @@ AerialPerspectiveVolume ComputeAerialPerspectiveVolume(const SkyView& sky, const
   volume.channel_count_ = sky.channel_count();
   const std::size_t n = volume.channel_count_;
   const std::size_t froxels = static_cast<std::size_t>(settings.width) * settings.height * settings.depth;
+  // Radiance and transmittance, one float each per froxel and channel.
+  CheckMemory("an aerial-perspective volume of " + std::to_string(settings.width) + "x" +
+                  std::to_string(settings.height) + "x" + std::to_string(settings.depth) + " at " + std::to_string(n) +
+                  " channels",
+              8.0 * static_cast<double>(froxels) * static_cast<double>(n));
   volume.radiance_.assign(froxels * n, 0.0f);
   volume.transmittance_.assign(froxels * n, 1.0f);
   const shared::CameraParameters shared_camera = ToSharedCamera(camera);

@@ -1593,16 +1593,25 @@ namespace {
 PathTally TraceBlocks(std::size_t channels, std::uint64_t first, std::uint64_t count,
                       const std::function<void(std::uint64_t, std::uint64_t, PathTally&)>& trace_block) {
   const std::uint64_t blocks = (count + kBlockPaths - 1) / kBlockPaths;
-  std::vector<PathTally> tallies(blocks, PathTally(channels));
-  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::uint64_t>(0, blocks, 1),
-                            [&](const oneapi::tbb::blocked_range<std::uint64_t>& range) {
-                              for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
-                                const std::uint64_t start = b * kBlockPaths;
-                                trace_block(first + start, std::min(kBlockPaths, count - start), tallies[b]);
-                              }
-                            });
+  // Blocks are traced in parallel a group at a time and merged in block order, as one pass over
+  // all of them would be: the result is the same, and the tallies in memory stay under ~64 MB
+  // (2^40 paths were 2^33 tallies at once, a std::bad_alloc).
+  const std::uint64_t tally_bytes = 4 * sizeof(double) * kTallySlots * std::max<std::size_t>(channels, 1);
+  const std::uint64_t group_blocks = std::max<std::uint64_t>(64, (std::uint64_t{64} << 20) / tally_bytes);
   PathTally total(channels);
-  for (const PathTally& t : tallies) total.Merge(t);
+  std::vector<PathTally> tallies;
+  for (std::uint64_t group = 0; group < blocks; group += group_blocks) {
+    const std::uint64_t n = std::min(group_blocks, blocks - group);
+    tallies.assign(n, PathTally(channels));
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::uint64_t>(0, n, 1),
+                              [&](const oneapi::tbb::blocked_range<std::uint64_t>& range) {
+                                for (std::uint64_t i = range.begin(); i < range.end(); ++i) {
+                                  const std::uint64_t start = (group + i) * kBlockPaths;
+                                  trace_block(first + start, std::min(kBlockPaths, count - start), tallies[i]);
+                                }
+                              });
+    for (const PathTally& t : tallies) total.Merge(t);
+  }
   return total;
 }
 

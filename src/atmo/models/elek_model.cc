@@ -6,6 +6,7 @@
 #include <string>
 
 #include "atmo/error.h"
+#include "atmo/memory.h"
 #include "cpu/hillaire_tables.h"
 #include "io/elek_table_file.h"
 #include "models/model_options.h"
@@ -113,6 +114,12 @@ ElekModel::ElekModel(const AtmosphereParameters& parameters, const ElekSettings&
     if (settings.rayleigh_phase == "modified") batch.atmosphere.rayleigh_phase = shared::kPhaseModifiedRayleigh;
     batches_.push_back(std::move(batch));
   }
+  // Measured peak memory (docs/reliability.md, "Memory"): 120-128 bytes per texel and batch of 3
+  // channels, over a base of ~9 MB.
+  const double texels = static_cast<double>(settings.size.x) * settings.size.y * settings.size.z;
+  CheckMemory("elek tables of size=" + std::to_string(settings.size.x) + "x" + std::to_string(settings.size.y) + "x" +
+                  std::to_string(settings.size.z) + " at " + std::to_string(parameters.channel_count()) + " channels",
+              128.0 * texels * static_cast<double>(batches_.size()) + 16e6);
 }
 
 cpu::ElekGrid ElekModel::grid() const {
