@@ -7,7 +7,6 @@
 // - elek: the tables computed on GL (PrecomputeElekGl) answered by the model's views.
 // CI runs the counts below (ATMO_PROPERTY_SCALE=1); scripts/property_sweep.sh multiplies the
 // atmospheres.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -45,7 +44,6 @@ int CheckHillaireGl(const Context& context, int atmospheres, int observers, int 
   int checked = 0;
   for (int a = 0; a < atmospheres; ++a) {
     const AtmosphereParameters p = RandomAtmosphere(rng);
-    const auto start = std::chrono::steady_clock::now();
     HillaireGl sky(context, p, settings);
     sky.Precompute();
     for (int o = 0; o < observers; ++o) {
@@ -69,8 +67,6 @@ int CheckHillaireGl(const Context& context, int atmospheres, int observers, int 
       }
       checked += views;
     }
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0)
-        << "hillaire gl atmosphere " << a << ": " << ToJson(p);
   }
   return checked;
 }
@@ -81,7 +77,6 @@ int CheckElekGl(const Context& context, int atmospheres, int queries, std::uint6
   int checked = 0;
   for (int a = 0; a < atmospheres; ++a) {
     const AtmosphereParameters p = RandomAtmosphere(rng);
-    const auto start = std::chrono::steady_clock::now();
     ElekModel model(p, settings);
     PrecomputeElekGl(context, model);
     std::vector<double> l(3), t(3), d(3);
@@ -100,8 +95,6 @@ int CheckElekGl(const Context& context, int atmospheres, int queries, std::uint6
       }
       ++checked;
     }
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0)
-        << "elek gl atmosphere " << a << ": " << ToJson(p);
   }
   return checked;
 }

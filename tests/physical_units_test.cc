@@ -1,5 +1,6 @@
 // Light in physical units against published clear-sky values: zenith luminance, direct and
 // diffuse illuminance, the energy bookkeeping of the colour conversion, and the spectral models.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -176,6 +177,46 @@ TEST(SpectralRender, FoldedColourFrameEqualsTheConvertedSpectralFrame) {
       EXPECT_LT(worst, 1e-4) << c.model << " " << n;
     }
   }
+}
+
+// A render loop's target: RenderView into an image reuses its storage when the frame's size and
+// channels match (no fresh pages per frame) and gives the pixels of a fresh RenderView, the sun
+// disc pass included; another size or camera replaces it, dropping the last frame's alpha and
+// environment-map tag.
+TEST(SpectralRender, RenderingIntoAnImageReusesItsStorage) {
+  const AtmosphereParameters p = MakeSpectral(Preset("earth"), 5);
+  const auto model = CreateModel("hillaire", p);
+  const auto sky = model->View(0.0, SunDirection(10.0, 0.0));
+  RadianceTerms terms;
+  terms.sun_disc = true;
+  Camera camera{CameraKind::kPerspective, 48, 24};
+  camera.fov_deg = 40.0;
+  const Image fresh = RenderView(*sky, camera, terms, p.solar_irradiance);
+  // The disc is in the frame (what a second, added pass would double).
+  RadianceTerms sky_only = terms;
+  sky_only.sun_disc = false;
+  const Image no_disc = RenderView(*sky, camera, sky_only, p.solar_irradiance);
+  EXPECT_GT(*std::max_element(fresh.pixels.begin(), fresh.pixels.end()),
+            10.0f * *std::max_element(no_disc.pixels.begin(), no_disc.pixels.end()));
+  Image target;
+  RenderView(*sky, camera, terms, p.solar_irradiance, target);
+  const float* storage = target.pixels.data();
+  RenderView(*sky, camera, terms, p.solar_irradiance, target);  // the disc must not add twice
+  EXPECT_EQ(target.pixels.data(), storage);
+  EXPECT_EQ(target.pixels, fresh.pixels);
+  const std::vector<glm::vec3> weights =
+      ColourWeights(SpectralConversion(p.wavelengths_nm), ImageColour::kLinearSrgb);
+  Image folded;
+  RenderViewFolded(*sky, camera, terms, weights, folded);
+  RenderViewFolded(*sky, camera, terms, weights, folded);
+  EXPECT_EQ(folded.pixels, RenderViewFolded(*sky, camera, terms, weights).pixels);
+  // A fisheye of another size: replaced, with its own alpha; then an equirect without it.
+  RenderView(*sky, Camera{CameraKind::kFisheye, 16, 16}, {}, p.solar_irradiance, target);
+  EXPECT_EQ(target.width, 16);
+  EXPECT_EQ(target.alpha.size(), 256u);
+  RenderView(*sky, Camera{CameraKind::kEquirect, 16, 16}, {}, p.solar_irradiance, target);
+  EXPECT_TRUE(target.alpha.empty());
+  EXPECT_EQ(target.envmap, EnvMap::kLatLong);
 }
 
 }  // namespace

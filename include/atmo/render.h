@@ -65,6 +65,10 @@ Image Render(const Model& model, const RenderSettings& settings);
 using RowProgress = std::function<void(int rows_done, int rows_total)>;
 Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance, const RowProgress& progress = {});
+// The same into `image`, whose pixel storage is reused when its size and channel count are the
+// frame's (a render loop's target: no allocation, zero fill or page faults per frame).
+void RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
+                std::span<const double> solar_irradiance, Image& image, const RowProgress& progress = {});
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
 // (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the
@@ -73,6 +77,8 @@ Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& 
 // `weights` without one entry per channel of the view.
 Image RenderViewFolded(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                        std::span<const glm::vec3> weights, const RowProgress& progress = {});
+void RenderViewFolded(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
+                      std::span<const glm::vec3> weights, Image& image, const RowProgress& progress = {});
 
 // Progressive rendering of a Monte Carlo model (model `reference`): every pixel gets
 // `samples_per_pixel` paths (per channel) in passes, the first of `first_pass_samples` paths and

@@ -95,15 +95,24 @@ namespace {
 
 // The frame loop shared by RenderView and RenderViewFolded: camera rays per row (rows in
 // parallel), `evaluate(views, row)` writes `channels` values per pixel of the row.
+// `image` is reused when its size and channel count match (every pixel is written: no zero fill,
+// no fresh pages), else replaced.
 template <typename Evaluate>
-Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& evaluate,
-                 const RowProgress& progress) {
+void RenderRows(const Camera& camera_settings, int channels, const Evaluate& evaluate, const RowProgress& progress,
+                Image& image) {
   std::atomic<int> rows_done{0};
   std::mutex reporting;  // one progress call at a time; rows that find it busy do not wait
   const shared::CameraParameters camera = ToSharedCamera(camera_settings);
   const int width = camera_settings.width;
   const std::size_t nc = static_cast<std::size_t>(channels);
-  Image image(width, camera_settings.height, channels);
+  if (image.width != width || image.height != camera_settings.height || image.channels != channels ||
+      image.pixels.size() != static_cast<std::size_t>(width) * camera_settings.height * nc) {
+    image = Image(width, camera_settings.height, channels);
+  }
+  image.alpha.clear();
+  image.channel_names.clear();
+  image.colour_space = ColourSpace::kUnspecified;
+  image.envmap = EnvMap::kNone;
   const bool has_alpha = camera_settings.kind == CameraKind::kFisheye;
   if (has_alpha) image.alpha.assign(static_cast<std::size_t>(width) * image.height, 0.0f);
   if (camera_settings.kind == CameraKind::kEquirect) image.envmap = EnvMap::kLatLong;  // docs/environment.md
@@ -130,13 +139,19 @@ Image RenderRows(const Camera& camera_settings, int channels, const Evaluate& ev
     }
   });
   if (progress) progress(image.height, image.height);
-  return image;
 }
 
 }  // namespace
 
 Image RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
                  std::span<const double> solar_irradiance, const RowProgress& progress) {
+  Image image;
+  RenderView(sky, camera_settings, terms, solar_irradiance, image, progress);
+  return image;
+}
+
+void RenderView(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
+                std::span<const double> solar_irradiance, Image& image, const RowProgress& progress) {
   ValidateCamera(camera_settings);
   const std::size_t n = sky.channel_count();
   CheckChannels(n);
@@ -146,27 +161,33 @@ Image RenderView(const SkyView& sky, const Camera& camera_settings, const Radian
   // their centres.
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
-  Image image = RenderRows(camera_settings, static_cast<int>(n), [&](std::span<const glm::dvec3> views, std::span<float> row) {
+  RenderRows(camera_settings, static_cast<int>(n), [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatch(views, sky_terms, row);
     for (std::size_t x = 0; x < views.size(); ++x) {
       for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
     }
-  }, progress);
+  }, progress, image);
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
-  return image;
 }
 
 Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
                        std::span<const glm::vec3> weights, const RowProgress& progress) {
+  Image image;
+  RenderViewFolded(sky, camera_settings, terms, weights, image, progress);
+  return image;
+}
+
+void RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
+                      std::span<const glm::vec3> weights, Image& image, const RowProgress& progress) {
   ValidateCamera(camera_settings);
   const std::size_t n = sky.channel_count();
   CheckChannels(n);
   if (weights.size() != n) throw Error("RenderViewFolded needs one weight per channel");
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
-  Image image = RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
+  RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatchFolded(views, sky_terms, weights, row);
-  }, progress);
+  }, progress, image);
   if (terms.sun_disc) {
     // The disc pass with the disc's radiance folded by the same weights (solar irradiance 1: the
     // weights carry the units).
@@ -185,7 +206,6 @@ Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const 
         },
         ones, image);
   }
-  return image;
 }
 
 CameraKind ParseCameraKind(std::string_view name) {
