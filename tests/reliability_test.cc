@@ -253,6 +253,10 @@ const BadInput kBadInputs[] = {
     {"ObserverTooFar", "render --config observer.json" ATMO_TINY, "observer_altitude_m"},
     {"AltitudeTooFar", "render --altitude 1e12" ATMO_TINY, "--altitude"},
     {"GridAltitudeTooFar", "sample --grid far.csv --out out.csv", "far.csv:2: altitude_m 1e+12 is outside"},
+    // An error quotes at most 32 bytes of a line that is not a grid's (docs/reliability.md, "Trust boundaries").
+    {"GridQuotesAnExcerpt", "sample --grid secret.txt --out out.csv",
+     "secret.txt:1: expected the header 'altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg', got "
+     "'password=correct horse battery s...'"},
     // Accepted garbage and undefined conversions.
     // Cube-map products checked before any work: a refused command replaced sky.exr and sky.png.
     {"CubeKtx2MissingFolder", "render --camera cubemap --face-size 8 --ktx2 nodir/c.ktx2",
@@ -389,6 +393,7 @@ TEST_P(BadInputTest, FailsInOneLineAndLeavesOutputsUntouched) {
   WriteFile(dir_ / "sun.json", R"({"sun_angular_radius_rad": 1e-12})");
   WriteFile(dir_ / "observer.json", R"({"observer_altitude_m": 1e15})");
   WriteFile(dir_ / "far.csv", std::string(kGridHeader) + "\n1e12,30,60,90\n");
+  WriteFile(dir_ / "secret.txt", "password=correct horse battery staple and more words\n");
   // Valid text, a NUL, then bytes that were ignored.
   WriteFile(dir_ / "nul.json", std::string("{}") + '\0' + "{\"rayleigh\": 7}");
   WriteFile(dir_ / "nul.csv", std::string(kGridHeader) + "\n0,30,60,90\n" + '\0' + "garbage\n");

@@ -21,6 +21,26 @@ namespace atmo::cli {
 
 namespace {
 
+// What an error quotes of an input line or field: at most 32 bytes, control characters escaped,
+// "..." when cut. A grid given a file that is not a grid (`--grid /etc/passwd`) is named by its
+// path and line number; its contents are not echoed beyond that excerpt.
+std::string Excerpt(std::string_view text) {
+  constexpr std::size_t kMax = 32;
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < kMax; ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c == 0x7f) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
+      out += escaped;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (text.size() > kMax) out += "...";
+  return out;
+}
+
 std::string_view Trim(std::string_view text) {
   const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
   while (!text.empty() && is_space(text.front())) text.remove_prefix(1);
@@ -116,7 +136,7 @@ void ParseNumberRows(std::string_view text, const std::string& path, const char*
       const std::vector<std::string_view> names = SplitCommas(line);
       const std::vector<std::string_view> expected = SplitCommas(header);
       if (names != expected) {
-        throw Error(where + "expected the header '" + header + "', got '" + std::string(line) + "'");
+        throw Error(where + "expected the header '" + header + "', got '" + Excerpt(line) + "'");
       }
       header_seen = true;
       continue;
@@ -132,9 +152,9 @@ void ParseNumberRows(std::string_view text, const std::string& path, const char*
       const auto [ptr, error] = std::from_chars(field.data(), last, values[i]);
       if (field.empty() || error != std::errc() || ptr != last) {
         if (error == std::errc::result_out_of_range && ptr == last) {
-          throw Error(where + "'" + std::string(field) + "' is out of range");
+          throw Error(where + "'" + Excerpt(field) + "' is out of range");
         }
-        throw Error(where + "expected " + count + " comma-separated numbers, got '" + std::string(field) + "'");
+        throw Error(where + "expected " + count + " comma-separated numbers, got '" + Excerpt(field) + "'");
       }
     }
     row(values, where, line_number);

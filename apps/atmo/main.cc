@@ -34,6 +34,7 @@
 #include "atmo/interrupt.h"
 #include "atmo/memory.h"
 #include "atmo/render.h"
+#include "atmo/timing.h"
 #include "cli_flags.h"
 #include "commands.h"
 
@@ -359,6 +360,8 @@ int main(int argc, char** argv) {
                            static_cast<std::size_t>(common.threads));
     }
     if (!common.max_memory.empty()) atmo::SetMemoryLimitBytes(atmo::ParseByteSize(common.max_memory));
+    // Long precomputations announce their estimate and passes (atmo::SetProgressHandler).
+    atmo::SetProgressHandler([](const std::string& message) { std::fprintf(stderr, "atmo: %s\n", message.c_str()); });
     if (render_app->parsed()) return atmo::cli::RunRender(common, render);
     if (sample_app->parsed()) return atmo::cli::RunSample(common, sample);
     if (compare_app->parsed()) return atmo::cli::RunCompare(common, compare);

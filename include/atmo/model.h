@@ -13,6 +13,7 @@
 // ground, the ground's own reflected light.
 #pragma once
 
+#include <chrono>
 #include <limits>
 #include <map>
 #include <memory>
@@ -120,6 +121,11 @@ class Model {
   std::size_t channel_count() const { return parameters_.channel_count(); }
   // Per-pass times of Precompute() and of the per-view tables View() builds.
   const PassTimings& timings() const { return timings_; }
+  // Seconds Precompute() is expected to take on the threads oneTBB may use, from the model's
+  // table sizes and per-cell costs measured on this project's 2-core machine (docs/performance.md);
+  // 0 for models whose precomputation is short whatever their options. An estimate, within a
+  // factor of ~2, for announcing long work (SetProgressHandler), never for a decision.
+  virtual double EstimatedPrecomputeSeconds() const { return 0.0; }
 
  protected:
   explicit Model(AtmosphereParameters parameters) : parameters_(std::move(parameters)) {}
@@ -127,9 +133,13 @@ class Model {
   void RecordPass(std::string_view pass, double ms) const;
 
  private:
+  friend std::unique_ptr<Model> CreateModel(std::string_view, const AtmosphereParameters&, const ModelOptions&);
   AtmosphereParameters parameters_;
   mutable std::mutex timings_mutex_;
   mutable PassTimings timings_;
+  // Set by CreateModel around a long Precompute: each pass's end is announced (SetProgressHandler).
+  std::chrono::steady_clock::time_point progress_start_{};
+  bool announce_passes_ = false;
 };
 
 // Creates and precomputes a model by name. Throws atmo::Error for an unknown model (listing the

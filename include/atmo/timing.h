@@ -5,6 +5,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,5 +47,19 @@ class ScopedPassTimer {
   std::string name_;
   std::chrono::steady_clock::time_point start_;
 };
+
+// Long work announced: when a model's precomputation is estimated to take at least
+// `min_seconds` (Model::EstimatedPrecomputeSeconds), CreateModel sends the handler one message
+// with the estimate before it starts and one as each pass ends ("source4d_gather_2 done, 41 s
+// in"). The command line prints them on stderr (atmo: ...); the default handler is empty
+// (silent). Messages may come from any thread, one at a time. Thread-safe.
+using ProgressHandler = std::function<void(const std::string& message)>;
+void SetProgressHandler(ProgressHandler handler, double min_seconds = 10.0);
+
+// Implementation of the above for CreateModel and Model::RecordPass.
+namespace progress {
+bool Wanted(double estimated_seconds);
+void Send(const std::string& message);
+}  // namespace progress
 
 }  // namespace atmo

@@ -1,5 +1,8 @@
 #include "atmo/timing.h"
 
+#include <mutex>
+#include <utility>
+
 namespace atmo {
 
 void PassTimings::Add(std::string_view name, double ms) {
@@ -20,5 +23,33 @@ double PassTimings::LastMs(std::string_view name) const {
   }
   return -1.0;
 }
+
+namespace {
+
+std::mutex g_progress_mutex;
+ProgressHandler g_progress_handler;
+double g_progress_min_seconds = 10.0;
+
+}  // namespace
+
+void SetProgressHandler(ProgressHandler handler, double min_seconds) {
+  std::lock_guard<std::mutex> lock(g_progress_mutex);
+  g_progress_handler = std::move(handler);
+  g_progress_min_seconds = min_seconds;
+}
+
+namespace progress {
+
+bool Wanted(double estimated_seconds) {
+  std::lock_guard<std::mutex> lock(g_progress_mutex);
+  return g_progress_handler && estimated_seconds >= g_progress_min_seconds;
+}
+
+void Send(const std::string& message) {
+  std::lock_guard<std::mutex> lock(g_progress_mutex);
+  if (g_progress_handler) g_progress_handler(message);
+}
+
+}  // namespace progress
 
 }  // namespace atmo

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include <oneapi/tbb/task_arena.h>
+
 #include "atmo/error.h"
 #include "atmo/memory.h"
 #include "cpu/hillaire_tables.h"
@@ -120,6 +122,15 @@ ElekModel::ElekModel(const AtmosphereParameters& parameters, const ElekSettings&
   CheckMemory("elek tables of size=" + std::to_string(settings.size.x) + "x" + std::to_string(settings.size.y) + "x" +
                   std::to_string(settings.size.z) + " at " + std::to_string(parameters.channel_count()) + " channels",
               128.0 * texels * static_cast<double>(batches_.size()) + 16e6);
+}
+
+double ElekModel::EstimatedPrecomputeSeconds() const {
+  // Measured (`atmo sample --model elek`, docs/reliability.md's memory runs): the default
+  // 32x256x32 table with K = 4 at 3 channels in ~1.0 s of precomputation on 2 threads, about
+  // 2 us of CPU per texel and order; it grows with the texels, the orders and the batches.
+  const double texels = static_cast<double>(settings_.size.x) * settings_.size.y * settings_.size.z;
+  const double cpu_seconds = 2e-6 * texels * std::max(settings_.orders, 1) * static_cast<double>(batches_.size());
+  return cpu_seconds / std::max(oneapi::tbb::this_task_arena::max_concurrency(), 1);
 }
 
 cpu::ElekGrid ElekModel::grid() const {

@@ -70,6 +70,7 @@ class ElekModel final : public Model {
 
   std::string_view name() const override { return "elek"; }
   void Precompute() override;
+  double EstimatedPrecomputeSeconds() const override;
   std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const override;
 
   // The tables of one batch of three channels.

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
 #include "models/elek_model.h"
@@ -12,10 +16,35 @@
 #include "models/source4d_model.h"
 
 namespace atmo {
+namespace {
+
+// 95 -> "1 min 35 s", 7.4 -> "7 s".
+std::string FormatDuration(double seconds) {
+  char text[64];
+  if (seconds < 60.0) {
+    std::snprintf(text, sizeof text, "%.0f s", seconds);
+  } else if (seconds < 3600.0) {
+    std::snprintf(text, sizeof text, "%d min %02d s", static_cast<int>(seconds / 60.0),
+                  static_cast<int>(std::fmod(seconds, 60.0)));
+  } else {
+    std::snprintf(text, sizeof text, "%.1f h", seconds / 3600.0);
+  }
+  return text;
+}
+
+}  // namespace
 
 void Model::RecordPass(std::string_view pass, double ms) const {
-  std::lock_guard<std::mutex> lock(timings_mutex_);
-  timings_.Add(pass, ms);
+  {
+    std::lock_guard<std::mutex> lock(timings_mutex_);
+    timings_.Add(pass, ms);
+  }
+  if (announce_passes_) {
+    const double in_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - progress_start_).count();
+    char text[160];
+    std::snprintf(text, sizeof text, "%.*s done, %.0f s in", static_cast<int>(pass.size()), pass.data(), in_s);
+    progress::Send(text);
+  }
 }
 
 void SkyView::RadianceEstimate(const glm::dvec3& view, std::span<double> radiance,
@@ -101,7 +130,19 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
     for (const std::string& n : ModelNames()) known += (known.empty() ? "" : ", ") + n;
     throw Error("unknown model '" + std::string(name) + "' (known: " + known + ")");
   }
+  // Long work is announced before it starts, and each of its passes as it ends.
+  const double estimate = model->EstimatedPrecomputeSeconds();
+  if (progress::Wanted(estimate)) {
+    char text[200];
+    std::snprintf(text, sizeof text, "%s precomputation: about %s on %d threads (an estimate)",
+                  std::string(model->name()).c_str(), FormatDuration(estimate).c_str(),
+                  oneapi::tbb::this_task_arena::max_concurrency());
+    progress::Send(text);
+    model->progress_start_ = std::chrono::steady_clock::now();
+    model->announce_passes_ = true;
+  }
   model->Precompute();
+  model->announce_passes_ = false;
   return model;
 }
 

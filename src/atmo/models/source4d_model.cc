@@ -1,5 +1,6 @@
 #include "models/source4d_model.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -132,6 +133,16 @@ Source4dModel::Source4dModel(const AtmosphereParameters& parameters, const Sourc
                   std::to_string(t.mu_s_size) + "x" + std::to_string(t.phi_size) + " at " +
                   std::to_string(parameters.channel_count()) + " channels",
               64.0 * cells * static_cast<double>(batches_.size()) + 40e6);
+}
+
+double Source4dModel::EstimatedPrecomputeSeconds() const {
+  // Measured (docs/performance.md, `atmo bench --model source4d`): the default 16x24x48x8 table
+  // at 3 channels and 5 orders in 1.14 s on 2 threads, 3.1 us of CPU per cell and order, the
+  // gathers dominating; the cost grows with the cells, the orders and the batches of 3 channels.
+  const cpu::Source4dSettings& t = settings_.tables;
+  const double cells = static_cast<double>(t.r_size) * t.mu_size * t.mu_s_size * t.phi_size;
+  const double cpu_seconds = 3.1e-6 * cells * std::max(t.orders, 1) * static_cast<double>(batches_.size());
+  return cpu_seconds / std::max(oneapi::tbb::this_task_arena::max_concurrency(), 1);
 }
 
 void Source4dModel::Precompute() {

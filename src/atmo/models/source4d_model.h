@@ -46,6 +46,7 @@ class Source4dModel final : public Model {
 
   std::string_view name() const override { return "source4d"; }
   void Precompute() override;
+  double EstimatedPrecomputeSeconds() const override;
   std::unique_ptr<SkyView> View(double altitude_m, const glm::dvec3& sun_direction) const override;
 
   struct Batch {
