@@ -38,6 +38,7 @@
 #include "atmo/cubemap.h"
 #include "atmo/aerosol.h"
 #include "atmo/error.h"
+#include "atmo/memory.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -734,6 +735,8 @@ PYBIND11_MODULE(_atmo, m) {
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);
   m.def("aerosol_types", &AerosolTypeNames);
+  m.def("set_max_memory", [](const std::string& size) { SetMemoryLimitBytes(size.empty() ? 0 : ParseByteSize(size)); });
+  m.def("max_memory", [] { return MemoryLimitBytes(); });
   m.def("preset_json", [](const std::string& name) { return ToJson(Preset(name)); });
   m.attr("version") = ATMO_VERSION;
 }

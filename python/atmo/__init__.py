@@ -41,6 +41,8 @@ __all__ = [
     "preset_names",
     "preset",
     "aerosol_types",
+    "set_max_memory",
+    "max_memory",
     "CAMERAS",
     "UNITS",
 ]
@@ -473,6 +475,20 @@ def _memory_limit_bytes() -> float:
 def aerosol_types() -> list:
     """The OPAC aerosol types of the `aerosol=` keyword (docs/aerosols.md)."""
     return list(_atmo.aerosol_types())
+
+
+def set_max_memory(size: Optional[str]) -> None:
+    """The memory limit of `--max-memory` (docs/reliability.md, "Memory"): "4G", "512M", ...;
+    None restores the default, half of this machine's memory. Models, renders and volumes whose
+    estimate exceeds it raise ValueError before they allocate."""
+    if size is not None and not isinstance(size, str):
+        raise ValueError(f"size must be a string such as '4G' or None (got {size!r})")
+    _atmo.set_max_memory(size or "")
+
+
+def max_memory() -> int:
+    """The memory limit in bytes (set_max_memory)."""
+    return int(_atmo.max_memory())
 
 
 def preset(name: str) -> dict:

@@ -36,3 +36,18 @@ def test_bad_wavelengths_get_one_line_errors(keywords, message):
 def test_malformed_wavelengths_are_refused(keywords):
     with pytest.raises(ValueError):
         atmo.Model("hillaire", preset="us-standard", **keywords)
+
+
+def test_max_memory_refuses_large_tables_before_allocating():
+    default = atmo.max_memory()
+    try:
+        atmo.set_max_memory("256M")
+        assert atmo.max_memory() == 256 * 1024 * 1024
+        with pytest.raises(ValueError) as error:
+            atmo.Model("source4d", preset="earth", options={"table": "64x64x64x64"})
+        assert "would need about 1.0 GB, more than the memory limit of 256.0 MB" in str(error.value)
+        with pytest.raises(ValueError):
+            atmo.set_max_memory("4X")
+    finally:
+        atmo.set_max_memory(None)
+    assert atmo.max_memory() == default
