@@ -216,6 +216,45 @@ def cie_effects_table(atmo):
                  rows)
 
 
+def cie_ring_table(atmo):
+    """A sky scanner's lowest ring against a point: the CIE fits were made to patch averages (the
+    Tregenza scanner's lowest band spans elevations 0-12 deg and 12 deg of azimuth), so atmo's
+    average over such a patch is set beside CIE 12 at the patch's centre (6 deg), and the point
+    comparison at 5 deg beside it."""
+    elevations = [0.5 + i for i in range(12)]
+    offsets = [-5.0, -2.5, 0.0, 2.5, 5.0]
+    points, keys = [], []
+    for sun in CIE_SUNS:
+        points.append((0.0, 90 - sun, 0.0, 0.0))
+        keys.append((sun, None, None, None))
+        for az in CIE_AZIMUTHS:
+            points.append((0.0, 90 - sun, 85.0, az))
+            keys.append((sun, az, "point", None))
+            for el in elevations:
+                for d in offsets:
+                    points.append((0.0, 90 - sun, 90 - el, (az + d) % 360))
+                    keys.append((sun, az, el, d))
+    values = dict(zip(keys, atmo.luminance_grid(["--preset", "us-standard"], points)))
+    p12 = cie_params(12)
+    rows = []
+    for sun in CIE_SUNS:
+        zenith = values[(sun, None, None, None)]
+        for az in CIE_AZIMUTHS:
+            weight = total = 0.0
+            for el in elevations:
+                w = math.cos(math.radians(el))  # solid angle of the 1-degree rows
+                for d in offsets:
+                    total += w * values[(sun, az, el, d)]
+                    weight += w
+            ring = total / weight / zenith
+            point = values[(sun, az, "point", None)] / zenith
+            rows.append(["%d" % sun, "%d" % az, "%.2f" % (point / cie_relative(*p12, 90 - sun, 85, az)),
+                         "%.2f" % (ring / cie_relative(*p12, 90 - sun, 84, az)),
+                         "%.2f" % (ring / point)])
+    return table(["sun elev. (°)", "azimuth from sun (°)", "L(5°)/Lz ÷ CIE 12 (5°)",
+                  "ring 0–12° average / Lz ÷ CIE 12 (6°)", "ring average ÷ L(5°)"], rows)
+
+
 def illuminance_effects_table(atmo):
     elevations = [10, -4, -8, -12]
     usno = {float(r["sun_altitude_deg"]): float(r["usno1987_total_lux"]) for r in read_csv("illuminance_vs_sun_altitude.csv")}
@@ -353,6 +392,7 @@ TABLES = {
     "twilight": twilight_table,
     "cie": cie_table,
     "cie-effects": cie_effects_table,
+    "cie-ring": cie_ring_table,
     "astm": astm_table,
     "run": run_table,
     "real-sky-solvers": solvers_table,
