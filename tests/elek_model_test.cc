@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include "atmo/elek.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
@@ -423,14 +425,7 @@ TEST_F(ElekFiles, ExportThenLoadGivesIdenticalRadiance) {
   EXPECT_NE(text.find("\"raw\": \"table_transmittance.raw\""), std::string::npos);
 }
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using atmo::testing::ErrorOf;
 
 TEST_F(ElekFiles, LoadRefusesMismatches) {
   const ModelOptions options = {{"size", "4x8x4"}, {"orders", "1"}};

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include "atmo/error.h"
 #include "atmo/gas_absorption.h"
 #include "atmo/model.h"
@@ -16,14 +18,7 @@
 namespace atmo {
 namespace {
 
-std::string ErrorOf(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using atmo::testing::ErrorOf;
 
 double O2Column() { return kOxygenMixingRatio * ClimatologyColumns(Climatology::kUsStandard1976).air_per_m2; }
 double WaterColumn() { return ClimatologyColumns(Climatology::kUsStandard1976).water_per_m2; }

@@ -15,6 +15,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "error_of.h"
 #include <nlohmann/json.hpp>
 
 #include "atmo/error.h"
@@ -61,14 +63,7 @@ bool HasTemporary(const fs::path& dir) {
   return false;
 }
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using atmo::testing::ErrorOf;
 
 // Batch b of a 2D exported table as a shared texture (the CPU's GL_LINEAR sampler).
 shared::Texture2D Texture(const ExportedTable& table, std::size_t b, bool repeat_u = false) {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include "atmo/error.h"
 #include "atmo/memory.h"
 #include "atmo/model.h"
@@ -12,14 +14,7 @@
 namespace atmo {
 namespace {
 
-std::string ErrorOf(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using atmo::testing::ErrorOf;
 
 // Restores the default limit when a test ends.
 struct LimitGuard {

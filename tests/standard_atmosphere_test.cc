@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include "atmo/aerosol.h"
 #include "atmo/error.h"
 #include "atmo/model.h"
@@ -26,14 +28,7 @@ AerosolRequest Request(void (*set)(AerosolRequest&)) {
   return r;
 }
 
-std::string ErrorOf(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using atmo::testing::ErrorOf;
 
 // The US Standard Atmosphere 1976's own tables (NOAA-S/T 76-1562, table I, geometric altitude):
 // pressure and kinetic temperature. Below 86 km the equations are the standard's, so they agree to

@@ -1,8 +1,11 @@
-// Text from an input, made fit to quote in a one-line message (atmo::Error, warnings): control
+// Text and numbers from an input, made fit to quote in a one-line message (atmo::Error, warnings): control
 // characters become escapes (\n, \r, \t, \xNN). A JSON key or name can hold any of them ("\n" in
 // a key of a config was a line break in "unknown key '...'", found by fuzz_json_parameters).
 #pragma once
 
+#include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <string_view>
 
@@ -21,6 +24,22 @@ inline std::string Printable(std::string_view text) {
     else out += c;
   }
   return out;
+}
+
+// A number as a user would write it in a message: integers without exponent or fraction (6360000,
+// -1), other values in the shortest form that reads back exactly (0.004675, 1e-300), and nan /
+// inf / -inf.
+inline std::string FormatNumber(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0.0 ? "inf" : "-inf";
+  if (value == std::floor(value) && std::fabs(value) < 1e15) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.0f", value);
+    return buffer;
+  }
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
 }
 
 }  // namespace atmo

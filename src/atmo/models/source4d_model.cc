@@ -124,9 +124,9 @@ Source4dModel::Source4dModel(const AtmosphereParameters& parameters, const Sourc
     batch.atmosphere = ToSharedParameters(parameters, b);
     batches_.push_back(std::move(batch));
   }
-  // Measured peak memory (docs/reliability.md, "Memory"): ~52 bytes per table cell at 64^4 (the
-  // 866 MB of table=64x64x64x64), more per cell in small tables; 64 per cell and batch of 3
-  // channels plus 40 MB bounds both.
+  // Peak memory (docs/reliability.md, "Memory"): ~200 bytes per cell measured at 16-32 r-rows
+  // (mostly fixed costs), ~52 per cell at 64^4 (the 866 MB of table=64x64x64x64 an outside audit
+  // measured); 64 per cell and batch of 3 channels plus 40 MB bounds both.
   const cpu::Source4dSettings& t = settings.tables;
   const double cells = static_cast<double>(t.r_size) * t.mu_size * t.mu_s_size * t.phi_size;
   CheckMemory("source4d tables of table=" + std::to_string(t.r_size) + "x" + std::to_string(t.mu_size) + "x" +

@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "atmo/error.h"
 #include "physics/data/gas_absorption.h"
+#include "printable.h"
 
 namespace atmo {
 namespace {
@@ -14,12 +14,6 @@ namespace {
 // The tables are per cm^2 (cm^5 for O4); amounts here are per m^2 (m^5).
 constexpr double kCm2PerM2 = 1e4;
 constexpr double kCm5PerM5 = 1e10;
-
-std::string Format(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
-}
 
 // Mean transmittance of 1 nm bin k for a slant amount (per m^2, or m^5 for O4).
 double BinTransmittance(Gas gas, int k, double slant_amount) {
@@ -40,25 +34,28 @@ double BinTransmittance(Gas gas, int k, double slant_amount) {
   return 1.0;
 }
 
-// The band's mean cross-section (per m^2, or m^5 for O4), each bin weighted by its overlap.
-double BandMeanCrossSection(Gas gas, WavelengthBand band) {
+// The band's mean of value(k) over the 1 nm bins, each weighted by its overlap with the band;
+// `outside` stands for the part of the band beyond the tables (360-830 nm).
+template <typename Value>
+double BandMean(WavelengthBand band, double outside, const Value& value) {
   const double first = data::kGasFirstBinNm;
   const double lo = std::clamp(band.lower_nm, first, first + data::kGasBinCount);
   const double hi = std::clamp(band.upper_nm, first, first + data::kGasBinCount);
-  double sum = 0.0;
+  double sum = outside * ((band.upper_nm - band.lower_nm) - (hi - lo));
   for (int k = static_cast<int>(std::floor(lo - first)); k < data::kGasBinCount && first + k < hi; ++k) {
     const double overlap = std::min(hi, first + k + 1.0) - std::max(lo, first + k);
-    if (!(overlap > 0.0)) continue;
-    double sigma = 0.0;
-    if (gas == Gas::kOxygenCollisions) {
-      sigma = data::kO4CrossSection[k] / kCm5PerM5;
-    } else {
-      // The line-by-line bin mean (the quantiles are medians of sixteenths, whose mean is lower).
-      sigma = (gas == Gas::kOxygen ? data::kO2CrossSectionBinMean[k] : data::kH2OCrossSectionBinMean[k]) / kCm2PerM2;
-    }
-    sum += overlap * sigma;
+    if (overlap > 0.0) sum += overlap * value(k);
   }
   return sum / (band.upper_nm - band.lower_nm);
+}
+
+// The band's mean cross-section (per m^2, or m^5 for O4): the line-by-line bin means (the
+// quantiles are medians of sixteenths, whose mean is lower).
+double BandMeanCrossSection(Gas gas, WavelengthBand band) {
+  return BandMean(band, 0.0, [&](int k) {
+    if (gas == Gas::kOxygenCollisions) return data::kO4CrossSection[k] / kCm5PerM5;
+    return (gas == Gas::kOxygen ? data::kO2CrossSectionBinMean[k] : data::kH2OCrossSectionBinMean[k]) / kCm2PerM2;
+  });
 }
 
 }  // namespace
@@ -67,11 +64,11 @@ std::vector<WavelengthBand> ChannelBands(std::span<const double> wavelengths_nm)
   const std::size_t n = wavelengths_nm.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (!(std::isfinite(wavelengths_nm[i]) && wavelengths_nm[i] > 0.0)) {
-      throw Error("channel bands need positive wavelengths (got " + Format(wavelengths_nm[i]) + " nm)");
+      throw Error("channel bands need positive wavelengths (got " + FormatNumber(wavelengths_nm[i]) + " nm)");
     }
     if (i > 0 && !(wavelengths_nm[i] > wavelengths_nm[i - 1])) {
-      throw Error("channel bands need increasing wavelengths (" + Format(wavelengths_nm[i - 1]) + " nm, then " +
-                  Format(wavelengths_nm[i]) + " nm)");
+      throw Error("channel bands need increasing wavelengths (" + FormatNumber(wavelengths_nm[i - 1]) + " nm, then " +
+                  FormatNumber(wavelengths_nm[i]) + " nm)");
     }
   }
   std::vector<WavelengthBand> bands(n);
@@ -91,33 +88,23 @@ std::vector<WavelengthBand> ChannelBands(std::span<const double> wavelengths_nm)
 
 double GasBandTransmittance(Gas gas, WavelengthBand band, double amount, double air_mass) {
   if (!(std::isfinite(amount) && amount >= 0.0)) {
-    throw Error("gas amount must be finite and >= 0 (got " + Format(amount) + ")");
+    throw Error("gas amount must be finite and >= 0 (got " + FormatNumber(amount) + ")");
   }
   if (!(std::isfinite(air_mass) && air_mass >= 0.0)) {
-    throw Error("air mass must be finite and >= 0 (got " + Format(air_mass) + ")");
+    throw Error("air mass must be finite and >= 0 (got " + FormatNumber(air_mass) + ")");
   }
   if (!(std::isfinite(band.lower_nm) && std::isfinite(band.upper_nm) && band.upper_nm > band.lower_nm)) {
-    throw Error("a wavelength band needs lower < upper (got " + Format(band.lower_nm) + "-" + Format(band.upper_nm) +
+    throw Error("a wavelength band needs lower < upper (got " + FormatNumber(band.lower_nm) + "-" + FormatNumber(band.upper_nm) +
                 " nm)");
   }
   const double slant = amount * air_mass;
-  // The mean over the band: each 1 nm bin weighted by its overlap; no absorption outside the tables.
-  double sum = 0.0;
-  const double first = data::kGasFirstBinNm;
-  const double last = first + data::kGasBinCount;
-  const double lo = std::clamp(band.lower_nm, first, last);
-  const double hi = std::clamp(band.upper_nm, first, last);
-  for (int k = static_cast<int>(std::floor(lo - first)); k < data::kGasBinCount && first + k < hi; ++k) {
-    const double overlap = std::min(hi, first + k + 1.0) - std::max(lo, first + k);
-    if (overlap > 0.0) sum += overlap * BinTransmittance(gas, k, slant);
-  }
-  const double outside = (band.upper_nm - band.lower_nm) - (hi - lo);
-  return (sum + outside) / (band.upper_nm - band.lower_nm);
+  // No absorption outside the tables: transmittance 1 there.
+  return BandMean(band, 1.0, [&](int k) { return BinTransmittance(gas, k, slant); });
 }
 
 double GasEffectiveCrossSection(Gas gas, WavelengthBand band, double amount, double air_mass) {
   if (!(std::isfinite(air_mass) && air_mass > 0.0)) {
-    throw Error("the reference air mass must be finite and > 0 (got " + Format(air_mass) + ")");
+    throw Error("the reference air mass must be finite and > 0 (got " + FormatNumber(air_mass) + ")");
   }
   const double t = GasBandTransmittance(gas, band, amount, air_mass);
   const double slant = amount * air_mass;

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "atmo/error.h"
+#include "printable.h"
 #include "physics/density_interpolation.h"
 
 namespace atmo {
@@ -53,21 +54,6 @@ constexpr double kMinSunRadius_rad = 1e-6;
 constexpr double kMaxIrradiance = 1e10;
 constexpr double kMinExposure = 1e-10;
 constexpr double kMaxExposure = 1e10;
-
-// A number as a user would write it: integers without exponent or fraction (6360000, -1), other
-// values in the shortest form that reads back exactly (0.004675, 1e-300), and nan / inf / -inf.
-std::string FormatNumber(double value) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0.0 ? "inf" : "-inf";
-  if (value == std::floor(value) && std::fabs(value) < 1e15) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.0f", value);
-    return buffer;
-  }
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 // A bound of a range, in the shortest form (1e+10 rather than 10000000000).
 std::string FormatBound(double value) {

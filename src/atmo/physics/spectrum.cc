@@ -10,6 +10,7 @@
 
 #include "atmo/error.h"
 #include "physics/gases.h"
+#include "printable.h"
 #include "physics/data/spectral_tables.h"
 
 namespace atmo {
@@ -201,12 +202,6 @@ AtmosphereParameters EarthSpectral(const SpectralEarthSettings& s) {
   }
   Validate(p);
   return p;
-}
-
-static std::string FormatNumber(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.10g", value);
-  return text;
 }
 
 AtmosphereParameters MakeSpectral(const AtmosphereParameters& in, int count) {
