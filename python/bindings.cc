@@ -609,13 +609,14 @@ py::tuple ReadExrArray(const std::string& path) {
 
 void WritePngArray(const std::string& path, const FloatArray& array, const std::optional<FloatArray>& alpha,
                    std::optional<double> exposure, std::optional<double> ev100, const std::string& tonemap,
-                   std::optional<double> gamma, bool per_channel, bool dither, int bits) {
+                   std::optional<double> gamma, bool per_channel, bool dither, int bits, const std::string& metering) {
   Image image = FromArray(array, alpha);
   if (image.channels != 3) throw Error("write_png needs an image of 3 channels (linear sRGB), got " + std::to_string(image.channels));
   if (exposure && ev100) throw Error("give exposure or ev100, not both");
   if (bits != 8 && bits != 16) throw Error("bits must be 8 or 16 (got " + std::to_string(bits) + ")");
   ToneMapping mapping;
   mapping.op = ParseToneMapper(tonemap);
+  const Metering meter = ParseMetering(metering);
   if (gamma) {
     if (!(*gamma > 0.0) || !std::isfinite(*gamma)) throw Error("gamma must be a positive number");
     mapping.transfer = DisplayTransfer::kGamma;
@@ -630,7 +631,7 @@ void WritePngArray(const std::string& path, const FloatArray& array, const std::
     mapping.exposure = *exposure;
   } else {
     // The `atmo render` default for colour images: auto-exposure (docs/display.md).
-    mapping.exposure = ExposureFromEv100(ev100 ? *ev100 : AutoExposureEv100(image));
+    mapping.exposure = ExposureFromEv100(ev100 ? *ev100 : AutoExposureEv100(image, meter));
   }
   WritePng(path, image, mapping);
 }
@@ -726,10 +727,11 @@ PYBIND11_MODULE(_atmo, m) {
   m.def("read_exr", &ReadExrArray, py::arg("path"));
   m.def("write_png", &WritePngArray, py::arg("path"), py::arg("image"), py::arg("alpha"), py::arg("exposure"),
         py::arg("ev100"), py::arg("tonemap"), py::arg("gamma"), py::arg("per_channel"), py::arg("dither"),
-        py::arg("bits"));
-  m.def("auto_exposure_ev100", [](const FloatArray& image, const std::optional<FloatArray>& alpha) {
-    return AutoExposureEv100(FromArray(image, alpha));
-  }, py::arg("image"), py::arg("alpha") = py::none());
+        py::arg("bits"), py::arg("metering"));
+  m.def("auto_exposure_ev100", [](const FloatArray& image, const std::optional<FloatArray>& alpha,
+                                  const std::string& metering) {
+    return AutoExposureEv100(FromArray(image, alpha), ParseMetering(metering));
+  }, py::arg("image"), py::arg("alpha") = py::none(), py::arg("metering") = "adaptive");
   m.def("exposure_from_ev100", &ExposureFromEv100);
   m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);

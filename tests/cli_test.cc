@@ -422,17 +422,21 @@ std::vector<unsigned char> ReadPngRgb(const fs::path& path, int* width, int* hei
   return rgb;
 }
 
-TEST_F(CliTest, SunriseSunStaysOrangeInThePng) {
+TEST_F(CliTest, SunriseSunIsNearWhiteWithAgxAndKeepsItsHueOnTheLuminanceCurve) {
   // A 2-degree view centred on a sun 1 degree up: the disc fills the middle. Its EXR colour is a
-  // deep orange; the PNG keeps the hue (tone mapping on luminance, chromaticity kept), where the
-  // per-channel curve turns it almost white.
+  // deep orange. The default AgX rolls it off to near white, as film and the eye see a sun far
+  // over the exposure; the exp curve on luminance keeps the hue (chromaticity kept).
   const std::string view = "render --width 64 --height 64 --fov 2 --pitch 1 --sun-elevation 1 --exr sun.exr ";
-  ASSERT_EQ(Run(view + "--png sun.png").exit_code, 0);
+  ASSERT_EQ(Run(view + "--png agx.png").exit_code, 0);
+  ASSERT_EQ(Run(view + "--png sun.png --tonemap exp").exit_code, 0);
   ASSERT_EQ(Run(view + "--png seed.png --per-channel --gamma 2.2").exit_code, 0);
   const atmo::Image exr = atmo::ReadExr(dir_ / "sun.exr");
   const float r = exr.at(32, 32, 0), g = exr.at(32, 32, 1);
   ASSERT_GT(r, 2.0f * g) << "the sunrise sun is orange in the EXR";
   int w = 0, h = 0;
+  const std::vector<unsigned char> agx = ReadPngRgb(dir_ / "agx.png", &w, &h);
+  ASSERT_EQ(agx.size(), 64u * 64u * 3u);
+  for (int c = 0; c < 3; ++c) EXPECT_GE(agx[(32 * 64 + 32) * 3 + c], 235) << c;
   const std::vector<unsigned char> png = ReadPngRgb(dir_ / "sun.png", &w, &h);
   ASSERT_EQ(png.size(), 64u * 64u * 3u);
   const unsigned char* centre = &png[(32 * 64 + 32) * 3];
@@ -444,6 +448,53 @@ TEST_F(CliTest, SunriseSunStaysOrangeInThePng) {
   const std::vector<unsigned char> seed = ReadPngRgb(dir_ / "seed.png", &w, &h);
   const unsigned char* seed_centre = &seed[(32 * 64 + 32) * 3];
   EXPECT_GT(seed_centre[1], 200) << "the per-channel curve saturates green too: a near-white sun";
+}
+
+// Mean Rec.601 luma (the "brightness" of 8-bit sRGB codes) of rows [y0, y1) of an RGB PNG.
+double MeanLuma(const std::vector<unsigned char>& rgb, int width, int y0, int y1) {
+  double sum = 0.0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const unsigned char* p = &rgb[(static_cast<std::size_t>(y) * width + x) * 3];
+      sum += 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
+    }
+  }
+  return sum / (static_cast<double>(y1 - y0) * width);
+}
+
+TEST_F(CliTest, TheFirstPictureLooksLikeDaylightAndTheSunIsWhite) {
+  // Noon (sun 60 degrees, default exposure and display): the top third of the frame has a mean
+  // luma of at least 100 of 255, and a time-lapse keeps dusk darker than noon.
+  for (const char* elevation : {"60", "-8"}) {
+    ASSERT_EQ(Run(std::string("render --width 320 --height 180 --no-exr --sun-elevation ") + elevation +
+                  " -o sky" + elevation)
+                  .exit_code,
+              0);
+  }
+  int w = 0, h = 0;
+  const std::vector<unsigned char> noon = ReadPngRgb(dir_ / "sky60.png", &w, &h);
+  const double noon_top = MeanLuma(noon, w, 0, h / 3);
+  EXPECT_GE(noon_top, 100.0);
+  const std::vector<unsigned char> dusk = ReadPngRgb(dir_ / "sky-8.png", &w, &h);
+  EXPECT_LT(MeanLuma(dusk, w, 0, h / 3), noon_top - 30.0) << "nautical twilight darker than noon";
+  // Sun 30 degrees up, spectral, a 5-degree field of 400 x 400: the disc's centre is near white
+  // (every channel at least 235) and not darker than the sky 40 pixels (half a degree) away.
+  ASSERT_EQ(Run("render --preset earth-spectral --sun-elevation 30 --pitch 30 --fov 5 --width 400 --height 400 "
+                "--no-exr -o disc")
+                .exit_code,
+            0);
+  const std::vector<unsigned char> disc = ReadPngRgb(dir_ / "disc.png", &w, &h);
+  ASSERT_EQ(w, 400);
+  const unsigned char* centre = &disc[(200 * 400 + 200) * 3];
+  for (const int offset : {-40, 40}) {
+    const unsigned char* beside = &disc[(200 * 400 + 200 + offset) * 3];
+    const unsigned char* above = &disc[((200 + offset) * 400 + 200) * 3];
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_GE(centre[c], 235) << c;
+      EXPECT_GE(centre[c], beside[c]) << c;
+      EXPECT_GE(centre[c], above[c]) << c;
+    }
+  }
 }
 
 TEST_F(CliTest, CivilTwilightIsVisibleWithAutoExposure) {

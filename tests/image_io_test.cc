@@ -535,7 +535,7 @@ TEST(ToneMap, ParseRejectsOtherNamesWithAHelpfulMessage) {
       ParseToneMapper(name);
       FAIL() << "accepted '" << name << "'";
     } catch (const Error& e) {
-      EXPECT_EQ(std::string(e.what()), "unknown tone mapper '" + std::string(name) + "' (use exp, aces or none)");
+      EXPECT_EQ(std::string(e.what()), "unknown tone mapper '" + std::string(name) + "' (use agx, exp, aces or none)");
     }
   }
 }
@@ -590,39 +590,87 @@ TEST(AutoExposure, UniformImageMetersAtLog2OfEightTimesItsLuminance) {
   // EV100 = log2(L S / K) with S = 100, K = 12.5.
   for (double luminance : {0.01, 1.0, 3.0, 8000.0, 1.6e9}) {
     const float v = static_cast<float>(luminance);
-    EXPECT_NEAR(AutoExposureEv100(Uniform(8, 4, v, v, v)), std::log2(8.0 * luminance), 1e-6) << luminance;
+    EXPECT_NEAR(AutoExposureEv100(Uniform(8, 4, v, v, v), Metering::kCamera), std::log2(8.0 * luminance), 1e-6)
+        << luminance;
   }
   // Only the luminance counts, not the colour.
   const double y = Luminance(2.0, 1.0, 0.5);
-  EXPECT_NEAR(AutoExposureEv100(Uniform(3, 3, 2.0f, 1.0f, 0.5f)), std::log2(8.0 * y), 1e-6);
+  EXPECT_NEAR(AutoExposureEv100(Uniform(3, 3, 2.0f, 1.0f, 0.5f), Metering::kCamera), std::log2(8.0 * y), 1e-6);
 }
 
 TEST(AutoExposure, ScalingTheImageShiftsEv100ByLog2OfTheScale) {
   const Image sky = SkyGradient(16, 64, 1.0, 10.0);
   Image brighter = sky;
   for (float& v : brighter.pixels) v *= 1000.0f;
-  EXPECT_NEAR(AutoExposureEv100(brighter) - AutoExposureEv100(sky), std::log2(1000.0), 1e-4);
+  EXPECT_NEAR(AutoExposureEv100(brighter, Metering::kCamera) - AutoExposureEv100(sky, Metering::kCamera),
+              std::log2(1000.0), 1e-4);
   // The gradient's log-average is sqrt(1 * 10): the percentile clamps move it only slightly.
-  EXPECT_NEAR(AutoExposureEv100(sky), std::log2(8.0 * std::sqrt(10.0)), 0.05);
+  EXPECT_NEAR(AutoExposureEv100(sky, Metering::kCamera), std::log2(8.0 * std::sqrt(10.0)), 0.05);
+  // Adaptive metering follows the luminance more slowly: 1000 times brighter is less than 10
+  // stops more exposure, because the brighter scene is also given a higher key.
+  const double adaptive_shift = AutoExposureEv100(brighter) - AutoExposureEv100(sky);
+  EXPECT_GT(adaptive_shift, 7.0);
+  EXPECT_LT(adaptive_shift, std::log2(1000.0) - 0.5);
 }
 
-TEST(AutoExposure, TwilightAndNoonSkiesComeOutMidGrey) {
-  // Auto-exposed with the default mapping, a twilight sky (1..10 cd/m^2) and a noon sky
-  // (5000..10000 cd/m^2) both land in the middle of the display range, neither black nor white.
-  for (const auto& [low, high] : {std::pair{1.0, 10.0}, std::pair{5000.0, 10000.0}}) {
-    const Image sky = SkyGradient(4, 128, low, high);
-    ToneMapping mapping;
-    mapping.exposure = ExposureFromEv100(AutoExposureEv100(sky));
-    double sum = 0.0;
-    for (int y = 0; y < sky.height; ++y) {
-      const auto d = ToneMapPixel(sky.at(0, y, 0), sky.at(0, y, 1), sky.at(0, y, 2), mapping);
-      // Display luminance, encoded again: the grey level an observer sees.
-      sum += SrgbEncode(Luminance(SrgbDecode(d[0]), SrgbDecode(d[1]), SrgbDecode(d[2])));
-    }
-    const double mean = sum / sky.height;
-    EXPECT_GT(mean, 0.25) << low << ".." << high;
-    EXPECT_LT(mean, 0.6) << low << ".." << high;
+// The mean display grey level (sRGB-encoded display luminance) of an auto-exposed sky.
+double MeanDisplayGrey(const Image& sky, ToneMapping mapping, Metering metering) {
+  mapping.exposure = ExposureFromEv100(AutoExposureEv100(sky, metering));
+  double sum = 0.0;
+  for (int y = 0; y < sky.height; ++y) {
+    const auto d = ToneMapPixel(sky.at(0, y, 0), sky.at(0, y, 1), sky.at(0, y, 2), mapping);
+    sum += SrgbEncode(Luminance(SrgbDecode(d[0]), SrgbDecode(d[1]), SrgbDecode(d[2])));
   }
+  return sum / sky.height;
+}
+
+TEST(AutoExposure, CameraMeteringMakesTwilightAndNoonSkiesMidGrey) {
+  // The reflected-light meter places a twilight sky (1..10 cd/m^2) and a noon sky
+  // (5000..10000 cd/m^2) both in the middle of the display range, neither black nor white.
+  for (const ToneMapper op : {ToneMapper::kExponential, ToneMapper::kAgx}) {
+    ToneMapping mapping;
+    mapping.op = op;
+    const double twilight = MeanDisplayGrey(SkyGradient(4, 128, 1.0, 10.0), mapping, Metering::kCamera);
+    const double noon = MeanDisplayGrey(SkyGradient(4, 128, 5000.0, 10000.0), mapping, Metering::kCamera);
+    EXPECT_GT(twilight, 0.25);
+    EXPECT_LT(twilight, 0.6);
+    EXPECT_NEAR(noon, twilight, 0.02) << "the camera meter cannot tell noon from twilight";
+  }
+}
+
+TEST(AutoExposure, AdaptiveMeteringKeepsNoonBrightAndNightDark) {
+  // A time-lapse's frames: noon, civil twilight, nautical twilight and night skies.
+  const ToneMapping mapping;  // AgX
+  const double noon = MeanDisplayGrey(SkyGradient(4, 128, 5000.0, 10000.0), mapping, Metering::kAdaptive);
+  const double civil = MeanDisplayGrey(SkyGradient(4, 128, 20.0, 80.0), mapping, Metering::kAdaptive);
+  const double nautical = MeanDisplayGrey(SkyGradient(4, 128, 0.5, 2.0), mapping, Metering::kAdaptive);
+  const double night = MeanDisplayGrey(SkyGradient(4, 128, 5e-4, 2e-3), mapping, Metering::kAdaptive);
+  EXPECT_GT(noon, 0.45) << "noon at or above the display's mid grey";
+  EXPECT_LT(noon, 0.65) << "but not washed out";
+  EXPECT_GT(noon, civil + 0.03);
+  EXPECT_GT(civil, nautical + 0.1);
+  EXPECT_GT(nautical, night + 0.05);
+  EXPECT_LT(night, 0.25);
+  // A clear noon sky gets the sunny-16 exposure (EV100 15 for a sunlit scene).
+  EXPECT_NEAR(AutoExposureEv100(Uniform(8, 8, 7000.0f, 7000.0f, 7000.0f)), 15.0, 0.1);
+}
+
+TEST(AutoExposure, AdaptationKeyIsKrawczyksAndRisesWithLuminance) {
+  // Krawczyk, Myszkowski and Seidel 2005: a = 1.03 - 2 / (2 + log10(L + 1)).
+  EXPECT_NEAR(AdaptationKey(0.0), 0.03, 1e-12);
+  EXPECT_NEAR(AdaptationKey(9.0), 1.03 - 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(AdaptationKey(99999.0), 1.03 - 2.0 / 7.0, 1e-12);
+  double previous = 0.0;
+  for (double l = 1e-6; l < 1e9; l *= 3.0) {
+    EXPECT_GT(AdaptationKey(l), previous);
+    previous = AdaptationKey(l);
+  }
+  EXPECT_NEAR(MeteringKey(7000.0), 0.18, 1e-12);
+  EXPECT_EQ(AdaptationKey(std::numeric_limits<double>::quiet_NaN()), 0.01);
+  EXPECT_EQ(AdaptationKey(-1.0), 0.01);
+  EXPECT_EQ(ParseMetering("camera"), Metering::kCamera);
+  EXPECT_EQ(ParseMetering("adaptive"), Metering::kAdaptive);
+  EXPECT_THROW(ParseMetering("spot"), Error);
 }
 
 TEST(AutoExposure, ASmallBrightSunDoesNotSetTheExposure) {
@@ -657,7 +705,7 @@ TEST(AutoExposure, SkipsUncoveredAndUnusablePixels) {
   image.at(1, 1, 1) = std::numeric_limits<float>::infinity();
   for (int c = 0; c < 3; ++c) image.at(2, 1, c) = 0.0f;
   for (int c = 0; c < 3; ++c) image.at(3, 1, c) = -4.0f;
-  EXPECT_NEAR(AutoExposureEv100(image), std::log2(8.0 * 5.0), 1e-6);
+  EXPECT_NEAR(AutoExposureEv100(image, Metering::kCamera), std::log2(8.0 * 5.0), 1e-6);
 }
 
 TEST(AutoExposure, BlackImageGivesZeroAndFewChannelsThrow) {
@@ -673,7 +721,7 @@ TEST(AutoExposure, BlackImageGivesZeroAndFewChannelsThrow) {
       for (int c = 0; c < 6; ++c) six.at(x, y, c) = c < 3 ? 2.0f : 1e6f;
     }
   }
-  EXPECT_NEAR(AutoExposureEv100(six), std::log2(16.0), 1e-6);
+  EXPECT_NEAR(AutoExposureEv100(six, Metering::kCamera), std::log2(16.0), 1e-6);
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -791,7 +839,7 @@ TEST(ToneMapPixel, EveryChannelIsMonotonicInTheExposure) {
 }
 
 TEST(ToneMapPixel, BadValuesAreBlackOrExtreme) {
-  const ToneMapping mapping;
+  const ToneMapping mapping{ToneMapper::kExponential, 10.0};
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   EXPECT_EQ(ToneMapPixel(nan, nan, nan, mapping), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
   EXPECT_EQ(ToneMapPixel(-1.0f, -2.0f, -inf, mapping), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
@@ -802,6 +850,57 @@ TEST(ToneMapPixel, BadValuesAreBlackOrExtreme) {
   EXPECT_LT(red[1], 1e-30f);  // 1 / the largest float, relative to red
   EXPECT_EQ(red[2], 0.0f);
   EXPECT_EQ(ToneMapPixel(inf, inf, inf, mapping), (std::array<float, 3>{1.0f, 1.0f, 1.0f}));
+}
+
+// ------------------------------------------------------------------------------------------------
+// AgX
+
+TEST(Agx, SceneGreyIsDisplayMidGreyAndTheRangeIsSixteenAndAHalfStops) {
+  const ToneMapping agx{ToneMapper::kAgx, 1.0};
+  // 0.18 encodes at x = 20/33, where the sigmoid is 1/2: display 0.5 for a 2.2 display.
+  const auto grey = AgxDisplay(0.18, 0.18, 0.18);
+  for (double c : grey) EXPECT_NEAR(c, 0.5, 1e-9);
+  EXPECT_NEAR(ToneMapValue(0.18f, agx), SrgbEncode(std::pow(0.5, 2.2)), 1e-6);
+  // The ends: 2^-12.47 and below is black, 2^4.03 (16.3) and above white.
+  EXPECT_LT(AgxDisplay(1e-5, 1e-5, 1e-5)[1], 1e-3);
+  EXPECT_GT(AgxDisplay(16.3, 16.3, 16.3)[1], 0.999);
+  EXPECT_EQ(ToneMapPixel(0.0f, 0.0f, 0.0f, agx), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
+  // Grey stays grey (each inset row sums to 1) and rises monotonically.
+  float previous = -1.0f;
+  for (double v = 1e-6; v < 100.0; v *= 1.1) {
+    const auto d = ToneMapPixel(static_cast<float>(v), static_cast<float>(v), static_cast<float>(v), agx);
+    EXPECT_NEAR(d[0], d[1], 1e-6);
+    EXPECT_NEAR(d[2], d[1], 1e-6);
+    EXPECT_GE(d[1], previous);
+    previous = d[1];
+  }
+}
+
+TEST(Agx, BrightColoursRollOffToWhiteAndDimOnesKeepTheirHue) {
+  const ToneMapping agx{ToneMapper::kAgx, 1.0};
+  // A deep orange (the sun near the horizon, R:G:B = 1 : 0.45 : 0.12) far above the range: white.
+  const auto sun = ToneMapPixel(400.0f, 180.0f, 48.0f, agx);
+  for (float c : sun) EXPECT_GT(c, 0.97f);
+  // The same colour at mid exposure keeps its order of channels (still orange).
+  const auto dim = ToneMapPixel(0.2f, 0.09f, 0.024f, agx);
+  EXPECT_GT(dim[0], dim[1] + 0.05f);
+  EXPECT_GT(dim[1], dim[2] + 0.05f);
+  // Displayed luminance never falls as the exposure rises, for saturated colours too.
+  for (const auto& rgb : {std::array<float, 3>{1.0f, 0.45f, 0.12f}, std::array<float, 3>{0.05f, 0.2f, 1.0f},
+                          std::array<float, 3>{0.0f, 1.0f, 0.0f}}) {
+    double previous = -1.0;
+    for (double e = 1e-4; e < 1e4; e *= 1.2) {
+      const auto d = ToneMapPixel(rgb[0], rgb[1], rgb[2], {ToneMapper::kAgx, e});
+      const double y = Luminance(SrgbDecode(d[0]), SrgbDecode(d[1]), SrgbDecode(d[2]));
+      EXPECT_GE(y, previous - 1e-6) << e;
+      previous = y;
+    }
+  }
+  // NaN and negative channels count as 0; +inf saturates to white through the inset.
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(ToneMapPixel(nan, -1.0f, nan, agx), (std::array<float, 3>{0.0f, 0.0f, 0.0f}));
+  for (float c : ToneMapPixel(inf, 0.0f, 0.0f, agx)) EXPECT_GT(c, 0.97f);
+  EXPECT_EQ(ParseToneMapper("agx"), ToneMapper::kAgx);
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -231,9 +231,15 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
                        "EV100 from the image's log-average luminance (the default for physical units)")
       ->excludes(exposure)
       ->excludes(ev);
-  app->add_option("--tonemap", render.tonemap, "exp, aces or none (applied to luminance, hue kept)")
-      ->check(CLI::IsMember({"exp", "aces", "none"}))
+  app->add_option("--metering", render.metering,
+                  "how auto-exposure places the average: adaptive (a noon sky bright, twilight darker, "
+                  "as the eye adapts) or camera (every sky a mid grey)")
+      ->check(CLI::IsMember({"adaptive", "camera"}))
       ->capture_default_str();
+  app->add_option("--tonemap", render.tonemap,
+                  "agx (highlights roll off to white), or exp, aces, none on the luminance with hue kept "
+                  "[default: agx; exp for a relative 3-channel render or with --per-channel]")
+      ->check(CLI::IsMember({"agx", "exp", "aces", "none"}));
   app->add_option_function<double>(
                 "--gamma", [&render](const double& g) { render.gamma = g; },
                 "a bare display gamma instead of the sRGB transfer function (the seed's curve: 2.2)")
@@ -325,8 +331,8 @@ void FinishRenderFlags(CLI::App* app, RenderCommand& render, const RenderFlags& 
     }
   }
   if (png_only_warnings && render.png_path.empty()) {
-    for (const char* flag : {"--exposure", "--ev", "--auto-exposure", "--tonemap", "--gamma", "--per-channel",
-                             "--no-dither", "--png-bits"}) {
+    for (const char* flag : {"--exposure", "--ev", "--auto-exposure", "--metering", "--tonemap", "--gamma",
+                             "--per-channel", "--no-dither", "--png-bits"}) {
       if (app->get_option(flag)->count() > 0) PrintWarning(std::string(flag) + " applies to the PNG only");
     }
   }

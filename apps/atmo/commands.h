@@ -115,7 +115,9 @@ struct RenderCommand {
   std::optional<double> exposure;
   std::optional<double> ev100;
   bool auto_exposure = false;
-  std::string tonemap = "exp";
+  std::string metering = "adaptive";  // how auto-exposure places the average (atmo::Metering)
+  // Empty: agx, except exp for a relative 3-channel render or with --per-channel (the seeds' look).
+  std::string tonemap;
   std::optional<double> gamma;  // given: the bare gamma transfer instead of sRGB
   bool per_channel = false;     // the curve per channel (the seed's look) instead of on luminance
   bool no_dither = false;

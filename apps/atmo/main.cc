@@ -81,8 +81,8 @@ void GroupFlags(CLI::App* app) {
       {"--refraction", "Observer and sun"}, {"--no-sun-disc", "Observer and sun"},
       {"--sun-size", "Observer and sun"}, {"--no-ground", "Observer and sun"},
       {"--exposure", "PNG display"}, {"--ev", "PNG display"}, {"--auto-exposure", "PNG display"},
-      {"--tonemap", "PNG display"}, {"--gamma", "PNG display"}, {"--per-channel", "PNG display"},
-      {"--no-dither", "PNG display"}, {"--png-bits", "PNG display"},
+      {"--tonemap", "PNG display"}, {"--metering", "PNG display"}, {"--gamma", "PNG display"},
+      {"--per-channel", "PNG display"}, {"--no-dither", "PNG display"}, {"--png-bits", "PNG display"},
       {"--until", "Time-lapse"}, {"--step", "Time-lapse"}, {"--mp4", "Time-lapse"}, {"--fps", "Time-lapse"},
   };
   for (CLI::Option* option : app->get_options()) {

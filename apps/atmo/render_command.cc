@@ -116,7 +116,11 @@ RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command)
   if (!std::isfinite(settings.altitude_m)) throw Error("--altitude must be a finite number");
 
   ToneMapping& mapping = plan.mapping;
-  mapping.op = ParseToneMapper(command.tonemap);
+  const bool seed_look = command.per_channel ||
+                         (plan.unit == RadianceUnit::kRelative && plan.parameters.channel_count() == 3);
+  mapping.op = !command.tonemap.empty() ? ParseToneMapper(command.tonemap)
+               : seed_look              ? ToneMapper::kExponential
+                                        : ToneMapper::kAgx;
   if (command.gamma) {
     mapping.transfer = DisplayTransfer::kGamma;
     mapping.gamma = *command.gamma;
@@ -195,7 +199,9 @@ std::vector<std::string> RenderOutputs::Write(const std::string& exr_path, const
     } else if (command.ev100) {
       png_mapping.exposure = ExposureFromEv100(*command.ev100);
     } else if (command.auto_exposure || !legacy_png_) {
-      png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display));
+      // Relative units have no level to adapt to: the camera meter places them.
+      const Metering metering = legacy_png_ ? Metering::kCamera : ParseMetering(command.metering);
+      png_mapping.exposure = ExposureFromEv100(AutoExposureEv100(display, metering));
     } else {
       png_mapping.exposure = plan_.parameters.exposure;
     }

@@ -123,6 +123,24 @@ float Curve(float v) {
   return clamp(t, 0.0, 1.0);
 }
 float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
+// AgX as AgxDisplay of src/atmo/io/display.cc (its numbers and sources are there), decoded from its
+// 2.2 display encoding to linear for Encode.
+float AgxSigmoid(float x) {
+  float d = x - 20.0 / 33.0;
+  return d <= 0.0 ? 0.5 + 2.0 * d * pow(1.0 + 59.507875 * pow(-d, 3.0), -1.0 / 3.0)
+                  : 0.5 + 2.0 * d * pow(1.0 + 69.86278913545539 * pow(d, 3.25), -4.0 / 13.0);
+}
+vec3 Agx(vec3 v) {
+  // Columns of the inset matrix (rows of display.cc's kAgxInset, transposed).
+  const mat3 inset = mat3(0.8424010709504686, 0.04240107095046854, 0.04240107095046854,
+                          0.07843650156180276, 0.8784365015618028, 0.07843650156180276,
+                          0.0791624274877287, 0.0791624274877287, 0.8791624274877287);
+  const float min_ev = -12.473931188332413, max_ev = 4.026068811667588;
+  vec3 stops = clamp(log2(max(inset * v, vec3(1e-30))), min_ev, max_ev);
+  vec3 x = (stops - min_ev) / (max_ev - min_ev);
+  vec3 f = clamp(vec3(AgxSigmoid(x.r), AgxSigmoid(x.g), AgxSigmoid(x.b)), 0.0, 1.0);
+  return pow(clamp(inverse(inset) * f, 0.0, 1.0), vec3(2.2));
+}
 // The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
 ivec2 Texel(ivec2 size) {
   ivec2 texel = ivec2(gl_FragCoord.xy * vec2(size) / vec2(window_size));
@@ -141,7 +159,9 @@ vec3 SkyB(ivec2 texel) {
 float Luminance(vec3 rgb) { return dot(rgb, vec3(0.2126, 0.7152, 0.0722)); }
 vec3 ToneMap(vec3 rgb) {
   vec3 v = max(rgb, vec3(0.0)) * exposure;
-#if PER_CHANNEL
+#if TONE_OP == 3
+  v = Agx(v);
+#elif PER_CHANNEL
   v = vec3(Curve(v.r), Curve(v.g), Curve(v.b));
 #else
   float y = Luminance(v);
@@ -1298,7 +1318,7 @@ void Viewer::DrawPanels() {
       state_.auto_exposure = false;
     }
     int op = static_cast<int>(mapping_.op);
-    ImGui::Combo("tone mapping", &op, "exp\0aces\0none\0");
+    ImGui::Combo("tone mapping", &op, "exp\0aces\0none\0agx\0");
     mapping_.op = static_cast<ToneMapper>(op);
     ImGui::Checkbox("per channel", &mapping_.per_channel);
   }
@@ -1502,7 +1522,10 @@ int Viewer::Run() {
             plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
                 ? frame
                 : ConvertImage(frame, SpectralConversion(current_.wavelengths_nm), ImageColour::kLinearSrgb);
-        metered_ev100_ = AutoExposureEv100(srgb);
+        // Relative units have no level to adapt to: the camera meter places them (as atmo render).
+        const bool relative = plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3;
+        const Metering metering = relative ? Metering::kCamera : ParseMetering(options_.render.metering);
+        metered_ev100_ = AutoExposureEv100(srgb, metering);
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
       if (fused != nullptr) {

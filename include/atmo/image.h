@@ -63,6 +63,10 @@ enum class ToneMapper {
   kExponential,  // the Atmosphere Plus seed: 1 - exp(-exposure * x)
   kAces,         // ACES filmic fit (Narkowicz 2015) of exposure * x
   kNone,         // exposure * x clamped to [0, 1]
+  // AgX (Sobotka 2022, the view transform of Blender 4): each channel of exposure * x, in a space
+  // inset towards white, through a log2 encoding of 16.5 stops and a sigmoid that puts scene grey
+  // 0.18 at display 0.5; bright colours roll off to white. Always per channel (docs/display.md).
+  kAgx,
 };
 
 // Display encoding of a tone-mapped value v in [0, 1].
@@ -78,12 +82,13 @@ enum class DisplayTransfer {
 // luminance (Luminance below) is in cd/m^2 for physical presets, relative for the legacy ones: the
 // mapping does not care, `exposure` scales either into the curve's range (see ExposureFromEv100).
 struct ToneMapping {
-  ToneMapper op = ToneMapper::kExponential;
+  ToneMapper op = ToneMapper::kAgx;
   double exposure = 10.0;  // multiplier of the linear values before the curve
   double gamma = 2.2;      // > 0; the power of DisplayTransfer::kGamma (unused by kSrgb)
   // false: the curve maps the luminance Y and the pixel is scaled by T(Y)/Y, then divided by its
   // largest channel when that exceeds 1, so hue and saturation survive (ToneMapPixel).
   // true: the curve maps each channel on its own (the seed's look; bright colours go to white).
+  // kAgx ignores it: AgX is a per-channel transform in its own inset space.
   bool per_channel = false;
   DisplayTransfer transfer = DisplayTransfer::kSrgb;
   // PNG only: add a triangular-PDF dither of at most +-1 code before rounding to the code (a
@@ -106,15 +111,33 @@ double Luminance(double r, double g, double b);
 double ExposureFromEv100(double ev100);
 // The inverse: log2(1 / (1.2 * exposure)); NaN for exposure <= 0.
 double Ev100FromExposure(double exposure);
-// EV100 that a reflected-light meter (calibration constant K = 12.5, S = 100) gives for the image:
-// EV100 = log2(L_avg * S / K), L_avg the log-average (geometric mean) luminance of channels 0..2
+// EV100 for the image from L_avg, the log-average (geometric mean) luminance of channels 0..2
 // as linear RGB. Pixels with alpha 0, and non-finite or non-positive luminance, are skipped. So that
 // a small, very bright sun disc (or a few black pixels) does not set the exposure, each log2
 // luminance is first clamped to the image's 2nd..98th percentile (a winsorised mean); a sun
-// that fills more than 2% of the frame does count. The average luminance then lands at
-// 1 / 9.6 of L_max. An image with no usable pixel gives 0. Throws atmo::Error for fewer than 3
-// channels or an inconsistent image.
-double AutoExposureEv100(const Image& image);
+// that fills more than 2% of the frame does count. An image with no usable pixel gives 0. Throws
+// atmo::Error for fewer than 3 channels or an inconsistent image.
+//
+// How the average is placed (Metering):
+// - kAdaptive (default): at MeteringKey(L_avg), so that a noon sky is exposed as the sunny-16 rule
+//   exposes daylight and a twilight or night sky darker, as the eye's adaptation falls short:
+//   EV100 = log2(L_avg / (1.2 * key)). The luminance must be in cd/m^2.
+// - kCamera: a reflected-light meter (K = 12.5, S = 100): EV100 = log2(L_avg * S / K), the average
+//   at 1 / 9.6 of L_max whatever its level (every sky a mid grey). For relative units too.
+enum class Metering { kAdaptive, kCamera };
+double AutoExposureEv100(const Image& image, Metering metering = Metering::kAdaptive);
+// The key (the exposed value of the average luminance, 0.18 being Reinhard's "normal" key) for an
+// average luminance L in cd/m^2: 1.03 - 2 / (2 + log10(L + 1)) (Krawczyk, Myszkowski and Seidel
+// 2005, "Perceptual effects in real-time tone mapping", SCCG 2005, eq. 11), clamped below at 0.01.
+// About 0.69 at a noon sky of 7000 cd/m^2, 0.31 at 5 cd/m^2, 0.04 at 0.05 cd/m^2.
+double AdaptationKey(double average_luminance);
+// The key of Metering::kAdaptive: AdaptationKey scaled so that a clear daylight sky's average
+// (7000 cd/m^2) lands at 0.18, the mid grey of the display transforms (AgX maps it to 0.5):
+// 0.18 * a(L) / a(7000). A noon sky then gets EV100 ~ 15, the sunny-16 rule; 40 cd/m^2 (civil
+// twilight) 0.125, 1 cd/m^2 (nautical) 0.042, 10^-3 cd/m^2 and less (night) 0.0079.
+double MeteringKey(double average_luminance);
+// Parses "adaptive" or "camera"; throws atmo::Error otherwise.
+Metering ParseMetering(const std::string& name);
 
 // sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1] (clamped), and its inverse.
 double SrgbEncode(double linear);
@@ -128,7 +151,10 @@ float ToneMapValue(float linear, const ToneMapping& mapping);
 // Maps one linear RGB pixel to display values in [0, 1] as mapping.per_channel says. NaN and
 // negative channels count as 0, +inf as the largest float.
 std::array<float, 3> ToneMapPixel(float r, float g, float b, const ToneMapping& mapping);
-// Parses "exp" / "exponential", "aces", "none"; throws atmo::Error otherwise.
+// AgX's output for one exposed linear Rec.709 pixel, display-encoded for a 2.2 power display, in
+// [0, 1] (ToneMapPixel decodes it and applies mapping.transfer).
+std::array<double, 3> AgxDisplay(double r, double g, double b);
+// Parses "exp" / "exponential", "aces", "none", "agx"; throws atmo::Error otherwise.
 ToneMapper ParseToneMapper(const std::string& name);
 
 // EXR: 32-bit float channels named by image.channel_names, or by default R, G, B (an image with

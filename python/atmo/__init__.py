@@ -414,19 +414,22 @@ def read_exr(path: Union[str, os.PathLike]):
 
 
 def write_png(path: Union[str, os.PathLike], image, *, alpha=None, exposure: Optional[float] = None,
-              ev100: Optional[float] = None, tonemap: str = "exp", gamma: Optional[float] = None,
-              per_channel: bool = False, dither: bool = True, bits: int = 8) -> None:
+              ev100: Optional[float] = None, tonemap: str = "agx", gamma: Optional[float] = None,
+              per_channel: bool = False, dither: bool = True, bits: int = 8,
+              metering: str = "adaptive") -> None:
     """A tone-mapped PNG of a linear sRGB H x W x 3 array, written atomically, as `atmo render`
-    writes it: exposure (a multiplier) or ev100, by default auto-exposure; tonemap "exp", "aces"
-    or "none"; gamma: the bare power instead of the sRGB curve; per_channel: the curve per channel
-    instead of on luminance; 8 or 16 bits."""
+    writes it: exposure (a multiplier) or ev100, by default auto-exposure (metering "adaptive" for
+    cd/m^2, "camera" for relative values; docs/display.md); tonemap "agx", "exp", "aces" or "none";
+    gamma: the bare power instead of the sRGB curve; per_channel: the exp/aces/none curve per
+    channel instead of on luminance; 8 or 16 bits."""
     _atmo.write_png(os.fspath(path), _image_array(image), _alpha_array(alpha), exposure, ev100, tonemap, gamma,
-                    bool(per_channel), bool(dither), int(bits))
+                    bool(per_channel), bool(dither), int(bits), str(metering))
 
 
-def auto_exposure_ev100(image, alpha=None) -> float:
-    """The EV100 of `atmo render --auto-exposure` for a linear sRGB image (include/atmo/image.h)."""
-    return _atmo.auto_exposure_ev100(_image_array(image), _alpha_array(alpha))
+def auto_exposure_ev100(image, alpha=None, metering: str = "adaptive") -> float:
+    """The EV100 of `atmo render --auto-exposure` for a linear sRGB image (include/atmo/image.h):
+    metering "adaptive" (cd/m^2; a noon sky bright, twilight darker) or "camera" (a mid grey)."""
+    return _atmo.auto_exposure_ev100(_image_array(image), _alpha_array(alpha), str(metering))
 
 
 def exposure_from_ev100(ev100: float) -> float:

@@ -45,10 +45,15 @@ def test_png_exposure_and_bits(tmp_path, earth):
     alpha = earth.render(16, 16, "fisheye", full=True).alpha
     atmo.write_png(tmp_path / "a.png", image, alpha=alpha, bits=16, ev100=14.0)
     assert png_header(tmp_path / "a.png") == (16, 16, 16, 6)  # 16-bit RGBA
-    # Auto-exposure maps the log-average luminance to 1 / 9.6 of the saturation luminance
+    # The camera meter maps the log-average luminance to 1 / 9.6 of the saturation luminance
     # (include/atmo/image.h): a brighter image gets a larger EV100, by log2 of the factor.
-    ev = atmo.auto_exposure_ev100(image, alpha)
-    assert atmo.auto_exposure_ev100(image * 4.0, alpha) == pytest.approx(ev + 2.0, abs=1e-4)
+    ev = atmo.auto_exposure_ev100(image, alpha, metering="camera")
+    assert atmo.auto_exposure_ev100(image * 4.0, alpha, metering="camera") == pytest.approx(ev + 2.0, abs=1e-4)
+    # The adaptive meter (the default) gives the brighter image a higher key: less than 2 stops.
+    adaptive = atmo.auto_exposure_ev100(image, alpha)
+    assert 1.0 < atmo.auto_exposure_ev100(image * 4.0, alpha) - adaptive < 2.0
+    with pytest.raises(ValueError, match="unknown metering"):
+        atmo.auto_exposure_ev100(image, alpha, metering="spot")
     assert atmo.exposure_from_ev100(ev) == pytest.approx(1.0 / (1.2 * 2.0**ev))
 
 

@@ -230,7 +230,8 @@ std::vector<unsigned char> ReadPngRgb(const fs::path& path, int& width, int& hei
 // The window shows what `atmo render` writes as its PNG: the display shader's exposure, curve and
 // sRGB encoding against the library's ToneMapPixel, at a fixed EV100 and without dither.
 TEST_F(Viewer, WindowShowsWhatThePngShows) {
-  for (const std::string display : {"--ev 9", "--ev 11 --tonemap aces", "--ev 8 --per-channel"}) {
+  for (const std::string display :
+       {"--ev 9", "--ev 9 --tonemap exp", "--ev 11 --tonemap aces", "--ev 8 --per-channel"}) {
     const std::string flags = std::string(kSameFlags) + " " + display + " --no-sun-disc --no-dither";
     const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot window.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;

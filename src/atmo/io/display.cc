@@ -2,8 +2,10 @@
 // transfer function (see include/atmo/image.h and docs/display.md).
 //
 // Contracts:
-// - Every mapping is monotonic non-decreasing in the linear input and in the exposure, per
-//   channel; its results are in [0, 1].
+// - Every mapping's results are in [0, 1]. The luminance curves and the per-channel mode are
+//   monotonic non-decreasing in the linear input and in the exposure, per channel; AgX is for grey
+//   pixels and for a pixel's luminance (its outset matrix lets one channel of a saturated colour
+//   fall as the others rise towards white, which is the point of it).
 // - The luminance mode only ever scales a pixel's RGB by one factor, so the linear chromaticity
 //   (hue and saturation) of the output is that of the input.
 #include <algorithm>
@@ -38,8 +40,54 @@ double ToneCurve(double v, ToneMapper op) {
     case ToneMapper::kNone:
       t = v;
       break;
+    case ToneMapper::kAgx: {
+      const auto grey = AgxDisplay(v, v, v);
+      t = std::pow(grey[1], 2.2);
+      break;
+    }
   }
   return std::clamp(t, 0.0, 1.0);
+}
+
+// AgX. The numbers are Troy Sobotka's AgX base transform (github.com/sobotka/AgX, the view
+// transform Blender 4 ships): the inset matrix, the log2 encoding from -12.47393 to +4.02607 stops
+// about scene grey 0.18 (16.5 stops), and the sigmoid of its LUT generator in the closed form given
+// by github.com/bWFuanVzYWth/AgX (README): with x0 = 20/33 (where grey 0.18 encodes),
+//   f(x) = 1/2 + 2 (x - x0) (1 + a |x - x0|^b)^c,
+// a = 59.507875, b = 3, c = -1/3 below x0 and a = 69.86278913545539, b = 13/4, c = -4/13 above;
+// f(0) = 0 and f(1) = 1 to 1e-4. The output is encoded for a display of gamma 2.2.
+constexpr double kAgxMinEv = -12.473931188332413;
+constexpr double kAgxMaxEv = 4.026068811667588;
+// Rows: AgX inset channel = row . (R, G, B) of linear Rec.709. Each row sums to 1 (grey stays grey).
+constexpr double kAgxInset[3][3] = {
+    {0.8424010709504686, 0.07843650156180276, 0.0791624274877287},
+    {0.04240107095046854, 0.8784365015618028, 0.0791624274877287},
+    {0.04240107095046854, 0.07843650156180276, 0.8791624274877287},
+};
+
+double AgxSigmoid(double x) {
+  constexpr double x0 = 20.0 / 33.0;
+  const double d = x - x0;
+  const double f = d <= 0.0 ? 0.5 + 2.0 * d * std::pow(1.0 + 59.507875 * std::pow(-d, 3.0), -1.0 / 3.0)
+                            : 0.5 + 2.0 * d * std::pow(1.0 + 69.86278913545539 * std::pow(d, 3.25), -4.0 / 13.0);
+  return std::clamp(f, 0.0, 1.0);
+}
+
+// The outset: the inverse of kAgxInset, computed once (a 3x3 inverse by cofactors).
+std::array<std::array<double, 3>, 3> AgxOutset() {
+  const auto& m = kAgxInset;
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  std::array<std::array<double, 3>, 3> inverse{};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      // inverse[i][j] = cofactor(j, i) / det
+      const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+      inverse[i][j] = (m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]) / det;
+    }
+  }
+  return inverse;
 }
 
 // A linear channel as ToneMapPixel reads it: NaN and negative values are 0, +inf the largest
@@ -50,6 +98,36 @@ double CleanChannel(float x) {
 }
 
 }  // namespace
+
+std::array<double, 3> AgxDisplay(double r, double g, double b) {
+  static const std::array<std::array<double, 3>, 3> outset = AgxOutset();
+  const double rgb[3] = {r, g, b};
+  double encoded[3];
+  for (int i = 0; i < 3; ++i) {
+    double inset = 0.0;
+    for (int j = 0; j < 3; ++j) inset += kAgxInset[i][j] * (std::isnan(rgb[j]) ? 0.0 : std::max(rgb[j], 0.0));
+    // log2 of 0 is -inf, which the clamp to the lower end takes care of; +inf clamps to the top.
+    const double stops = std::clamp(std::log2(inset), kAgxMinEv, kAgxMaxEv);
+    encoded[i] = AgxSigmoid((stops - kAgxMinEv) / (kAgxMaxEv - kAgxMinEv));
+  }
+  std::array<double, 3> out{};
+  for (int i = 0; i < 3; ++i) {
+    const double v = outset[i][0] * encoded[0] + outset[i][1] * encoded[1] + outset[i][2] * encoded[2];
+    out[i] = std::clamp(v, 0.0, 1.0);
+  }
+  return out;
+}
+
+double AdaptationKey(double average_luminance) {
+  if (!(average_luminance >= 0.0)) return 0.01;  // NaN or negative
+  if (std::isinf(average_luminance)) return 1.03;
+  return std::max(0.01, 1.03 - 2.0 / (2.0 + std::log10(average_luminance + 1.0)));
+}
+
+double MeteringKey(double average_luminance) {
+  constexpr double kDaylightSky = 7000.0;  // cd/m^2, a clear sky's log-average with the sun high
+  return 0.18 * AdaptationKey(average_luminance) / AdaptationKey(kDaylightSky);
+}
 
 ToneMapping SeedToneMapping(ToneMapper op, double exposure, double gamma) {
   ToneMapping mapping;
@@ -75,7 +153,7 @@ double Ev100FromExposure(double exposure) {
   return std::log2(1.0 / (1.2 * exposure));
 }
 
-double AutoExposureEv100(const Image& image) {
+double AutoExposureEv100(const Image& image, Metering metering) {
   if (image.channels < 3) {
     throw Error("auto-exposure needs an image with at least 3 channels, got " + std::to_string(image.channels));
   }
@@ -112,6 +190,10 @@ double AutoExposureEv100(const Image& image) {
   for (double l : log_luminance) sum += std::clamp(l, low, high);
   const double log2_average = sum / static_cast<double>(n);
 
+  if (metering == Metering::kAdaptive) {
+    // The average at the adapted key: exposure * L_avg = key, exposure = 1 / (1.2 * 2^EV100).
+    return log2_average - std::log2(1.2 * MeteringKey(std::exp2(log2_average)));
+  }
   // Reflected-light meter: EV100 = log2(L_avg S / K), S = 100, K = 12.5, so log2(L_avg) + 3.
   constexpr double kSensitivity = 100.0, kCalibration = 12.5;
   return log2_average + std::log2(kSensitivity / kCalibration);
@@ -159,6 +241,15 @@ float ToneMapValue(float linear, const ToneMapping& mapping) {
 }
 
 std::array<float, 3> ToneMapPixel(float r, float g, float b, const ToneMapping& mapping) {
+  if (mapping.op == ToneMapper::kAgx) {
+    if (!(mapping.exposure > 0.0)) return {0.0f, 0.0f, 0.0f};
+    const double e = mapping.exposure;
+    if (!(CleanChannel(r) + CleanChannel(g) + CleanChannel(b) > 0.0)) return {0.0f, 0.0f, 0.0f};
+    const auto display = AgxDisplay(e * CleanChannel(r), e * CleanChannel(g), e * CleanChannel(b));
+    std::array<float, 3> out{};
+    for (int c = 0; c < 3; ++c) out[c] = static_cast<float>(EncodeDisplay(std::pow(display[c], 2.2), mapping));
+    return out;
+  }
   if (mapping.per_channel) {
     return {ToneMapValue(r, mapping), ToneMapValue(g, mapping), ToneMapValue(b, mapping)};
   }

@@ -403,7 +403,14 @@ ToneMapper ParseToneMapper(const std::string& name) {
   if (name == "exp" || name == "exponential") return ToneMapper::kExponential;
   if (name == "aces") return ToneMapper::kAces;
   if (name == "none") return ToneMapper::kNone;
-  throw Error("unknown tone mapper '" + OneLine(name) + "' (use exp, aces or none)");
+  if (name == "agx") return ToneMapper::kAgx;
+  throw Error("unknown tone mapper '" + OneLine(name) + "' (use agx, exp, aces or none)");
+}
+
+Metering ParseMetering(const std::string& name) {
+  if (name == "adaptive") return Metering::kAdaptive;
+  if (name == "camera") return Metering::kCamera;
+  throw Error("unknown metering '" + OneLine(name) + "' (use adaptive or camera)");
 }
 
 // ---------------------------------------------------------------------------------------------
