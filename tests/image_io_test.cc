@@ -876,6 +876,25 @@ TEST(Agx, SceneGreyIsDisplayMidGreyAndTheRangeIsSixteenAndAHalfStops) {
   }
 }
 
+TEST(Agx, TablesFollowTheClosedFormCurve) {
+  // The closed-form sigmoid (docs/display.md) against the tabulated one inside ToneMapPixel, for
+  // grey (where the inset and outset are the identity), through the sRGB encoding: within 1e-6.
+  const auto sigmoid = [](double x) {
+    const double d = x - 20.0 / 33.0;
+    return d <= 0.0 ? 0.5 + 2.0 * d * std::pow(1.0 + 59.507875 * std::pow(-d, 3.0), -1.0 / 3.0)
+                    : 0.5 + 2.0 * d * std::pow(1.0 + 69.86278913545539 * std::pow(d, 3.25), -4.0 / 13.0);
+  };
+  double worst = 0.0;
+  for (double stops = -12.4; stops < 4.0; stops += 0.0137) {
+    const double x = (stops + 12.473931188332413) / 16.5;
+    const double expected = SrgbEncode(std::pow(std::clamp(sigmoid(x), 0.0, 1.0), 2.2));
+    const float v = static_cast<float>(std::exp2(stops));
+    const auto d = ToneMapPixel(v, v, v, {ToneMapper::kAgx, 1.0});
+    worst = std::max(worst, std::abs(d[1] - expected));
+  }
+  EXPECT_LT(worst, 1e-6);
+}
+
 TEST(Agx, BrightColoursRollOffToWhiteAndDimOnesKeepTheirHue) {
   const ToneMapping agx{ToneMapper::kAgx, 1.0};
   // A deep orange (the sun near the horizon, R:G:B = 1 : 0.45 : 0.12) far above the range: white.

@@ -68,8 +68,11 @@ constexpr double kAgxInset[3][3] = {
 double AgxSigmoid(double x) {
   constexpr double x0 = 20.0 / 33.0;
   const double d = x - x0;
-  const double f = d <= 0.0 ? 0.5 + 2.0 * d * std::pow(1.0 + 59.507875 * std::pow(-d, 3.0), -1.0 / 3.0)
-                            : 0.5 + 2.0 * d * std::pow(1.0 + 69.86278913545539 * std::pow(d, 3.25), -4.0 / 13.0);
+  // The same powers as above, in cheaper operations (this runs three times a pixel): u^3 as
+  // products, u^-1/3 as 1 / cbrt(u), d^3.25 as d^3 d^(1/4).
+  const double f = d <= 0.0 ? 0.5 + 2.0 * d / std::cbrt(1.0 - 59.507875 * d * d * d)
+                            : 0.5 + 2.0 * d * std::pow(1.0 + 69.86278913545539 * d * d * d * std::sqrt(std::sqrt(d)),
+                                                       -4.0 / 13.0);
   return std::clamp(f, 0.0, 1.0);
 }
 
@@ -97,6 +100,39 @@ double CleanChannel(float x) {
   return std::isinf(x) ? static_cast<double>(std::numeric_limits<float>::max()) : static_cast<double>(x);
 }
 
+// A smooth function on [0, 1] as a table of kTableSize + 1 values read with linear interpolation:
+// the tone mapping of a 1280x720 PNG calls AgX's two curves 8 million times, and their powers were
+// most of its cost. Both curves' second derivatives are small enough that the table is within
+// 1e-7 of the curve (AgxTables test), far below a 16-bit code (1.5e-5).
+class CurveTable {
+ public:
+  static constexpr int kTableSize = 4096;
+  template <typename F>
+  explicit CurveTable(F&& f) {
+    for (int i = 0; i <= kTableSize; ++i) values_[i] = f(static_cast<double>(i) / kTableSize);
+  }
+  double operator()(double x) const {
+    const double t = std::clamp(x, 0.0, 1.0) * kTableSize;
+    const int i = std::min(static_cast<int>(t), kTableSize - 1);
+    return values_[i] + (t - i) * (values_[i + 1] - values_[i]);
+  }
+
+ private:
+  std::array<double, kTableSize + 1> values_{};
+};
+
+// mapping.transfer of AgX's output v, which is encoded for a 2.2 display: EncodeDisplay(v^2.2),
+// with the sRGB power segment's two powers folded into one, (v^2.2)^(1/2.4) = v^(2.2/2.4).
+double EncodeAgx(double v, const ToneMapping& mapping) {
+  if (!(v > 0.0)) return 0.0;
+  if (v >= 1.0) return 1.0;
+  if (mapping.transfer == DisplayTransfer::kSrgb) {
+    static const double toe = std::pow(0.0031308, 1.0 / 2.2);  // v where v^2.2 meets the sRGB toe
+    return v <= toe ? 12.92 * std::pow(v, 2.2) : 1.055 * std::pow(v, 2.2 / 2.4) - 0.055;
+  }
+  return EncodeDisplay(std::pow(v, 2.2), mapping);
+}
+
 }  // namespace
 
 std::array<double, 3> AgxDisplay(double r, double g, double b) {
@@ -108,7 +144,8 @@ std::array<double, 3> AgxDisplay(double r, double g, double b) {
     for (int j = 0; j < 3; ++j) inset += kAgxInset[i][j] * (std::isnan(rgb[j]) ? 0.0 : std::max(rgb[j], 0.0));
     // log2 of 0 is -inf, which the clamp to the lower end takes care of; +inf clamps to the top.
     const double stops = std::clamp(std::log2(inset), kAgxMinEv, kAgxMaxEv);
-    encoded[i] = AgxSigmoid((stops - kAgxMinEv) / (kAgxMaxEv - kAgxMinEv));
+    static const CurveTable sigmoid(AgxSigmoid);
+    encoded[i] = sigmoid((stops - kAgxMinEv) / (kAgxMaxEv - kAgxMinEv));
   }
   std::array<double, 3> out{};
   for (int i = 0; i < 3; ++i) {
@@ -247,7 +284,11 @@ std::array<float, 3> ToneMapPixel(float r, float g, float b, const ToneMapping& 
     if (!(CleanChannel(r) + CleanChannel(g) + CleanChannel(b) > 0.0)) return {0.0f, 0.0f, 0.0f};
     const auto display = AgxDisplay(e * CleanChannel(r), e * CleanChannel(g), e * CleanChannel(b));
     std::array<float, 3> out{};
-    for (int c = 0; c < 3; ++c) out[c] = static_cast<float>(EncodeDisplay(std::pow(display[c], 2.2), mapping));
+    static const CurveTable srgb([](double v) { return EncodeAgx(v, ToneMapping{}); });
+    for (int c = 0; c < 3; ++c) {
+      out[c] = static_cast<float>(mapping.transfer == DisplayTransfer::kSrgb ? srgb(display[c])
+                                                                             : EncodeAgx(display[c], mapping));
+    }
     return out;
   }
   if (mapping.per_channel) {
