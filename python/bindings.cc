@@ -34,6 +34,7 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "atmo/engine_target.h"
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/aerosol.h"
@@ -733,6 +734,20 @@ PYBIND11_MODULE(_atmo, m) {
     return AutoExposureEv100(FromArray(image, alpha), ParseMetering(metering));
   }, py::arg("image"), py::arg("alpha") = py::none(), py::arg("metering") = "adaptive");
   m.def("exposure_from_ev100", &ExposureFromEv100);
+  m.def("engine_targets", [] {
+    py::list targets;
+    for (const EngineTarget& t : EngineTargets()) {
+      py::dict d;
+      d["name"] = t.name;
+      d["program"] = t.program;
+      d["equirect_centre_azimuth_deg"] = t.equirect_centre_azimuth_deg;
+      d["world"] = t.world;
+      d["recipe"] = t.recipe;
+      d["source"] = t.source;
+      targets.append(d);
+    }
+    return targets;
+  });
   m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);

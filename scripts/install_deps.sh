@@ -6,6 +6,9 @@
 # has them already (another distribution of Node.js, whose nodejs package bundles npm and
 # conflicts with Debian's npm) keeps them; only a machine without them gets Debian's. clang and
 # its runtime libraries are for the sanitizer and libFuzzer build of .ci/run (scripts/fuzz.sh).
+# With --tests it also installs what only the tests run: blender, which renders
+# `atmo render --target blender` maps in tests/engine_target_test.cc (a large package, so the
+# README's first command, which builds and runs only the CLI, leaves it out).
 set -euo pipefail
 
 SUDO=""
@@ -24,6 +27,9 @@ PACKAGES=(
   libimgui-dev libstb-dev
   clang libclang-rt-14-dev
 )
+if [ "${1:-}" = "--tests" ]; then
+  PACKAGES+=(blender)
+fi
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   PACKAGES+=(nodejs npm)
 fi

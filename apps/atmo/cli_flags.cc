@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "atmo/engine_target.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"
@@ -209,6 +210,9 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   AddOptionalNumber(app, "--yaw", render.yaw_deg,
                     "compass azimuth of the view centre (fisheye: of the image's top) in degrees "
                     "[default: the sun's; fisheye: 0, north up]");
+  app->add_option("--target", render.target,
+                  "write the equirect as this program reads it, fixed in the world: " + atmo::EngineTargetNames() +
+                      " (docs/environment.md)");
   AddNumber(app, "--pitch", render.pitch_deg, "elevation of the view in degrees")
       ->check(RangeOf(-90.0, 90.0));
   AddNumber(app, "--sun-elevation", render.sun_elevation_deg, "sun elevation in degrees")
@@ -322,6 +326,13 @@ void FinishRenderFlags(CLI::App* app, RenderCommand& render, const RenderFlags& 
   }
   if (flags.no_exr) render.exr_path.clear();
   if (flags.no_png) render.png_path.clear();
+  // --target writes an equirect: the camera unless --camera says otherwise (PlanRender refuses
+  // another), 2048 x 1024 unless the size is given.
+  if (!render.target.empty() && app->get_option("--camera")->count() == 0) render.camera = "equirect";
+  if (!render.target.empty() && app->get_option("--width")->count() == 0 && app->get_option("--height")->count() == 0) {
+    render.width = 2048;
+    render.height = 1024;
+  }
   // Flags that the chosen camera or outputs do not use: said, not silently ignored.
   if (render.camera != "perspective") {
     for (const char* flag : {"--fov", "--pitch"}) {

@@ -15,6 +15,7 @@
 #include "atmo/aerosol.h"
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
+#include "atmo/engine_target.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -105,7 +106,8 @@ struct RenderCommand {
   int width = 1280;
   int height = 720;
   double fov_deg = 90.0;
-  std::optional<double> yaw_deg;  // default: the sun azimuth (look towards the sun)
+  std::optional<double> yaw_deg;
+  std::string target;  // --target: an equirect in a program's convention (empty: none)  // default: the sun azimuth (look towards the sun)
   double pitch_deg = 10.0;
   double sun_elevation_deg = 10.0;
   double sun_azimuth_deg = 180.0;
@@ -161,6 +163,7 @@ struct RenderPlan {
   RenderSettings settings;
   std::optional<SunAtInstant> dated_sun;  // --date
   bool cubemap = false;                   // --camera cubemap (settings.camera then perspective)
+  const EngineTarget* target = nullptr;   // --target (include/atmo/engine_target.h)
   ToneMapping mapping;                    // the PNG's, before its exposure
 };
 // Throws atmo::Error for what RunRender rejects in these flags.

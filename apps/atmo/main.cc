@@ -74,7 +74,7 @@ void GroupFlags(CLI::App* app) {
       {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
       {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
       {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},
-      {"--yaw", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
+      {"--yaw", "Camera"}, {"--target", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
       {"--sun-elevation", "Observer and sun"}, {"--sun-azimuth", "Observer and sun"},
       {"--sun-zenith", "Observer and sun"}, {"--view-zenith", "Observer and sun"}, {"--azimuth", "Observer and sun"},
       {"--date", "Observer and sun"}, {"--latitude", "Observer and sun"}, {"--longitude", "Observer and sun"},

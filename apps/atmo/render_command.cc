@@ -101,6 +101,14 @@ RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command)
   settings.camera.yaw_deg =
       command.yaw_deg.value_or(settings.camera.kind == CameraKind::kFisheye ? 0.0 : command.sun_azimuth_deg);
   settings.camera.pitch_deg = command.pitch_deg;
+  // --target: the program's orientation, fixed in the world (a given --yaw still turns it).
+  if (!command.target.empty()) {
+    plan.target = &FindEngineTarget(command.target);
+    if (settings.camera.kind != CameraKind::kEquirect || plan.cubemap) {
+      throw Error("--target " + command.target + " writes an equirect: add --camera equirect");
+    }
+    settings.camera.yaw_deg = command.yaw_deg.value_or(plan.target->equirect_centre_azimuth_deg);
+  }
   settings.altitude_m = command.altitude_m.value_or(parameters.observer_altitude_m);
   settings.sun_elevation_deg = command.sun_elevation_deg;
   settings.sun_azimuth_deg = command.sun_azimuth_deg;
@@ -169,6 +177,10 @@ RenderOutputs::RenderOutputs(const CommonOptions& common, const RenderCommand& c
   }
   if (plan.dated_sun) {
     for (const auto& [key, value] : SunMetadata(command.sun, *plan.dated_sun)) SetMetadata(key, value);
+  }
+  if (plan.target != nullptr) {
+    SetMetadata("atmo:target", plan.target->name);
+    SetMetadata("atmo:targetWorld", plan.target->world);
   }
 }
 

@@ -34,6 +34,7 @@ __all__ = [
     "write_png",
     "auto_exposure_ev100",
     "exposure_from_ev100",
+    "engine_targets",
     "camera_directions",
     "sun_direction",
     "model_names",
@@ -299,11 +300,12 @@ class Model:
         return out.reshape(d.shape[:-1] + (out.shape[1],))
 
     # --- images --------------------------------------------------------------------------------
-    def render(self, width: int = 1280, height: Optional[int] = None, camera: str = "perspective", *,
+    def render(self, width: int = 1280, height: Optional[int] = None, camera: Optional[str] = None, *,
                fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
                sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0,
                altitude_m: Optional[float] = None, sun_disc: bool = True, ground: bool = True,
-               unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False):
+               unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False,
+               target: Optional[str] = None):
         """One frame as `atmo render` renders it (same defaults), as a float32 H x W x C array.
 
         camera: perspective (fov_deg, yaw_deg, pitch_deg), fisheye (all-sky; 0 outside the
@@ -313,7 +315,21 @@ class Model:
         CIE XYZ with xyz=True), radiance (W m^-2 sr^-1 nm^-1 per wavelength) or relative (the
         channels x the preset's solar_irradiance). spp: paths per pixel of a Monte Carlo model.
         With full=True, returns a Frame (alpha, channel names, EXR metadata, standard error).
+        target: an equirect as that program reads it, fixed in the world (engine_targets();
+        docs/environment.md): camera defaults to equirect and yaw_deg to the program's centre.
         """
+        convention = None
+        if target is not None:
+            convention = next((t for t in engine_targets() if t["name"] == target), None)
+            if convention is None:
+                raise ValueError(f"unknown target '{target}' (known: {', '.join(t['name'] for t in engine_targets())})")
+            if camera not in (None, "equirect"):
+                raise ValueError(f"target {target} writes an equirect: use camera='equirect'")
+            camera = "equirect"
+            if yaw_deg is None:
+                yaw_deg = convention["equirect_centre_azimuth_deg"]
+        if camera is None:
+            camera = "perspective"
         if camera not in CAMERAS:
             raise ValueError(f"unknown camera '{camera}' (use {', '.join(CAMERAS)})")
         if unit not in UNITS:
@@ -356,6 +372,9 @@ class Model:
             "atmo:modelOptions": " ".join(f"{k}={v}" for k, v in sorted(self._options.items())),
             "atmo:writer": "atmo Python module",
         }
+        if convention is not None:
+            metadata["atmo:target"] = convention["name"]
+            metadata["atmo:targetWorld"] = convention["world"]
         if camera == "perspective":
             metadata["atmo:cameraFovDeg"] = f"{fov_deg:.10g}"
             metadata["atmo:cameraPitchDeg"] = f"{pitch_deg:.10g}"
@@ -424,6 +443,13 @@ def write_png(path: Union[str, os.PathLike], image, *, alpha=None, exposure: Opt
     channel instead of on luminance; 8 or 16 bits."""
     _atmo.write_png(os.fspath(path), _image_array(image), _alpha_array(alpha), exposure, ev100, tonemap, gamma,
                     bool(per_channel), bool(dither), int(bits), str(metering))
+
+
+def engine_targets() -> list:
+    """The programs Model.render(target=...) and `atmo render --target` write equirects for: name,
+    program, equirect_centre_azimuth_deg, world, recipe, source
+    (include/atmo/engine_target.h)."""
+    return [dict(t) for t in _atmo.engine_targets()]
 
 
 def auto_exposure_ev100(image, alpha=None, metering: str = "adaptive") -> float:

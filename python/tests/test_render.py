@@ -143,3 +143,21 @@ def test_monte_carlo_frame_matches_atmo_render_with_its_seed(tmp_path, cli):
     again, _, again_names, _ = atmo.read_exr(tmp_path / "module.exr")
     assert again_names == names
     np.testing.assert_array_equal(again, printed)
+
+
+def test_target_fixes_the_equirect_in_the_programs_frame(earth):
+    """target= gives the CLI's --target equirect: yaw at the program's centre, whatever the sun."""
+    names = [t["name"] for t in atmo.engine_targets()]
+    assert "three" in names and "blender" in names
+    three = next(t for t in atmo.engine_targets() if t["name"] == "three")
+    frame = earth.render(64, camera=None, target="three", sun_azimuth_deg=200.0, full=True)
+    assert frame.image.shape == (32, 64, 3)
+    assert frame.metadata["atmo:camera"] == "equirect"
+    assert frame.metadata["atmo:target"] == "three"
+    assert float(frame.metadata["atmo:cameraYawDeg"]) == three["equirect_centre_azimuth_deg"]
+    same = earth.render(64, camera="equirect", yaw_deg=three["equirect_centre_azimuth_deg"], sun_azimuth_deg=200.0)
+    np.testing.assert_array_equal(frame.image, same)
+    with pytest.raises(ValueError, match="unknown target 'maya'"):
+        earth.render(64, target="maya")
+    with pytest.raises(ValueError, match="writes an equirect"):
+        earth.render(64, camera="fisheye", target="three")
