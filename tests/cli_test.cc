@@ -462,6 +462,34 @@ double MeanLuma(const std::vector<unsigned char>& rgb, int width, int y0, int y1
   return sum / (static_cast<double>(y1 - y0) * width);
 }
 
+TEST_F(CliTest, OutputNamesOfAnotherFormatAreRefused) {
+  // -o NAME.jpg would have written NAME.jpg.exr and NAME.jpg.png.
+  ExpectFailureKeepingOutputs("render --width 8 --height 8 -o out.jpg", "-o 'out.jpg' ends in .jpg",
+                              {"out.jpg.exr", "out.jpg.png"});
+  ExpectFailureKeepingOutputs("render --width 8 --height 8 -o sky.HDR", "ends in .hdr", {"sky.HDR.exr"});
+  // A dot that is not a format's extension is part of the name.
+  ASSERT_EQ(Run("render --width 8 --height 8 -o sky.v2").exit_code, 0);
+  EXPECT_TRUE(fs::exists(dir_ / "sky.v2.exr"));
+  EXPECT_TRUE(fs::exists(dir_ / "sky.v2.png"));
+}
+
+TEST_F(CliTest, MistypedFlagsAndSubcommandsGetASuggestion) {
+  const auto error_of = [&](const std::string& args) {
+    const RunResult r = Run(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
+    return r.err;
+  };
+  EXPECT_NE(error_of("rendr").find("(did you mean render?)"), std::string::npos);
+  EXPECT_NE(error_of("iluminance").find("(did you mean illuminance?)"), std::string::npos);
+  EXPECT_NE(error_of("render --sun-elevaton 5").find("(did you mean --sun-elevation?)"), std::string::npos);
+  EXPECT_NE(error_of("sample --altitud=3").find("(did you mean --altitude?)"), std::string::npos);
+  EXPECT_NE(error_of("illuminance --sun-elevatoin 5").find("(did you mean --sun-elevation?)"), std::string::npos);
+  // Nothing close: no guess.
+  EXPECT_EQ(error_of("xyzzy").find("did you mean"), std::string::npos);
+  EXPECT_EQ(error_of("render --frobnicate 3").find("did you mean"), std::string::npos);
+}
+
 TEST_F(CliTest, TheFirstPictureLooksLikeDaylightAndTheSunIsWhite) {
   // Noon (sun 60 degrees, default exposure and display): the top third of the frame has a mean
   // luma of at least 100 of 255, and a time-lapse keeps dusk darker than noon.

@@ -318,6 +318,7 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
 }
 
 void FinishRenderFlags(CLI::App* app, RenderCommand& render, const RenderFlags& flags, bool png_only_warnings) {
+  render.output_name = flags.output;
   if (!flags.output.empty()) {
     std::string extension = std::filesystem::path(flags.output).extension().string();
     for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));

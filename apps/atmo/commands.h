@@ -107,7 +107,8 @@ struct RenderCommand {
   int height = 720;
   double fov_deg = 90.0;
   std::optional<double> yaw_deg;
-  std::string target;  // --target: an equirect in a program's convention (empty: none)  // default: the sun azimuth (look towards the sun)
+  std::string target;  // --target: an equirect in a program's convention (empty: none)
+  std::string output_name;  // -o NAME as given (exr_path and png_path hold what it means)  // default: the sun azimuth (look towards the sun)
   double pitch_deg = 10.0;
   double sun_elevation_deg = 10.0;
   double sun_azimuth_deg = 180.0;

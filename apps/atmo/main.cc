@@ -18,6 +18,7 @@
 // This file only parses the command line (CLI11 lives here and in cli_flags.cc) and hands plain
 // structs to the subcommands in commands.h. Errors: one line `atmo: error: ...` on stderr; exit 2
 // for a command line that does not parse, 1 for anything else.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +27,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <oneapi/tbb/global_control.h>
@@ -96,6 +98,64 @@ void GroupFlags(CLI::App* app) {
 
 // Prints `atmo: warning: <message>` as one line on stderr.
 void PrintWarning(const std::string& message) { std::fprintf(stderr, "atmo: warning: %s\n", message.c_str()); }
+
+// Levenshtein distance (insertions, deletions, substitutions), for "did you mean".
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// The known word closest to `word` when it is close enough to be a typo (at most a third of its
+// letters off); empty otherwise.
+std::string Closest(const std::string& word, const std::vector<std::string>& known) {
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(1, word.size() / 3) + 1;
+  for (const std::string& candidate : known) {
+    const std::size_t d = EditDistance(word, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+// " (did you mean X?)" for the first command-line word that is neither a subcommand nor a flag of
+// the command being parsed but is close to one; empty when there is none.
+std::string DidYouMean(CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> subcommands;
+  for (const CLI::App* sub : app.get_subcommands({})) subcommands.push_back(sub->get_name());
+  const std::vector<CLI::App*> parsed = app.get_subcommands();
+  const CLI::App* command = parsed.empty() ? &app : parsed.front();
+  std::vector<std::string> flags;
+  for (const CLI::Option* option : command->get_options()) {
+    for (const std::string& name : option->get_lnames()) flags.push_back("--" + name);
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    word = word.substr(0, word.find('='));
+    if (word.rfind("--", 0) == 0) {
+      if (std::find(flags.begin(), flags.end(), word) != flags.end()) continue;
+      const std::string near = Closest(word, flags);
+      if (!near.empty()) return " (did you mean " + near + "?)";
+    } else if (parsed.empty() && !word.empty() && word[0] != '-') {
+      const std::string near = Closest(word, subcommands);
+      if (!near.empty()) return " (did you mean " + near + "?)";
+      return "";
+    }
+  }
+  return "";
+}
 
 }  // namespace
 
@@ -326,7 +386,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::Success& success) {
     return app.exit(success);  // --help, --version
   } catch (const CLI::ParseError& error) {
-    PrintError(error.what());
+    PrintError(error.what() + DidYouMean(app, argc, argv));
     return 2;
   }
 

@@ -297,6 +297,20 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                   std::to_string(command.face_size) + " (got " + std::to_string(command.specular_levels) + ")");
     }
   }
+  // -o NAME.jpg would write NAME.jpg.exr and NAME.jpg.png: a name that ends in another image or
+  // data format's extension is refused instead.
+  {
+    std::string extension = std::filesystem::path(command.output_name).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    for (const char* foreign : {".jpg", ".jpeg", ".tif", ".tiff", ".hdr", ".pic", ".rgbe", ".bmp", ".gif", ".webp",
+                                ".avif", ".heic", ".jxl", ".tga", ".pfm", ".ppm", ".dds", ".ktx", ".ktx2", ".json",
+                                ".csv", ".txt", ".mp4"}) {
+      if (extension == foreign) {
+        throw Error("-o '" + command.output_name + "' ends in " + extension +
+                    ", which atmo render does not write: give NAME (NAME.exr and NAME.png), NAME.exr or NAME.png");
+      }
+    }
+  }
   CheckExtension("--exr", command.exr_path, ".exr");
   CheckExtension("--png", command.png_path, ".png");
   if (IsTimeLapse(command.sun)) {
