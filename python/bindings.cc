@@ -34,6 +34,8 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "atmo/illuminance.h"
+#include "atmo/sun_position.h"
 #include "atmo/engine_target.h"
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
@@ -696,6 +698,27 @@ PYBIND11_MODULE(_atmo, m) {
       .def_property_readonly("monte_carlo", [](const PyModel& s) { return IsMonteCarlo(s.model()); })
       .def_property_readonly("parameter_hash", [](const PyModel& s) { return ParameterHashHex(s.parameters()); })
       .def("parameters_json", [](const PyModel& s) { return ToJson(s.parameters()); })
+      .def(
+          "illuminance",
+          [](const PyModel& self, double altitude_m, double sun_elevation_deg) {
+            Illuminance e;
+            {
+              py::gil_scoped_release release;
+              // As `atmo illuminance`: the solar spectrum comes in by colour, the model at irradiance 1.
+              const Model& model = self.UnitIrradianceModel();
+              const std::unique_ptr<SkyView> sky = model.View(altitude_m, SunDirection(sun_elevation_deg, 0.0));
+              e = ComputeIlluminance(*sky, model.parameters());
+            }
+            py::dict d;
+            d["direct_normal_lux"] = e.direct_normal_lux;
+            d["direct_horizontal_lux"] = e.direct_horizontal_lux;
+            d["diffuse_horizontal_lux"] = e.diffuse_horizontal_lux;
+            d["global_horizontal_lux"] = e.global_horizontal_lux;
+            d["direct_normal_w_m2"] = e.direct_normal_w_m2;
+            d["diffuse_horizontal_w_m2"] = e.diffuse_horizontal_w_m2;
+            return d;
+          },
+          py::arg("altitude_m"), py::arg("sun_elevation_deg"))
       .def("sample", &Sample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
            py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
       .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
@@ -748,6 +771,25 @@ PYBIND11_MODULE(_atmo, m) {
     }
     return targets;
   });
+  m.def(
+      "sun_position",
+      [](const std::string& date, double latitude_deg, double longitude_deg, bool refraction, double height_m) {
+        SunPositionOptions options;
+        options.refraction = refraction;
+        options.observer_height_m = height_m;
+        const double julian_day = ParseIsoDateTime(date);
+        const SunPosition p = ComputeSunPosition(julian_day, latitude_deg, longitude_deg, options);
+        py::dict d;
+        d["elevation_deg"] = p.elevation_deg;
+        d["geometric_elevation_deg"] = p.geometric_elevation_deg;
+        d["azimuth_deg"] = p.azimuth_deg;
+        d["right_ascension_deg"] = p.right_ascension_deg;
+        d["declination_deg"] = p.declination_deg;
+        d["distance_au"] = p.distance_au;
+        d["julian_day_utc"] = julian_day;
+        return d;
+      },
+      py::arg("date"), py::arg("latitude_deg"), py::arg("longitude_deg"), py::arg("refraction"), py::arg("height_m"));
   m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);

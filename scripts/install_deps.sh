@@ -23,7 +23,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
   libglfw3-dev xvfb xauth
-  pybind11-dev python3-dev python3-numpy python3-pytest
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-venv python3-setuptools python3-wheel
   libimgui-dev libstb-dev
   clang libclang-rt-14-dev
 )

@@ -35,6 +35,7 @@ __all__ = [
     "auto_exposure_ev100",
     "exposure_from_ev100",
     "engine_targets",
+    "sun_position",
     "camera_directions",
     "sun_direction",
     "model_names",
@@ -300,6 +301,15 @@ class Model:
         return out.reshape(d.shape[:-1] + (out.shape[1],))
 
     # --- images --------------------------------------------------------------------------------
+    def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None) -> dict:
+        """What `atmo illuminance` prints for one sun elevation (include/atmo/illuminance.h): the sun's
+        and the sky's light on a horizontal plane, direct_normal_lux, direct_horizontal_lux,
+        diffuse_horizontal_lux, global_horizontal_lux, and direct_normal_w_m2 and
+        diffuse_horizontal_w_m2 over 360-830 nm."""
+        if altitude_m is None:
+            altitude_m = self.observer_altitude_m
+        return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg)))
+
     def render(self, width: int = 1280, height: Optional[int] = None, camera: Optional[str] = None, *,
                fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
                sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0,
@@ -477,6 +487,17 @@ def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     return np.asarray(_atmo.sun_direction(float(elevation_deg), float(azimuth_deg)))
 
 
+def sun_position(date: str, latitude_deg: float, longitude_deg: float, *, refraction: bool = False,
+                 height_m: float = 0.0) -> dict:
+    """The sun at an ISO 8601 instant (`2026-06-21T05:30:00+02:00`; no zone: UTC) for an observer at
+    latitude_deg (north positive) and longitude_deg (east positive), as `atmo render --date` places
+    it (include/atmo/sun_position.h, libnova): elevation_deg (apparent with refraction=True),
+    geometric_elevation_deg, azimuth_deg (compass), right_ascension_deg, declination_deg,
+    distance_au, julian_day_utc. Feed elevation and azimuth to Model.render or Model.sample."""
+    return dict(_atmo.sun_position(str(date), float(latitude_deg), float(longitude_deg), bool(refraction),
+                                   float(height_m)))
+
+
 def set_threads(threads: int) -> None:
     """At most `threads` worker threads for the module's work from now on, as `atmo --threads`;
     0 restores oneTBB's default (all cores)."""
@@ -523,3 +544,8 @@ def max_memory() -> int:
 def preset(name: str) -> dict:
     """A preset's parameters as the JSON of docs/parameters.md (edit it and pass it as config=)."""
     return json.loads(_atmo.preset_json(name))
+
+
+def __dir__() -> list:
+    """The public names only (PEP 562): not the modules this one imports."""
+    return sorted(__all__ + ["__version__"])

@@ -161,3 +161,37 @@ def test_target_fixes_the_equirect_in_the_programs_frame(earth):
         earth.render(64, target="maya")
     with pytest.raises(ValueError, match="writes an equirect"):
         earth.render(64, camera="fisheye", target="three")
+
+
+def test_illuminance_is_the_clis(cli):
+    """Model.illuminance gives `atmo illuminance`'s row (printed to 6 digits)."""
+    from conftest import parse_csv
+    model = atmo.Model("hillaire", preset="earth-spectral")
+    row = parse_csv(cli("illuminance", "--preset", "earth-spectral", "--sun-elevation", "25"))[0]
+    e = model.illuminance(25.0)
+    for key in ("direct_normal_lux", "diffuse_horizontal_lux", "global_horizontal_lux", "direct_normal_w_m2",
+                "diffuse_horizontal_w_m2"):
+        assert e[key] == pytest.approx(row[key], rel=1e-5), key
+    assert e["global_horizontal_lux"] == pytest.approx(e["diffuse_horizontal_lux"] + e["direct_horizontal_lux"])
+    night = model.illuminance(-20.0)
+    assert night["direct_normal_lux"] == 0.0 and night["global_horizontal_lux"] < 1e-2
+
+
+def test_sun_position_is_where_render_date_puts_the_sun(cli, tmp_path):
+    """sun_position(date, lat, lon) equals the sun `atmo render --date` records."""
+    date, lat, lon = "2026-06-21T07:30:00+02:00", 48.85, 2.35
+    cli("render", "--date", date, "--latitude", str(lat), "--longitude", str(lon), "--width", "4", "--height", "4",
+        "--no-png", "--exr", str(tmp_path / "s.exr"))
+    _, _, _, metadata = atmo.read_exr(tmp_path / "s.exr")
+    sun = atmo.sun_position(date, lat, lon)
+    assert sun["elevation_deg"] == pytest.approx(float(metadata["atmo:sunElevationDeg"]), rel=1e-9)
+    assert sun["azimuth_deg"] == pytest.approx(float(metadata["atmo:sunAzimuthDeg"]), rel=1e-9)
+    # On a midsummer morning in Paris the sun is low, north of east.
+    assert 5.0 < sun["elevation_deg"] < 25.0 and 45.0 < sun["azimuth_deg"] < 90.0
+    assert sun["declination_deg"] == pytest.approx(23.44, abs=0.01)
+    refracted = atmo.sun_position(date, lat, lon, refraction=True)
+    assert refracted["elevation_deg"] > refracted["geometric_elevation_deg"]
+    with pytest.raises(ValueError):
+        atmo.sun_position("not a date", lat, lon)
+    with pytest.raises(ValueError):
+        atmo.sun_position(date, 91.0, lon)
