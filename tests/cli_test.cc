@@ -249,7 +249,7 @@ TEST_F(CliTest, ReferenceRenderHasStandardErrorChannelsThatShrinkAsOneOverSqrtSp
   const atmo::Image& a = images[16];
   const atmo::Image& b = images[64];
   ASSERT_EQ(a.channels, 6);
-  EXPECT_EQ(a.channel_names, (std::vector<std::string>{"R", "G", "B", "R.stderr", "G.stderr", "B.stderr"}));
+  EXPECT_EQ(a.channel_names, (std::vector<std::string>{"R", "G", "B", "stderr.R", "stderr.G", "stderr.B"}));
   // Summed over the 128 pixels and 3 channels, the standard errors of 64 paths are
   // sqrt(16 / 64) = 0.5 of those of 16 (the first 16 of the same paths). The path values are
   // skewed (in red many paths score 0: a pixel can even get 16 zeros, standard error 0), so the

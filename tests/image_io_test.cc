@@ -230,17 +230,18 @@ TEST(Exr, TwelveChannelsKeepTheirOrder) {
 }
 
 TEST(Exr, NamedChannelsRoundTripInReadOrder) {
-  // Extra channels "P.layer" come after R, G, B, grouped by layer in the order of P, whatever
-  // order the image had (EXR itself stores channels sorted by name); the rest follow by name.
+  // Extra channels "layer.P" (OpenEXR's layers) come after R, G, B, grouped by layer in the order
+  // of P, whatever order the image had (EXR itself stores channels sorted by name); the rest
+  // follow by name.
   TempDir dir;
   Image image = MakeTestImage(5, 4, 7, 8);
-  image.channel_names = {"R", "G", "B", "B.stderr", "R.stderr", "G.stderr", "Z"};
+  image.channel_names = {"R", "G", "B", "stderr.B", "stderr.R", "stderr.G", "Z"};
   image.alpha.assign(5 * 4, 0.5f);
   WriteExr(dir / "named.exr", image);
   const Image read = ReadExr(dir / "named.exr");
   ASSERT_EQ(read.channels, 7);
   EXPECT_EQ(read.channel_names,
-            (std::vector<std::string>{"R", "G", "B", "R.stderr", "G.stderr", "B.stderr", "Z"}));
+            (std::vector<std::string>{"R", "G", "B", "stderr.R", "stderr.G", "stderr.B", "Z"}));
   for (const std::string& name : image.channel_names) {
     const int from = image.ChannelIndex(name);
     const int to = read.ChannelIndex(name);
@@ -253,7 +254,7 @@ TEST(Exr, NamedChannelsRoundTripInReadOrder) {
   // Default names: ChannelIndex knows them too, and ReadExr reports them.
   EXPECT_EQ(Image(1, 1, 3).ChannelIndex("B"), 2);
   EXPECT_EQ(Image(1, 1, 2).ChannelIndex("C1"), 1);
-  EXPECT_EQ(Image(1, 1, 3).ChannelIndex("R.stderr"), -1);
+  EXPECT_EQ(Image(1, 1, 3).ChannelIndex("stderr.R"), -1);
   WriteExr(dir / "plain.exr", MakeTestImage(2, 2, 3, 9));
   EXPECT_EQ(ReadExr(dir / "plain.exr").channel_names, (std::vector<std::string>{"R", "G", "B"}));
 }

@@ -559,7 +559,7 @@ TEST(ReferenceRender, ProgressivePassesAreTheSameForAnyThreadCount) {
   const Image exr = WithStandardErrorChannels(one);
   ASSERT_EQ(exr.channels, 6);
   EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("G")), one.radiance.at(5, 6, 1));
-  EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("B.stderr")), one.standard_error.at(5, 6, 2));
+  EXPECT_EQ(exr.at(5, 6, exr.ChannelIndex("stderr.B")), one.standard_error.at(5, 6, 2));
 }
 
 // A cancelled render (a viewer restarting) stops and returns the last complete pass: here the

@@ -4,7 +4,7 @@
 // A Monte Carlo model (reference) renders progressively (RenderProgressive): --spp paths per
 // pixel in passes of 4, 8, 16, ... paths, with a progress bar on stderr when it is a terminal;
 // the outputs are rewritten (atomically) after every pass, so they always hold the latest pass,
-// and the EXR has the per-pixel standard errors as channels R.stderr, G.stderr, B.stderr.
+// and the EXR has the per-pixel standard errors as channels stderr.R, stderr.G, stderr.B (the layer stderr).
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -405,7 +405,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         ProgressiveSettings progressive;
         progressive.samples_per_pixel = command.spp.value_or(0);
         const ProgressiveImage result = RenderProgressive(*model, frame, progressive);
-        set_metadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+        set_metadata("atmo:standardErrorChannels", "stderr.NAME: the standard error of channel NAME (same unit), the EXR layer stderr");
         set_metadata("atmo:samplesPerPixel", std::to_string(result.samples_per_pixel));
         image = result.radiance;
         standard_error = result.standard_error;
@@ -454,7 +454,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   if (model != nullptr && IsMonteCarlo(*model)) {
     ProgressiveSettings progressive;
     progressive.samples_per_pixel = command.spp.value_or(0);  // 0: the model's samples option
-    set_metadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+    set_metadata("atmo:standardErrorChannels", "stderr.NAME: the standard error of channel NAME (same unit), the EXR layer stderr");
     // The bar's label says the whole job: paths per pixel and in total (the bar adds the ETA).
     // Without --spp: the model's samples option.
     const std::uint64_t spp = progressive.samples_per_pixel > 0

@@ -898,7 +898,7 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   outputs.SetMetadata("atmo:viewerFrame", std::to_string(frame_));
   const bool monte_carlo = standard_error.width > 0;
   if (monte_carlo) {
-    outputs.SetMetadata("atmo:standardErrorChannels", "NAME.stderr: the standard error of channel NAME (same unit)");
+    outputs.SetMetadata("atmo:standardErrorChannels", "stderr.NAME: the standard error of channel NAME (same unit), the EXR layer stderr");
     outputs.SetMetadata("atmo:samplesPerPixel", std::to_string(samples_per_pixel));
   }
   const std::vector<std::string> written =

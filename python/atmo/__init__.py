@@ -103,7 +103,7 @@ class Frame:
         image, names = self.image, list(self.channel_names)
         if self.standard_error is not None:
             image = np.concatenate([image, self.standard_error], axis=-1)
-            names += [n + ".stderr" for n in self.channel_names]
+            names += ["stderr." + n for n in self.channel_names]
         write_exr(path, image, alpha=self.alpha, channel_names=names, colour_space=self.colour_space,
                   envmap=self.envmap, metadata=self.metadata)
 

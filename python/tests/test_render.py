@@ -136,7 +136,7 @@ def test_monte_carlo_frame_matches_atmo_render_with_its_seed(tmp_path, cli):
         "--height", "4", "--exr", str(exr), "--no-png")
     printed, _, names, _ = atmo.read_exr(exr)
     frame = atmo.Model("reference", seed=5).render(8, 4, "equirect", spp=8, full=True)
-    assert names == ("R", "G", "B", "R.stderr", "G.stderr", "B.stderr")
+    assert names == ("R", "G", "B", "stderr.R", "stderr.G", "stderr.B")
     np.testing.assert_array_equal(frame.image, printed[..., :3])
     np.testing.assert_array_equal(frame.standard_error, printed[..., 3:])
     frame.write_exr(tmp_path / "module.exr")

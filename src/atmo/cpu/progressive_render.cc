@@ -149,7 +149,8 @@ Image WithStandardErrorChannels(const ProgressiveImage& image) {
   const Image& radiance = image.radiance;
   const std::size_t nc = static_cast<std::size_t>(radiance.channels);
   Image out(radiance.width, radiance.height, static_cast<int>(2 * nc));
-  // R, G, B for three channels (or the image's own names), C0..Cn-1 otherwise; then NAME.stderr.
+  // R, G, B for three channels (or the image's own names), C0..Cn-1 otherwise; then the layer
+  // "stderr" of the same names (OpenEXR's LAYER.NAME): stderr.R, stderr.G, stderr.B.
   std::vector<std::string> names = radiance.channel_names;
   if (names.empty()) {
     for (std::size_t c = 0; c < nc; ++c) {
@@ -158,7 +159,7 @@ Image WithStandardErrorChannels(const ProgressiveImage& image) {
       names.push_back(std::move(name));
     }
   }
-  for (std::size_t c = 0; c < nc; ++c) names.push_back(names[c] + ".stderr");
+  for (std::size_t c = 0; c < nc; ++c) names.push_back("stderr." + names[c]);
   out.channel_names = names;
   out.alpha = radiance.alpha;
   const std::size_t pixel_count = static_cast<std::size_t>(radiance.width) * radiance.height;

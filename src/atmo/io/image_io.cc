@@ -224,11 +224,12 @@ bool WritePngRows(const char* path, png_uint_32 width, png_uint_32 height, bool 
 // The channels after the first ones (R, G, B or C0..), in ReadExr's order: names "P.layer" for a
 // first channel P grouped by layer and in the order of P, then the others by name.
 std::vector<std::string> OrderExtraChannels(std::vector<std::string> extras, const std::vector<std::string>& first) {
+  // OpenEXR's layers: channel "LAYER.NAME" is NAME of layer LAYER (the text before the last dot).
   const auto key = [&](const std::string& name) {
     const std::size_t dot = name.rfind('.');
     if (dot != std::string::npos) {
-      const auto p = std::find(first.begin(), first.end(), name.substr(0, dot));
-      if (p != first.end()) return std::make_tuple(0, name.substr(dot + 1), p - first.begin(), name);
+      const auto p = std::find(first.begin(), first.end(), name.substr(dot + 1));
+      if (p != first.end()) return std::make_tuple(0, name.substr(0, dot), p - first.begin(), name);
     }
     return std::make_tuple(1, std::string(), std::ptrdiff_t{0}, name);
   };
