@@ -34,6 +34,8 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "atmo/cubemap.h"
+#include "atmo/ibl.h"
 #include "atmo/illuminance.h"
 #include "atmo/sun_position.h"
 #include "atmo/engine_target.h"
@@ -581,6 +583,76 @@ Image FromArray(const FloatArray& array, const std::optional<FloatArray>& alpha)
   return image;
 }
 
+// A cube map array in OpenEXR's layout (6 N x N x C, as Model.render(camera="cubemap") returns
+// it) as a Cubemap; and back.
+Cubemap CubeFromArray(const FloatArray& array) {
+  Image image = FromArray(array, std::nullopt);
+  image.colour_space = ColourSpace::kLinearSrgb;
+  return CubemapFromExrImage(image);
+}
+FloatArray CubeToArray(const Cubemap& cube) { return ToArray(CubemapExrImage(cube)); }
+
+void WriteKtx2Array(const std::string& path, const std::vector<FloatArray>& levels, bool mips, bool float32) {
+  if (levels.empty()) throw Error("write_ktx2 needs a cube map (or its levels)");
+  if (mips && levels.size() != 1) throw Error("write_ktx2: mips=True makes the chain from one cube map; got levels");
+  std::vector<Cubemap> chain;
+  for (const FloatArray& level : levels) chain.push_back(CubeFromArray(level));
+  py::gil_scoped_release release;
+  while (mips && chain.back().face_size > 1) chain.push_back(DownsampleCubemap(chain.back()));
+  WriteKtx2(path, chain, float32, std::string("atmo ") + ATMO_VERSION + " (Python)");
+}
+
+py::dict SphericalHarmonicsOf(const FloatArray& array, const std::string& frame) {
+  if (frame != "enu" && frame != "y_up") throw Error("frame must be 'enu' or 'y_up' (got '" + frame + "')");
+  const Cubemap cube = CubeFromArray(array);
+  if (cube.channels() != 3) throw Error("spherical_harmonics needs a 3-channel cube map");
+  SphericalHarmonics sh;
+  {
+    py::gil_scoped_release release;
+    sh = ProjectSphericalHarmonics(cube, frame == "enu" ? ShFrame::kEnu : ShFrame::kCube);
+  }
+  const std::array<glm::dvec3, 9> irradiance = ShIrradianceCoefficients(sh);
+  py::array_t<double> radiance_out({9, 3}), irradiance_out({9, 3});
+  auto r = radiance_out.mutable_unchecked<2>();
+  auto e = irradiance_out.mutable_unchecked<2>();
+  for (int i = 0; i < 9; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      r(i, c) = sh.radiance[i][c];
+      e(i, c) = irradiance[i][c];
+    }
+  }
+  py::dict d;
+  d["frame"] = frame;
+  d["radiance"] = radiance_out;
+  d["irradiance"] = irradiance_out;
+  return d;
+}
+
+FloatArray IrradianceCubemapArray(const FloatArray& array, int size, int source_size) {
+  const Cubemap cube = CubeFromArray(array);
+  Cubemap out;
+  {
+    py::gil_scoped_release release;
+    out = IrradianceCubemap(cube, size, source_size);
+  }
+  return CubeToArray(out);
+}
+
+std::vector<FloatArray> SpecularCubemapArrays(const FloatArray& array, int levels, int samples) {
+  const Cubemap cube = CubeFromArray(array);
+  SpecularSettings settings;
+  settings.levels = levels;
+  settings.samples = samples;
+  std::vector<Cubemap> chain;
+  {
+    py::gil_scoped_release release;
+    chain = PrefilterSpecular(cube, settings);
+  }
+  std::vector<FloatArray> out;
+  for (const Cubemap& level : chain) out.push_back(CubeToArray(level));
+  return out;
+}
+
 void WriteExrArray(const std::string& path, const FloatArray& array, const std::optional<FloatArray>& alpha,
                    const std::vector<std::string>& channel_names, const std::string& colour_space,
                    const std::string& envmap, const ImageMetadata& metadata) {
@@ -757,6 +829,10 @@ PYBIND11_MODULE(_atmo, m) {
     return AutoExposureEv100(FromArray(image, alpha), ParseMetering(metering));
   }, py::arg("image"), py::arg("alpha") = py::none(), py::arg("metering") = "adaptive");
   m.def("exposure_from_ev100", &ExposureFromEv100);
+  m.def("write_ktx2", &WriteKtx2Array, py::arg("path"), py::arg("levels"), py::arg("mips"), py::arg("float32"));
+  m.def("spherical_harmonics", &SphericalHarmonicsOf, py::arg("cube"), py::arg("frame"));
+  m.def("irradiance_cubemap", &IrradianceCubemapArray, py::arg("cube"), py::arg("size"), py::arg("source_size"));
+  m.def("specular_cubemaps", &SpecularCubemapArrays, py::arg("cube"), py::arg("levels"), py::arg("samples"));
   m.def("engine_targets", [] {
     py::list targets;
     for (const EngineTarget& t : EngineTargets()) {

@@ -96,6 +96,9 @@ Cubemap RenderCubemapFolded(const SkyView& sky, int face_size, const RadianceTer
 // mirrored: the face cameras' images), and envmap = EnvMap::kCube. colour_space and
 // channel_names are the faces'.
 Image CubemapExrImage(const Cubemap& cube);
+// The inverse: the Cubemap of an image in that layout (N wide, 6 N high; alpha is dropped). Throws
+// atmo::Error for another shape.
+Cubemap CubemapFromExrImage(const Image& image);
 
 // A half-size copy: each texel the solid-angle weighted mean of its 2 x 2 children (so that
 // sum L dOmega is kept for even sizes; odd sizes round down, size 1 stays 1).

@@ -35,6 +35,10 @@ __all__ = [
     "auto_exposure_ev100",
     "exposure_from_ev100",
     "engine_targets",
+    "write_ktx2",
+    "spherical_harmonics",
+    "irradiance_cubemap",
+    "specular_cubemaps",
     "sun_position",
     "camera_directions",
     "sun_direction",
@@ -453,6 +457,38 @@ def write_png(path: Union[str, os.PathLike], image, *, alpha=None, exposure: Opt
     channel instead of on luminance; 8 or 16 bits."""
     _atmo.write_png(os.fspath(path), _image_array(image), _alpha_array(alpha), exposure, ev100, tonemap, gamma,
                     bool(per_channel), bool(dither), int(bits), str(metering))
+
+
+# --- cube maps and image-based lighting (include/atmo/cubemap.h, include/atmo/ibl.h) -------------
+# A cube map here is what Model.render(N, camera="cubemap") returns: the six faces +X, -X, +Y, -Y,
+# +Z, -Z stacked vertically as OpenEXR lays them out (6 N x N x C, linear sRGB for unit
+# "luminance"; docs/environment.md).
+
+def write_ktx2(path: Union[str, os.PathLike], cube, *, mips: bool = False, float32: bool = False) -> None:
+    """A KTX 2.0 cubemap as `atmo render --ktx2` writes it: cube is one cube map (mips=True adds the
+    solid-angle weighted chain down to 1 texel) or a list of levels (specular_cubemaps' result);
+    RGBA16F, or RGBA32F with float32. Written atomically."""
+    levels = list(cube) if isinstance(cube, (list, tuple)) else [cube]
+    _atmo.write_ktx2(os.fspath(path), [_image_array(level) for level in levels], bool(mips), bool(float32))
+
+
+def spherical_harmonics(cube, frame: str = "enu") -> dict:
+    """L2 spherical harmonics of a 3-channel cube map, as `atmo render --sh` computes them:
+    {"frame", "radiance": 9 x 3 L_lm, "irradiance": 9 x 3 E_lm = A_l L_lm}, in the frame "enu"
+    (x east, y north, z up) or "y_up" (the cube frame: X east, Y up, Z south)."""
+    return dict(_atmo.spherical_harmonics(_image_array(cube), str(frame)))
+
+
+def irradiance_cubemap(cube, size: int = 32, source_size: int = 32) -> np.ndarray:
+    """The diffuse irradiance cube map of `atmo render --irradiance` (texel n: E(n), lux for a
+    luminance cube), size texels a face, from the radiance filtered to source_size."""
+    return _atmo.irradiance_cubemap(_image_array(cube), int(size), int(source_size))
+
+
+def specular_cubemaps(cube, levels: int = 6, samples: int = 32) -> list:
+    """The GGX-prefiltered specular chain of `atmo render --specular`: level m has roughness
+    m / (levels - 1) and half the size of the one before; write it with write_ktx2."""
+    return list(_atmo.specular_cubemaps(_image_array(cube), int(levels), int(samples)))
 
 
 def engine_targets() -> list:

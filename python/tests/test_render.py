@@ -195,3 +195,48 @@ def test_sun_position_is_where_render_date_puts_the_sun(cli, tmp_path):
         atmo.sun_position("not a date", lat, lon)
     with pytest.raises(ValueError):
         atmo.sun_position(date, 91.0, lon)
+
+
+def test_cube_map_products_are_the_clis(cli, tmp_path):
+    """write_ktx2, spherical_harmonics, irradiance_cubemap and specular_cubemaps of a rendered cube
+    give what `atmo render --camera cubemap --ktx2 --sh --irradiance --specular` writes."""
+    import json
+    import struct
+    flags = ["--camera", "cubemap", "--face-size", "16", "--sun-elevation", "25", "--sun-azimuth", "140"]
+    cli("render", *flags, "--exr", str(tmp_path / "c.exr"), "--png", "", "--ktx2", str(tmp_path / "c.ktx2"), "--mips",
+        "--sh", str(tmp_path / "sh.json"), "--irradiance", str(tmp_path / "irr.exr"),
+        "--specular", str(tmp_path / "spec.ktx2"), "--specular-levels", "4")
+    cube = atmo.Model("hillaire").render(16, camera="cubemap", sun_elevation_deg=25, sun_azimuth_deg=140)
+    exr, _, _, _ = atmo.read_exr(tmp_path / "c.exr")
+    np.testing.assert_array_equal(cube, exr)
+
+    sh = atmo.spherical_harmonics(cube)
+    written = json.loads((tmp_path / "sh.json").read_text())
+    assert sh["radiance"].shape == (9, 3)
+    for frame in ("enu", "y_up"):
+        ours = atmo.spherical_harmonics(cube, frame=frame)
+        np.testing.assert_allclose(ours["radiance"], written[frame]["radiance_coefficients"], rtol=1e-9)
+        np.testing.assert_allclose(ours["irradiance"], written[frame]["irradiance_coefficients"], rtol=1e-9)
+    # Facing up the irradiance of the L2 SH (enu: z up) is sum E_lm Y_lm(up).
+    up = np.array([0.282095, 0.0, 0.488603, 0.0, 0.0, 0.0, 0.315392 * 2.0, 0.0, 0.0])
+    assert np.all(up @ sh["irradiance"] > 0.0)
+
+    irradiance = atmo.irradiance_cubemap(cube)
+    written_irradiance, _, _, _ = atmo.read_exr(tmp_path / "irr.exr")
+    np.testing.assert_allclose(irradiance, written_irradiance, rtol=1e-6)
+
+    levels = atmo.specular_cubemaps(cube, levels=4)
+    assert [level.shape[1] for level in levels] == [16, 8, 4, 2]
+    np.testing.assert_array_equal(levels[0], cube)  # roughness 0 is the radiance itself
+
+    # KTX2 files: Python's and the CLI's have the same header fields and level sizes.
+    for name, ours in (("c.ktx2", lambda p: atmo.write_ktx2(p, cube, mips=True)),
+                       ("spec.ktx2", lambda p: atmo.write_ktx2(p, levels))):
+        ours(tmp_path / ("py_" + name))
+        a, b = (tmp_path / name).read_bytes(), (tmp_path / ("py_" + name)).read_bytes()
+        assert a[:12] == b[:12] == b"\xabKTX 20\xbb\r\n\x1a\n"
+        # vkFormat, typeSize, width, height, depth, layers, faces, levels, supercompression
+        assert struct.unpack_from("<9I", a, 12) == struct.unpack_from("<9I", b, 12)
+        assert struct.unpack_from("<9I", a, 12)[6] == 6
+    with pytest.raises(ValueError, match="6 N high"):
+        atmo.irradiance_cubemap(np.ones((10, 4, 3), np.float32))

@@ -178,6 +178,26 @@ Image CubemapExrImage(const Cubemap& cube) {
   return out;
 }
 
+Cubemap CubemapFromExrImage(const Image& image) {
+  const int n = image.width;
+  if (n < 1 || image.height != kCubeFaceCount * n || image.channels < 1 ||
+      image.pixels.size() != static_cast<std::size_t>(n) * image.height * image.channels) {
+    throw Error("a cube map image is N wide and 6 N high (OpenEXR's layout), got " + std::to_string(image.width) +
+                "x" + std::to_string(image.height));
+  }
+  const int c = image.channels;
+  Cubemap cube(n, c);
+  for (int f = 0; f < kCubeFaceCount; ++f) {
+    Image face(n, n, c);
+    std::copy(image.pixels.begin() + static_cast<std::ptrdiff_t>(f) * n * n * c,
+              image.pixels.begin() + static_cast<std::ptrdiff_t>(f + 1) * n * n * c, face.pixels.begin());
+    cube.faces[f] = FlipFace(face, static_cast<CubeFace>(f));
+    cube.faces[f].channel_names = image.channel_names;
+    cube.faces[f].colour_space = image.colour_space;
+  }
+  return cube;
+}
+
 Cubemap DownsampleCubemap(const Cubemap& cube) {
   const int n = cube.face_size;
   if (n <= 1) return cube;
