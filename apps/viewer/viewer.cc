@@ -1147,8 +1147,16 @@ void Viewer::HandleInput(double dt_s) {
 }
 
 void Viewer::DrawPanels() {
+  // The panel scales with the window: at most 26 % of its width (between 220 and 340 px) and 60 %
+  // of its height (it scrolls beyond), and it starts collapsed to its title bar in a window under
+  // 900 px wide (a 720 x 720 fisheye), where it would hide the sky. Click the title to open it.
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const float width = std::clamp(0.26f * display.x, 220.0f, 340.0f);
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(width, 0.6f * display.y), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(200.0f, 60.0f),
+                                      ImVec2(std::max(220.0f, 0.4f * display.x), std::max(60.0f, 0.9f * display.y)));
+  ImGui::SetNextWindowCollapsed(display.x < 900.0f, ImGuiCond_FirstUseEver);
   ImGui::Begin("atmo-viewer");
   ImGui::Text("%.2f ms/frame (%.1f fps), %s", frame_ms_, frame_ms_ > 0.0 ? 1000.0 / frame_ms_ : 0.0,
               context_->renderer().c_str());
@@ -1163,7 +1171,7 @@ void Viewer::DrawPanels() {
     }
     if (sky_ != nullptr && !sky_->Status().empty()) ImGui::TextWrapped("%s", sky_->Status().c_str());
   }
-  if (ImGui::CollapsingHeader("GPU passes (ms)", ImGuiTreeNodeFlags_DefaultOpen)) {
+  if (ImGui::CollapsingHeader("GPU passes (ms)")) {
     for (const PassTiming& pass : timings_.entries()) ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
   }
   if (ImGui::CollapsingHeader("Camera and sun", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -1176,10 +1184,13 @@ void Viewer::DrawPanels() {
     }
     v = static_cast<float>(state_.yaw_deg);
     if (ImGui::SliderFloat("yaw", &v, 0.0f, 360.0f, "%.1f")) state_.yaw_deg = v;
-    v = static_cast<float>(state_.pitch_deg);
-    if (ImGui::SliderFloat("pitch", &v, -90.0f, 90.0f, "%.1f")) state_.pitch_deg = v;
-    v = static_cast<float>(state_.fov_deg);
-    if (ImGui::SliderFloat("fov", &v, 5.0f, 170.0f, "%.1f")) state_.fov_deg = v;
+    // Pitch and field of view are the perspective camera's (the CLI says so for --pitch, --fov).
+    if (state_.camera == CameraKind::kPerspective) {
+      v = static_cast<float>(state_.pitch_deg);
+      if (ImGui::SliderFloat("pitch", &v, -90.0f, 90.0f, "%.1f")) state_.pitch_deg = v;
+      v = static_cast<float>(state_.fov_deg);
+      if (ImGui::SliderFloat("fov", &v, 5.0f, 170.0f, "%.1f")) state_.fov_deg = v;
+    }
     v = static_cast<float>(state_.sun_elevation_deg);
     if (ImGui::SliderFloat("sun elevation", &v, -90.0f, 90.0f, "%.2f")) {
       state_.sun_elevation_deg = v;

@@ -287,6 +287,35 @@ glm::dvec3 PatchMean(const Image& image, int x0, int x1, int y0, int y1) {
   return sum / static_cast<double>((x1 - x0 + 1) * (y1 - y0 + 1));
 }
 
+// The panel leaves the sky in view: in a 1280 x 720 window it covers at most 20 % of the frame,
+// and in a 720 x 720 fisheye it starts collapsed to its title bar (under 3 %). Measured as the
+// share of pixels that differ from the same frame without panels.
+TEST_F(Viewer, PanelScalesWithTheWindow) {
+  struct Case {
+    const char* flags;
+    double most;
+  };
+  for (const Case& c : {Case{"--width 1280 --height 720", 0.20}, Case{"--camera fisheye --width 720 --height 720", 0.03}}) {
+    const std::string flags = std::string(c.flags) + " --sun-elevation 20 --ev 12 --frames 3 --window-screenshot ";
+    ASSERT_EQ(RunViewer(flags + "panels.png").exit_code, 0);
+    ASSERT_EQ(RunViewer(flags + "sky.png --no-panels").exit_code, 0);
+    int w = 0, h = 0, w2 = 0, h2 = 0;
+    const std::vector<unsigned char> panels = ReadPngRgb(dir_ / "panels.png", w, h);
+    const std::vector<unsigned char> sky = ReadPngRgb(dir_ / "sky.png", w2, h2);
+    ASSERT_EQ(panels.size(), sky.size());
+    std::size_t covered = 0;
+    for (std::size_t p = 0; p + 2 < sky.size(); p += 3) {
+      int d = 0;
+      for (int k = 0; k < 3; ++k) d = std::max(d, std::abs(int(panels[p + k]) - int(sky[p + k])));
+      if (d > 8) ++covered;
+    }
+    const double share = static_cast<double>(covered) / (static_cast<double>(w) * h);
+    std::printf("[ figures ] panel over %s: %.1f %% of the window\n", c.flags, 100.0 * share);
+    EXPECT_GT(share, 0.0005) << c.flags << ": the panel (or its title bar) is drawn";
+    EXPECT_LT(share, c.most) << c.flags;
+  }
+}
+
 // A script lowers the sun from 30 to 2 degrees: the horizon towards the sun gets redder (longer
 // paths through the air take the blue out first) and darker; the sky overhead darker still.
 TEST_F(Viewer, ScriptedSunMoveReddensAndDarkensTheHorizon) {
