@@ -19,6 +19,10 @@
 #include <utility>
 #include <vector>
 
+#include <ImfDoubleAttribute.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfStringAttribute.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -227,6 +231,32 @@ TEST(Exr, TwelveChannelsKeepTheirOrder) {
   const Image read = ReadExr(dir / "twelve.exr");
   EXPECT_EQ(read.channels, 12);
   ExpectBitExact(image.pixels, read.pixels);
+}
+
+TEST(Exr, NumbersInTheMetadataAreTypedAttributes) {
+  // A number is a double attribute in the file (OpenEXR's own reader sees the type), text stays
+  // text, and ReadExr gives back the text that was written.
+  TempDir dir;
+  const ImageMetadata metadata = {{"atmo:sunAzimuthDeg", "48.34467976"}, {"atmo:samplesPerPixel", "1099511627776"},
+                                  {"atmo:tiny", "-1e-05"},                {"atmo:parameterHash", "0123456789012345"},
+                                  {"atmo:wavelengthsNm", "680, 550, 440"}, {"atmo:version", "0.1.0"},
+                                  {"atmo:infinite", "inf"},               {"atmo:text", "12 apples"}};
+  WriteExr(dir / "typed.exr", MakeTestImage(2, 2, 3, 1), metadata);
+  Imf::InputFile file((dir / "typed.exr").c_str());
+  const Imf::Header& header = file.header();
+  EXPECT_DOUBLE_EQ(header.typedAttribute<Imf::DoubleAttribute>("atmo:sunAzimuthDeg").value(), 48.34467976);
+  EXPECT_EQ(header.typedAttribute<Imf::DoubleAttribute>("atmo:samplesPerPixel").value(), 1099511627776.0);
+  EXPECT_EQ(header.typedAttribute<Imf::DoubleAttribute>("atmo:tiny").value(), -1e-05);
+  for (const char* text : {"atmo:parameterHash", "atmo:wavelengthsNm", "atmo:version", "atmo:infinite", "atmo:text"}) {
+    EXPECT_NE(header.findTypedAttribute<Imf::StringAttribute>(text), nullptr) << text;
+  }
+  ImageMetadata read;
+  ReadExr(dir / "typed.exr", &read);
+  for (const auto& [name, value] : metadata) {
+    const auto found = std::find_if(read.begin(), read.end(), [&](const auto& entry) { return entry.first == name; });
+    ASSERT_NE(found, read.end()) << name;
+    EXPECT_EQ(found->second, value) << name;
+  }
 }
 
 TEST(Exr, NamedChannelsRoundTripInReadOrder) {

@@ -56,7 +56,9 @@ struct Image {
   int ChannelIndex(const std::string& name) const;
 };
 
-// Ordered (name, value) string attributes stored in the EXR header.
+// Ordered (name, value) attributes of the EXR header: a value that is a plain decimal number is
+// stored as a double attribute (except names ending in "Hash"), any other as a string; ReadExr
+// gives numbers back in the shortest text that reads back to the same double.
 using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 
 enum class ToneMapper {
@@ -159,7 +161,7 @@ ToneMapper ParseToneMapper(const std::string& name);
 
 // EXR: 32-bit float channels named by image.channel_names, or by default R, G, B (an image with
 // other than 3 channels writes C0..Cn-1), plus A when the image has alpha; ZIP compression; each
-// metadata entry as a string attribute. channel_names must be empty or one unique, non-empty name
+// metadata entry as a double or string attribute (ImageMetadata). channel_names must be empty or one unique, non-empty name
 // per channel other than "A".
 // With `set`, the file is staged there (AtomicFileSet below) and appears on its Commit.
 class AtomicFileSet;

@@ -15,6 +15,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <limits>
+#include <memory>
+#include <regex>
+#include <charconv>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -36,6 +40,8 @@
 #include <vector>
 
 #include <ImfChannelList.h>
+#include <ImfDoubleAttribute.h>
+#include <ImfIntAttribute.h>
 #include <ImfStandardAttributes.h>
 #include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
@@ -223,6 +229,36 @@ bool WritePngRows(const char* path, png_uint_32 width, png_uint_32 height, bool 
 
 // The channels after the first ones (R, G, B or C0..), in ReadExr's order: names "P.layer" for a
 // first channel P grouped by layer and in the order of P, then the others by name.
+// A metadata value as an EXR attribute: a plain decimal number (the whole text, as atmo writes
+// numbers: optional sign, digits, fraction, exponent) becomes a double attribute, whatever its
+// value (so a reader finds one type per name; counts are exact up to 2^53); anything else a
+// string. Names ending in "Hash" stay strings (identifiers that can look like numbers).
+std::unique_ptr<Imf::Attribute> MetadataAttribute(const std::string& name, const std::string& value) {
+  const bool identifier = name.size() >= 4 && name.compare(name.size() - 4, 4, "Hash") == 0;
+  static const std::regex number(R"(-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
+  if (!identifier && std::regex_match(value, number)) {
+    double d = 0.0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), d);
+    if (error == std::errc() && end == value.data() + value.size() && std::isfinite(d)) {
+      return std::make_unique<Imf::DoubleAttribute>(d);
+    }
+  }
+  return std::make_unique<Imf::StringAttribute>(value);
+}
+
+// The text of a metadata attribute that ReadExr reports: strings as they are, numbers in the
+// shortest form that reads back to the same value; other attribute types are not metadata.
+std::optional<std::string> MetadataText(const Imf::Attribute& attribute) {
+  if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&attribute)) return text->value();
+  if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&attribute)) return std::to_string(i->value());
+  if (const auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&attribute)) {
+    char buffer[32];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, d->value());
+    return std::string(buffer, result.ptr);
+  }
+  return std::nullopt;
+}
+
 std::vector<std::string> OrderExtraChannels(std::vector<std::string> extras, const std::vector<std::string>& first) {
   // OpenEXR's layers: channel "LAYER.NAME" is NAME of layer LAYER (the text before the last dot).
   const auto key = [&](const std::string& name) {
@@ -655,7 +691,7 @@ void WriteExr(const fs::path& path, const Image& image, const ImageMetadata& met
     if (name.empty()) throw Error(WriteError(path, "metadata with an empty name"));
     if (!seen.insert(name).second) throw Error(WriteError(path, "duplicate metadata name '" + name + "'"));
     try {
-      header.insert(name, Imf::StringAttribute(value));
+      header.insert(name, *MetadataAttribute(name, value));
     } catch (const std::exception& e) {
       // e.g. a name that is a standard attribute of another type ("channels").
       throw Error(WriteError(path, "metadata '" + name + "': " + e.what()));
@@ -770,9 +806,9 @@ Image ReadExr(const fs::path& path, ImageMetadata* metadata) {
     if (metadata != nullptr) {
       metadata->clear();
       for (auto it = header.begin(); it != header.end(); ++it) {
-        if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) {
-          metadata->emplace_back(it.name(), text->value());
-        }
+        // atmo's numbers come back as the text it wrote; the standard attributes (floats,
+        // vectors, boxes, chromaticities, envmap) are not metadata.
+        if (std::optional<std::string> text = MetadataText(it.attribute())) metadata->emplace_back(it.name(), *text);
       }
     }
     return image;
