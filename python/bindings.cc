@@ -34,6 +34,9 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "atmo/hillaire_tables.h"
+#include "io/hillaire_table_file.h"  // ValidateHillaireExportView (python/CMakeLists.txt adds src/atmo)
+#include "atmo/elek.h"
 #include "atmo/cubemap.h"
 #include "atmo/ibl.h"
 #include "atmo/illuminance.h"
@@ -653,6 +656,41 @@ std::vector<FloatArray> SpecularCubemapArrays(const FloatArray& array, int level
   return out;
 }
 
+// `atmo precompute`: the tables of elek (its 4D scattering table and transmittance) or hillaire
+// (its six tables for one observer and sun, with atmo precompute's default camera and aerial
+// volume) written as NAME.json and NAME*.exr/.raw; the paths written.
+std::vector<std::string> ExportTables(const PyModel& self, const std::string& name, double altitude_m,
+                                      double sun_elevation_deg, double sun_azimuth_deg) {
+  if (name.empty() || name.back() == '/') throw Error("export_tables needs the tables' NAME (NAME.json, ...)");
+  std::vector<std::string> written;
+  py::gil_scoped_release release;
+  const std::string model = std::string(self.model().name());
+  if (model == "elek") {
+    const ElekTableFiles files = ExportElekTable(self.model(), name);
+    for (const auto& path : {files.exr, files.raw, files.transmittance_exr, files.transmittance_raw, files.json}) {
+      written.push_back(path.string());
+    }
+    return written;
+  }
+  if (model != "hillaire") {
+    throw Error("export_tables writes the tables of models elek and hillaire; model " + model + " has none");
+  }
+  HillaireExportView view;
+  view.altitude_m = altitude_m;
+  view.sun_elevation_deg = sun_elevation_deg;
+  view.sun_azimuth_deg = sun_azimuth_deg;
+  view.camera.kind = CameraKind::kPerspective;  // atmo precompute's defaults
+  view.camera.width = 1280;
+  view.camera.height = 720;
+  view.camera.fov_deg = 90.0;
+  view.camera.yaw_deg = sun_azimuth_deg;
+  view.camera.pitch_deg = 10.0;
+  ValidateHillaireExportView(self.parameters(), view);
+  const HillaireTableFiles files = ExportHillaireTables(ComputeHillaireTables(self.model(), view), name);
+  for (const auto& path : files.all()) written.push_back(path.string());
+  return written;
+}
+
 void WriteExrArray(const std::string& path, const FloatArray& array, const std::optional<FloatArray>& alpha,
                    const std::vector<std::string>& channel_names, const std::string& colour_space,
                    const std::string& envmap, const ImageMetadata& metadata) {
@@ -770,6 +808,8 @@ PYBIND11_MODULE(_atmo, m) {
       .def_property_readonly("monte_carlo", [](const PyModel& s) { return IsMonteCarlo(s.model()); })
       .def_property_readonly("parameter_hash", [](const PyModel& s) { return ParameterHashHex(s.parameters()); })
       .def("parameters_json", [](const PyModel& s) { return ToJson(s.parameters()); })
+      .def("export_tables", &ExportTables, py::arg("name"), py::arg("altitude_m"), py::arg("sun_elevation_deg"),
+           py::arg("sun_azimuth_deg"))
       .def(
           "illuminance",
           [](const PyModel& self, double altitude_m, double sun_elevation_deg) {

@@ -305,6 +305,16 @@ class Model:
         return out.reshape(d.shape[:-1] + (out.shape[1],))
 
     # --- images --------------------------------------------------------------------------------
+    def export_tables(self, name: Union[str, os.PathLike], *, altitude_m: Optional[float] = None,
+                      sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0) -> list:
+        """`atmo precompute --out NAME` for this model: elek's scattering and transmittance tables,
+        or hillaire's six tables for one observer and sun (docs/tables.md), as NAME.json and
+        NAME*.exr/.raw, each written atomically; the paths written. Other models have no tables."""
+        if altitude_m is None:
+            altitude_m = self.observer_altitude_m
+        return list(self._model.export_tables(os.fspath(name), float(altitude_m), float(sun_elevation_deg),
+                                              float(sun_azimuth_deg)))
+
     def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None) -> dict:
         """What `atmo illuminance` prints for one sun elevation (include/atmo/illuminance.h): the sun's
         and the sky's light on a horizontal plane, direct_normal_lux, direct_horizontal_lux,

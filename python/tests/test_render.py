@@ -240,3 +240,17 @@ def test_cube_map_products_are_the_clis(cli, tmp_path):
         assert struct.unpack_from("<9I", a, 12)[6] == 6
     with pytest.raises(ValueError, match="6 N high"):
         atmo.irradiance_cubemap(np.ones((10, 4, 3), np.float32))
+
+
+def test_export_tables_is_atmo_precompute(cli, tmp_path):
+    """Model.export_tables writes the tables `atmo precompute --out` writes, byte for byte."""
+    cli("precompute", "--model", "hillaire", "--sun-elevation", "15", "--out", str(tmp_path / "cli"))
+    written = atmo.Model("hillaire").export_tables(tmp_path / "py", sun_elevation_deg=15.0)
+    assert [p.rsplit("/", 1)[-1] for p in written][-1] == "py.json"
+    raws = [p for p in written if p.endswith(".raw")]
+    assert len(raws) == 6
+    for raw in raws:
+        suffix = raw.rsplit("/py", 1)[-1]
+        assert (tmp_path / ("cli" + suffix)).read_bytes() == open(raw, "rb").read(), suffix
+    with pytest.raises(ValueError, match="model simple has none"):
+        atmo.Model("simple").export_tables(tmp_path / "s")
