@@ -253,4 +253,4 @@ def test_export_tables_is_atmo_precompute(cli, tmp_path):
         suffix = raw.rsplit("/py", 1)[-1]
         assert (tmp_path / ("cli" + suffix)).read_bytes() == open(raw, "rb").read(), suffix
     with pytest.raises(ValueError, match="model simple has none"):
-        atmo.Model("simple").export_tables(tmp_path / "s")
+        atmo.Model("simple", preset="simple").export_tables(tmp_path / "s")
