@@ -647,6 +647,15 @@ TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
   values = std::map<std::string, std::string>(metadata.begin(), metadata.end());
   EXPECT_EQ(values["atmo:cameraFovDeg"], "60");
   EXPECT_EQ(values["atmo:cameraPitchDeg"], "10");
+  // A cube map's faces fix their own directions: no yaw, field of view or pitch is recorded.
+  ASSERT_EQ(Run("render --camera cubemap --face-size 4 --png ''").exit_code, 0);
+  metadata.clear();
+  atmo::ReadExr(dir_ / "sky.exr", &metadata);
+  values = std::map<std::string, std::string>(metadata.begin(), metadata.end());
+  for (const char* key : {"atmo:cameraYawDeg", "atmo:cameraFovDeg", "atmo:cameraPitchDeg"}) {
+    EXPECT_EQ(values.count(key), 0u) << key;
+  }
+  EXPECT_EQ(values["atmo:camera"], "cubemap");
 }
 
 TEST_F(CliTest, GridDashReadsStandardInput) {

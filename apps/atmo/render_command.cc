@@ -170,8 +170,12 @@ RenderOutputs::RenderOutputs(const CommonOptions& common, const RenderCommand& c
       {"atmo:sunAngularDiameterDeg", Format("%.10g", 2.0 * parameters.sun_angular_radius_rad * 180.0 / std::numbers::pi)},
       {"atmo:modelOptions", JoinOptions(common.options)},
   };
-  // Only what the camera uses: the field of view and pitch are the perspective camera's.
-  if (settings.camera.kind == CameraKind::kPerspective) {
+  // Only what the camera uses: the field of view and pitch are the perspective camera's (a cube
+  // map's faces are perspective cameras too, but their yaw, fov and pitch are fixed by the face).
+  if (plan.cubemap) {
+    std::erase_if(metadata_, [](const auto& entry) { return entry.first == "atmo:cameraYawDeg"; });
+  }
+  if (settings.camera.kind == CameraKind::kPerspective && !plan.cubemap) {
     SetMetadata("atmo:cameraFovDeg", Format("%.10g", settings.camera.fov_deg));
     SetMetadata("atmo:cameraPitchDeg", Format("%.10g", settings.camera.pitch_deg));
   }

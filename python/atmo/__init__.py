@@ -396,6 +396,8 @@ class Model:
             "atmo:modelOptions": " ".join(f"{k}={v}" for k, v in sorted(self._options.items())),
             "atmo:writer": "atmo Python module",
         }
+        if camera == "cubemap":
+            del metadata["atmo:cameraYawDeg"]  # the faces fix their own directions (as atmo render)
         if convention is not None:
             metadata["atmo:target"] = convention["name"]
             metadata["atmo:targetWorld"] = convention["world"]
