@@ -77,6 +77,40 @@ TEST_F(EngineTarget, ThreeJsReadsTheSunWhereItIs) {
   }
 }
 
+TEST_F(EngineTarget, ThreeJsCubeTextureReadsTheSunWhereItIs) {
+  // --camera cubemap --target three --hdr-faces: six RGBE faces that three's HDRLoader reads and
+  // its CubeTexture samples (the x flip and OpenGL's face rule, tests/three_cube.mjs) with the sun
+  // in its texel.
+  if (std::string(ATMO_NODE).empty()) GTEST_SKIP() << "node is not installed (scripts/install_deps.sh installs it)";
+  ASSERT_TRUE(fs::exists(fs::path(ATMO_NODE_MODULES) / "three" / "package.json"));
+  for (const Sun& sun : {Sun{120.0, 30.0}, Sun{250.0, 8.0}, Sun{10.0, 55.0}}) {
+    ASSERT_EQ(Run("render --camera cubemap --face-size 64 --target three --hdr-faces cube --png '' " + SunFlags(sun))
+                  .exit_code,
+              0);
+    const double a = sun.azimuth_deg * std::numbers::pi / 180.0, e = sun.elevation_deg * std::numbers::pi / 180.0;
+    char direction[128];
+    std::snprintf(direction, sizeof direction, "%.17g %.17g %.17g", std::sin(a) * std::cos(e), std::sin(e),
+                  -std::cos(a) * std::cos(e));
+    int status = 0;
+    std::string err;
+    const std::string out = Shell("NODE_PATH='" ATMO_NODE_MODULES "' '" ATMO_NODE "' '" ATMO_SOURCE_DIR
+                                  "/tests/three_cube.mjs' cube " + std::string(direction),
+                                  status, &err);
+    ASSERT_EQ(status, 0) << out << err;
+    EXPECT_EQ(err, "");
+    const nlohmann::json j = nlohmann::json::parse(out);
+    EXPECT_FALSE(j["flipY"].get<bool>());
+    EXPECT_EQ(j["sunFace"].get<int>(), j["expectedFace"].get<int>()) << out;
+    const double dc = j["sunColumn"].get<double>() - j["expectedColumn"].get<double>();
+    const double dr = j["sunRow"].get<double>() - j["expectedRow"].get<double>();
+    std::printf("[ figures ] three.js CubeTexture: sun at azimuth %g, elevation %g on face %d, %.2f and %.2f texels "
+                "from where three samples it\n",
+                sun.azimuth_deg, sun.elevation_deg, j["sunFace"].get<int>(), dc, dr);
+    EXPECT_LE(std::abs(dc), 1.0) << out;
+    EXPECT_LE(std::abs(dr), 1.0) << out;
+  }
+}
+
 TEST_F(EngineTarget, BlenderSeesTheSunWhereItIsAndLightsAPlaneWithAtmosIlluminance) {
   if (std::string(ATMO_BLENDER).empty()) {
     GTEST_SKIP() << "blender is not installed (scripts/install_deps.sh installs Debian's blender)";
@@ -238,6 +272,11 @@ TEST_F(EngineTarget, BadTargetsAreRefusedBeforeAnyWork) {
                               {"sky.exr", "sky.png"});
   ExpectFailureKeepingOutputs("render --target three --camera fisheye -o sky", "--target three writes an equirect",
                               {"sky.exr", "sky.png"});
+  ExpectFailureKeepingOutputs("render --target blender --camera cubemap --hdr-faces c -o sky",
+                              "cube maps are written for three only", {"sky.exr", "c_px.hdr"});
+  ExpectFailureKeepingOutputs("render --target three --camera cubemap -o sky", "writes --hdr-faces NAME",
+                              {"sky.exr"});
+  ExpectFailureKeepingOutputs("render --hdr-faces c -o sky", "need --camera cubemap", {"sky.exr", "c_nz.hdr"});
   EXPECT_THROW(FindEngineTarget(""), Error);
 }
 

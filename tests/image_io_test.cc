@@ -233,6 +233,42 @@ TEST(Exr, TwelveChannelsKeepTheirOrder) {
   ExpectBitExact(image.pixels, read.pixels);
 }
 
+TEST(RadianceHdr, HeaderAndRgbePixels) {
+  TempDir dir;
+  Image image(3, 2, 3);
+  const float values[6][3] = {{1.0f, 0.5f, 0.25f}, {0.0f, 0.0f, 0.0f}, {3000.0f, 1500.0f, 10.0f},
+                              {-1.0f, std::numeric_limits<float>::quiet_NaN(), 2.0f}, {1e-40f, 0.0f, 0.0f},
+                              {0.7f, 0.7f, 0.7f}};
+  for (int i = 0; i < 6; ++i) {
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = values[i][c];
+  }
+  WriteRadianceHdr(dir / "sky.hdr", image);
+  std::ifstream file(dir / "sky.hdr", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const std::string header = "#?RADIANCE\n# atmo " ATMO_VERSION "\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n";
+  ASSERT_EQ(bytes.substr(0, header.size()), header);
+  ASSERT_EQ(bytes.size(), header.size() + 6 * 4);
+  const auto pixel = [&](int i) {
+    const unsigned char* p = reinterpret_cast<const unsigned char*>(bytes.data()) + header.size() + 4 * i;
+    return std::array<int, 4>{p[0], p[1], p[2], p[3]};
+  };
+  // 1 = 0.5 2^1: mantissas 128, 64, 32 and exponent 1 + 128.
+  EXPECT_EQ(pixel(0), (std::array<int, 4>{128, 64, 32, 129}));
+  EXPECT_EQ(pixel(1), (std::array<int, 4>{0, 0, 0, 0}));
+  EXPECT_EQ(pixel(3), (std::array<int, 4>{0, 0, 128, 130})) << "negative and NaN as 0";
+  EXPECT_EQ(pixel(4), (std::array<int, 4>{0, 0, 0, 0})) << "below the format's range";
+  // Decoded as (byte + 0.5) 2^(e - 136), every channel within half a mantissa step of its value.
+  for (int i : {0, 2, 5}) {
+    const auto p = pixel(i);
+    for (int c = 0; c < 3; ++c) {
+      const double decoded = (p[c] + 0.5) * std::ldexp(1.0, p[3] - 136);
+      EXPECT_NEAR(decoded, values[i][c], std::ldexp(1.0, p[3] - 136)) << i << " " << c;
+    }
+  }
+  EXPECT_THROW(WriteRadianceHdr(dir / "one.hdr", Image(2, 2, 1)), Error);
+  EXPECT_FALSE(fs::exists(dir / "one.hdr"));
+}
+
 TEST(Exr, NumbersInTheMetadataAreTypedAttributes) {
   // A number is a double attribute in the file (OpenEXR's own reader sees the type), text stays
   // text, and ReadExr gives back the text that was written.

@@ -297,6 +297,9 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app->add_option("--specular", render.specular_path, "cubemap: GGX-prefiltered specular mip chain, KTX2");
+  app->add_option("--hdr-faces", render.hdr_faces,
+                  "cubemap: six Radiance HDR faces NAME_px.hdr .. NAME_nz.hdr (with --target three: for three.js's "
+                  "HDRCubeTextureLoader)");
   app->add_option("--specular-levels", render.specular_levels,
                          "cubemap: specular levels (roughness = level / (levels - 1))")
       ->check(CLI::Range(1, 15))

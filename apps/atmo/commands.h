@@ -149,6 +149,9 @@ struct RenderCommand {
   std::string irradiance_path;  // diffuse irradiance cube map: OpenEXR cube for *.exr, else KTX2
   int irradiance_size = 32;
   std::string specular_path;    // GGX-prefiltered specular mip chain, KTX2
+  // Six Radiance HDR faces NAME_px.hdr, NAME_nx.hdr, ... NAME_nz.hdr (three.js's names and order), in
+  // the cube frame's GL convention, or as three's CubeTexture wants them with --target three.
+  std::string hdr_faces;
   int specular_levels = 6;
   int specular_samples = 32;
 };
@@ -197,6 +200,8 @@ class RenderOutputs {
 // cubemap_command.cc: whether --ktx2, --sh, --irradiance or --specular asks for output, and
 // writing them from the cube (3 channels; linear sRGB when `luminance`), appending the paths.
 bool WantsEnvironmentOutputs(const RenderCommand& command);
+// The six files of --hdr-faces NAME: NAME_px.hdr, NAME_nx.hdr, ..., NAME_nz.hdr (none for "").
+std::vector<std::string> HdrFacePaths(const std::string& name);
 void WriteEnvironmentOutputs(const RenderCommand& command, const Cubemap& cube, const std::string& unit_description,
                              bool luminance, std::vector<std::string>& written);
 

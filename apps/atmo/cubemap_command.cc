@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atmo/engine_target.h"
 #include "atmo/cubemap.h"
 #include "atmo/error.h"
 #include "atmo/ibl.h"
@@ -61,15 +62,30 @@ void WriteText(const std::string& path, const std::string& text) {
 
 bool WantsEnvironmentOutputs(const RenderCommand& command) {
   return !command.ktx2_path.empty() || !command.sh_path.empty() || !command.irradiance_path.empty() ||
-         !command.specular_path.empty();
+         !command.specular_path.empty() || !command.hdr_faces.empty();
+}
+
+std::vector<std::string> HdrFacePaths(const std::string& name) {
+  std::vector<std::string> paths;
+  if (name.empty()) return paths;
+  for (const char* face : {"px", "nx", "py", "ny", "pz", "nz"}) paths.push_back(name + "_" + face + ".hdr");
+  return paths;
 }
 
 void WriteEnvironmentOutputs(const RenderCommand& command, const Cubemap& cube, const std::string& unit_description,
                              bool luminance, std::vector<std::string>& written) {
   if (cube.channels() != 3) {
-    throw Error("--ktx2, --sh, --irradiance and --specular need 3 colour channels (use --unit luminance)");
+    throw Error("--ktx2, --sh, --irradiance, --specular and --hdr-faces need 3 colour channels (use --unit luminance)");
   }
   const std::string writer = std::string("atmo ") + ATMO_VERSION;
+  if (!command.hdr_faces.empty()) {
+    const Cubemap faces = command.target == "three" ? CubeTextureForThree(cube) : cube;
+    const std::vector<std::string> paths = HdrFacePaths(command.hdr_faces);
+    for (int f = 0; f < kCubeFaceCount; ++f) {
+      WriteRadianceHdr(paths[f], faces.faces[f]);
+      written.push_back(paths[f]);
+    }
+  }
   if (!command.ktx2_path.empty()) {
     const std::vector<Cubemap> chain = MipChain(cube, command.mips ? 64 : 1);
     WriteKtx2(command.ktx2_path, chain, command.ktx2_float32, writer);

@@ -104,7 +104,17 @@ RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command)
   // --target: the program's orientation, fixed in the world (a given --yaw still turns it).
   if (!command.target.empty()) {
     plan.target = &FindEngineTarget(command.target);
-    if (settings.camera.kind != CameraKind::kEquirect || plan.cubemap) {
+    if (plan.cubemap) {
+      // A cube map for a program: three.js's CubeTexture, as --hdr-faces (CubeTextureForThree).
+      if (command.target != "three") {
+        throw Error("--target " + command.target + " with --camera cubemap: cube maps are written for three only; "
+                    "use --camera equirect");
+      }
+      if (command.hdr_faces.empty()) {
+        throw Error("--target three --camera cubemap writes --hdr-faces NAME (six Radiance HDR faces for three's "
+                    "HDRCubeTextureLoader)");
+      }
+    } else if (settings.camera.kind != CameraKind::kEquirect) {
       throw Error("--target " + command.target + " writes an equirect: add --camera equirect");
     }
     settings.camera.yaw_deg = command.yaw_deg.value_or(plan.target->equirect_centre_azimuth_deg);
@@ -260,10 +270,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   double frame_s = 0.0;
   CheckBackend(common, /*command_has_gl=*/true);
   // Every file the command may write, apart from the inputs and from each other.
-  const std::vector<NamedPath> output_paths = {
+  std::vector<NamedPath> output_paths = {
       {"--exr", command.exr_path},         {"--png", command.png_path},      {"--mp4", command.sun.mp4_path},
       {"--ktx2", command.ktx2_path},       {"--sh", command.sh_path},        {"--irradiance", command.irradiance_path},
       {"--specular", command.specular_path}};
+  for (const std::string& face : HdrFacePaths(command.hdr_faces)) output_paths.push_back({"--hdr-faces", face});
   CheckOutputsApart(common, {}, output_paths);
   const bool on_gl = common.backend == "gl";
   RenderPlan plan = PlanRender(common, command);
@@ -282,7 +293,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                   std::to_string(command.face_size) + ")");
     }
   } else if (WantsEnvironmentOutputs(command)) {
-    throw Error("--ktx2, --sh, --irradiance and --specular need --camera cubemap");
+    throw Error("--ktx2, --sh, --irradiance, --specular and --hdr-faces need --camera cubemap");
   }
 
   // Fail fast, before precomputing anything, when an output cannot be written, so that a refused

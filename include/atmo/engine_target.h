@@ -19,6 +19,8 @@
 #include <string_view>
 #include <vector>
 
+#include "atmo/cubemap.h"
+
 namespace atmo {
 
 struct EngineTarget {
@@ -38,5 +40,13 @@ const std::vector<EngineTarget>& EngineTargets();
 const EngineTarget& FindEngineTarget(std::string_view name);
 // "three, blender, ..." for messages.
 std::string EngineTargetNames();
+
+// A cube map (the cube-frame GL convention of atmo/cubemap.h) as three.js's CubeTexture wants its
+// six images: three samples a cube texture that is not a render target along (-x, y, z) for the
+// world direction (x, y, z) (src/renderers/webgl/WebGLBackground.js and WebGLMaterials.js, the
+// matrix _m; PMREMGenerator's flipEnvMap), so its +X image holds the world's -X side: the +X and
+// -X faces swap and every face is mirrored left-right. Faces in three's order px, nx, py, ny, pz,
+// nz; rows from t = 0 (three uploads cube images with flipY false).
+Cubemap CubeTextureForThree(const Cubemap& cube);
 
 }  // namespace atmo

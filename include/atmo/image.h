@@ -178,6 +178,13 @@ Image ReadExr(const std::filesystem::path& path, ImageMetadata* metadata = nullp
 // cHRM of the Rec.709 primaries and D65. Needs an image with 3 channels; throws atmo::Error.
 void WritePng(const std::filesystem::path& path, const Image& image, const ToneMapping& mapping);
 
+// Radiance HDR (RGBE, Ward 1991; the format of Radiance's `ra_rgbe` and of three.js's HDRLoader):
+// the header "#?RADIANCE", "FORMAT=32-bit_rle_rgbe", the resolution line "-Y H +X W" (rows from the
+// top), then each pixel as 4 bytes, mantissas of R, G, B with a shared exponent, uncompressed
+// scanlines (which every RGBE reader takes). Linear values as they are (no exposure); NaN and
+// negative values as 0, values above the format's range clamp. Needs 3 channels; atomic.
+void WriteRadianceHdr(const std::filesystem::path& path, const Image& image);
+
 // Calls write(temporary_path) and renames the temporary file onto `path`. If `write` throws, the
 // temporary file is removed and the error is rethrown as atmo::Error naming `path`. Fails early,
 // before calling `write`, when the target's folder does not exist or is not writable, or when

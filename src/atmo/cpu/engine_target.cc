@@ -92,4 +92,23 @@ const EngineTarget& FindEngineTarget(std::string_view name) {
   throw Error("unknown --target '" + shown + "' (known: " + EngineTargetNames() + ")");
 }
 
+Cubemap CubeTextureForThree(const Cubemap& cube) {
+  // Face f of the result holds the radiance along M d, M = diag(-1, 1, 1), d the GL direction of
+  // its texel: +X (1, -b, -a) -> (-1, -b, -a) is the -X face at a' = -a; +Y (a, 1, b) -> (-a, 1, b)
+  // is the +Y face at a' = -a; and so on: swap the X faces, mirror s (a) on all.
+  Cubemap out = cube;
+  for (int f = 0; f < kCubeFaceCount; ++f) {
+    const int source = f == 0 ? 1 : f == 1 ? 0 : f;
+    const Image& in = cube.faces[source];
+    Image& face = out.faces[f];
+    const int n = in.width;
+    for (int j = 0; j < in.height; ++j) {
+      for (int i = 0; i < n; ++i) {
+        for (int c = 0; c < in.channels; ++c) face.at(i, j, c) = in.at(n - 1 - i, j, c);
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace atmo

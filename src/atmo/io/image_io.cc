@@ -877,4 +877,43 @@ void WritePng(const fs::path& path, const Image& image, const ToneMapping& mappi
   });
 }
 
+// ---------------------------------------------------------------------------------------------
+// Radiance HDR (RGBE).
+
+void WriteRadianceHdr(const fs::path& path, const Image& image) {
+  if (auto problem = ImageProblem(image)) throw Error(WriteError(path, *problem));
+  if (image.channels != 3) {
+    throw Error(WriteError(path, "Radiance HDR needs a 3-channel image, got " + std::to_string(image.channels)));
+  }
+  std::string bytes = "#?RADIANCE\n# atmo " ATMO_VERSION "\nFORMAT=32-bit_rle_rgbe\n\n-Y " +
+                      std::to_string(image.height) + " +X " + std::to_string(image.width) + "\n";
+  const std::size_t header = bytes.size();
+  bytes.resize(header + 4 * static_cast<std::size_t>(image.width) * image.height);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(image.width) * image.height; ++i) {
+    double rgb[3];
+    for (int c = 0; c < 3; ++c) {
+      const double v = image.pixels[3 * i + c];
+      rgb[c] = v > 0.0 ? std::min(v, 1.7e38) : 0.0;  // NaN and negative values as 0
+    }
+    const double largest = std::max({rgb[0], rgb[1], rgb[2]});
+    unsigned char* out = reinterpret_cast<unsigned char*>(bytes.data()) + header + 4 * i;
+    if (largest < 1e-32) {
+      out[0] = out[1] = out[2] = out[3] = 0;
+      continue;
+    }
+    // largest = m 2^e with m in [0.5, 1): mantissa bytes v 256 / 2^e, exponent byte e + 128.
+    int exponent = 0;
+    const double mantissa = std::frexp(largest, &exponent);
+    const double scale = mantissa * 256.0 / largest;
+    for (int c = 0; c < 3; ++c) out[c] = static_cast<unsigned char>(std::min(255.0, rgb[c] * scale));
+    out[3] = static_cast<unsigned char>(exponent + 128);
+  }
+  WriteFileAtomically(path, [&](const fs::path& temporary) {
+    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
+    file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    file.close();
+    if (!file) throw std::runtime_error("write failed");
+  });
+}
+
 }  // namespace atmo
