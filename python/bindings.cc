@@ -869,6 +869,11 @@ PYBIND11_MODULE(_atmo, m) {
     return AutoExposureEv100(FromArray(image, alpha), ParseMetering(metering));
   }, py::arg("image"), py::arg("alpha") = py::none(), py::arg("metering") = "adaptive");
   m.def("exposure_from_ev100", &ExposureFromEv100);
+  m.def("write_hdr", [](const std::string& path, const FloatArray& image) {
+    const Image converted = FromArray(image, std::nullopt);
+    py::gil_scoped_release release;
+    WriteRadianceHdr(path, converted);
+  }, py::arg("path"), py::arg("image"));
   m.def("write_ktx2", &WriteKtx2Array, py::arg("path"), py::arg("levels"), py::arg("mips"), py::arg("float32"));
   m.def("spherical_harmonics", &SphericalHarmonicsOf, py::arg("cube"), py::arg("frame"));
   m.def("irradiance_cubemap", &IrradianceCubemapArray, py::arg("cube"), py::arg("size"), py::arg("source_size"));

@@ -288,10 +288,11 @@ TEST(Exr, NumbersInTheMetadataAreTypedAttributes) {
   }
   ImageMetadata read;
   ReadExr(dir / "typed.exr", &read);
-  for (const auto& [name, value] : metadata) {
-    const auto found = std::find_if(read.begin(), read.end(), [&](const auto& entry) { return entry.first == name; });
-    ASSERT_NE(found, read.end()) << name;
-    EXPECT_EQ(found->second, value) << name;
+  for (const auto& written : metadata) {
+    const auto found =
+        std::find_if(read.begin(), read.end(), [&](const auto& entry) { return entry.first == written.first; });
+    ASSERT_NE(found, read.end()) << written.first;
+    EXPECT_EQ(found->second, written.second) << written.first;
   }
 }
 

@@ -35,6 +35,7 @@ __all__ = [
     "auto_exposure_ev100",
     "exposure_from_ev100",
     "engine_targets",
+    "write_hdr",
     "write_ktx2",
     "spherical_harmonics",
     "irradiance_cubemap",
@@ -475,6 +476,12 @@ def write_png(path: Union[str, os.PathLike], image, *, alpha=None, exposure: Opt
 # A cube map here is what Model.render(N, camera="cubemap") returns: the six faces +X, -X, +Y, -Y,
 # +Z, -Z stacked vertically as OpenEXR lays them out (6 N x N x C, linear sRGB for unit
 # "luminance"; docs/environment.md).
+
+def write_hdr(path: Union[str, os.PathLike], image) -> None:
+    """A Radiance HDR (RGBE) file of a linear H x W x 3 array, as `atmo render --hdr-faces` writes
+    its faces (include/atmo/image.h, WriteRadianceHdr); written atomically."""
+    _atmo.write_hdr(os.fspath(path), _image_array(image))
+
 
 def write_ktx2(path: Union[str, os.PathLike], cube, *, mips: bool = False, float32: bool = False) -> None:
     """A KTX 2.0 cubemap as `atmo render --ktx2` writes it: cube is one cube map (mips=True adds the

@@ -254,3 +254,18 @@ def test_export_tables_is_atmo_precompute(cli, tmp_path):
         assert (tmp_path / ("cli" + suffix)).read_bytes() == open(raw, "rb").read(), suffix
     with pytest.raises(ValueError, match="model simple has none"):
         atmo.Model("simple", preset="simple").export_tables(tmp_path / "s")
+
+
+def test_write_hdr_is_the_clis_face(cli, tmp_path):
+    """write_hdr writes the bytes `atmo render --hdr-faces` writes for the same face."""
+    cli("render", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--hdr-faces",
+        str(tmp_path / "c"), "--exr", str(tmp_path / "c.exr"), "--png", "")
+    cube = atmo.Model("hillaire").render(8, camera="cubemap", sun_elevation_deg=30)
+    exr, _, _, _ = atmo.read_exr(tmp_path / "c.exr")
+    np.testing.assert_array_equal(cube, exr)
+    # Face +Y of the OpenEXR layout is the view from inside; the HDR face is the GL-convention
+    # one, flipped top-bottom for the Y faces (docs/environment.md): rows reversed.
+    atmo.write_hdr(tmp_path / "py.hdr", cube[16:24][::-1])
+    assert (tmp_path / "py.hdr").read_bytes() == (tmp_path / "c_py.hdr").read_bytes()
+    with pytest.raises(ValueError, match="3-channel"):
+        atmo.write_hdr(tmp_path / "x.hdr", np.ones((2, 2, 4), np.float32))
