@@ -874,6 +874,12 @@ PYBIND11_MODULE(_atmo, m) {
     py::gil_scoped_release release;
     WriteRadianceHdr(path, converted);
   }, py::arg("path"), py::arg("image"));
+  m.def("cube_faces_for_three", [](const FloatArray& cube) {
+    const Cubemap three = CubeTextureForThree(CubeFromArray(cube));
+    std::vector<FloatArray> faces;
+    for (const Image& face : three.faces) faces.push_back(ToArray(face));
+    return faces;
+  }, py::arg("cube"));
   m.def("write_ktx2", &WriteKtx2Array, py::arg("path"), py::arg("levels"), py::arg("mips"), py::arg("float32"));
   m.def("spherical_harmonics", &SphericalHarmonicsOf, py::arg("cube"), py::arg("frame"));
   m.def("irradiance_cubemap", &IrradianceCubemapArray, py::arg("cube"), py::arg("size"), py::arg("source_size"));

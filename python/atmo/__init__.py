@@ -36,6 +36,7 @@ __all__ = [
     "exposure_from_ev100",
     "engine_targets",
     "write_hdr",
+    "cube_faces_for_three",
     "write_ktx2",
     "spherical_harmonics",
     "irradiance_cubemap",
@@ -481,6 +482,13 @@ def write_hdr(path: Union[str, os.PathLike], image) -> None:
     """A Radiance HDR (RGBE) file of a linear H x W x 3 array, as `atmo render --hdr-faces` writes
     its faces (include/atmo/image.h, WriteRadianceHdr); written atomically."""
     _atmo.write_hdr(os.fspath(path), _image_array(image))
+
+
+def cube_faces_for_three(cube) -> list:
+    """The six faces px, nx, py, ny, pz, nz of a rendered cube map as three.js's CubeTexture wants
+    them (`--target three --hdr-faces`; docs/environment.md): write each with write_hdr and load
+    them with three's HDRCubeTextureLoader."""
+    return list(_atmo.cube_faces_for_three(_image_array(cube)))
 
 
 def write_ktx2(path: Union[str, os.PathLike], cube, *, mips: bool = False, float32: bool = False) -> None:

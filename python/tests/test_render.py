@@ -269,3 +269,15 @@ def test_write_hdr_is_the_clis_face(cli, tmp_path):
     assert (tmp_path / "py.hdr").read_bytes() == (tmp_path / "c_py.hdr").read_bytes()
     with pytest.raises(ValueError, match="3-channel"):
         atmo.write_hdr(tmp_path / "x.hdr", np.ones((2, 2, 4), np.float32))
+
+
+def test_cube_faces_for_three_are_the_clis(cli, tmp_path):
+    """cube_faces_for_three + write_hdr give the files of --target three --hdr-faces."""
+    cli("render", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--sun-azimuth", "70",
+        "--target", "three", "--hdr-faces", str(tmp_path / "c"), "--exr", "", "--png", "")
+    cube = atmo.Model("hillaire").render(8, camera="cubemap", sun_elevation_deg=30, sun_azimuth_deg=70)
+    faces = atmo.cube_faces_for_three(cube)
+    assert len(faces) == 6
+    for name, face in zip(("px", "nx", "py", "ny", "pz", "nz"), faces):
+        atmo.write_hdr(tmp_path / f"py_{name}.hdr", face)
+        assert (tmp_path / f"py_{name}.hdr").read_bytes() == (tmp_path / f"c_{name}.hdr").read_bytes(), name
