@@ -18,8 +18,25 @@
 namespace atmo::testing {
 namespace {
 
+struct Sun {
+  double azimuth_deg;
+  double elevation_deg;
+};
+
 class EngineTarget : public CliFixture {
  protected:
+  // Runs `tests/SCRIPT ARGS X Y Z` under node with three (ATMO_NODE_MODULES), X Y Z the sun's
+  // direction in three's world (+X east, +Y up, -Z north); its stdout, its stderr into `err`.
+  std::string Node(const std::string& script, const std::string& args, const Sun& sun, int& status,
+                   std::string& err) const {
+    const double a = sun.azimuth_deg * std::numbers::pi / 180.0, e = sun.elevation_deg * std::numbers::pi / 180.0;
+    char direction[128];
+    std::snprintf(direction, sizeof direction, "%.17g %.17g %.17g", std::sin(a) * std::cos(e), std::sin(e),
+                  -std::cos(a) * std::cos(e));
+    return Shell("NODE_PATH='" ATMO_NODE_MODULES "' '" ATMO_NODE "' '" ATMO_SOURCE_DIR "/tests/" + script + "' " + args +
+                     " " + direction,
+                 status, &err);
+  }
   // Runs a shell command in the test's folder; its stdout (stderr into `err`).
   std::string Shell(const std::string& command, int& status, std::string* err = nullptr) const {
     const std::string full = "cd '" + dir_.string() + "' && " + command + " >shell_out.txt 2>shell_err.txt";
@@ -29,10 +46,6 @@ class EngineTarget : public CliFixture {
   }
 };
 
-struct Sun {
-  double azimuth_deg;
-  double elevation_deg;
-};
 constexpr Sun kSuns[] = {{135.0, 30.0}, {250.0, 8.0}};
 
 std::string SunFlags(const Sun& sun) {
@@ -47,16 +60,9 @@ TEST_F(EngineTarget, ThreeJsReadsTheSunWhereItIs) {
       << "three is not in " << ATMO_NODE_MODULES << " (configure installs it with npm)";
   for (const Sun& sun : kSuns) {
     ASSERT_EQ(Run("render --target three --width 1024 --height 512 --no-png -o three " + SunFlags(sun)).exit_code, 0);
-    // The sun's direction in three's world: +X east, +Y up, -Z north.
-    const double a = sun.azimuth_deg * std::numbers::pi / 180.0, e = sun.elevation_deg * std::numbers::pi / 180.0;
-    char direction[128];
-    std::snprintf(direction, sizeof direction, "%.17g %.17g %.17g", std::sin(a) * std::cos(e), std::sin(e),
-                  -std::cos(a) * std::cos(e));
     int status = 0;
     std::string err;
-    const std::string out = Shell("NODE_PATH='" ATMO_NODE_MODULES "' '" ATMO_NODE "' '" ATMO_SOURCE_DIR
-                                  "/tests/three_equirect.mjs' three.exr " + std::string(direction),
-                                  status, &err);
+    const std::string out = Node("three_equirect.mjs", "three.exr", sun, status, err);
     ASSERT_EQ(status, 0) << out << err;
     // three's EXRLoader reads string, int and float attributes and skips atmo's doubles, one
     // console warning each (docs/environment.md); nothing else may go wrong.
@@ -87,15 +93,9 @@ TEST_F(EngineTarget, ThreeJsCubeTextureReadsTheSunWhereItIs) {
     ASSERT_EQ(Run("render --camera cubemap --face-size 64 --target three --hdr-faces cube --png '' " + SunFlags(sun))
                   .exit_code,
               0);
-    const double a = sun.azimuth_deg * std::numbers::pi / 180.0, e = sun.elevation_deg * std::numbers::pi / 180.0;
-    char direction[128];
-    std::snprintf(direction, sizeof direction, "%.17g %.17g %.17g", std::sin(a) * std::cos(e), std::sin(e),
-                  -std::cos(a) * std::cos(e));
     int status = 0;
     std::string err;
-    const std::string out = Shell("NODE_PATH='" ATMO_NODE_MODULES "' '" ATMO_NODE "' '" ATMO_SOURCE_DIR
-                                  "/tests/three_cube.mjs' cube " + std::string(direction),
-                                  status, &err);
+    const std::string out = Node("three_cube.mjs", "cube", sun, status, err);
     ASSERT_EQ(status, 0) << out << err;
     EXPECT_EQ(err, "");
     const nlohmann::json j = nlohmann::json::parse(out);
