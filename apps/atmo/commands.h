@@ -128,6 +128,7 @@ struct RenderCommand {
   bool no_sun_disc = false;
   std::optional<double> sun_size_deg;  // the sun's angular diameter; default: 2 x sun_angular_radius_rad
   bool no_ground = false;
+  bool no_night_glow = false;  // leave the airglow and zodiacal light out (NightSkySettings::enabled)
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG
   // Monte Carlo paths per pixel (model reference only; default: its `samples` option).

@@ -17,8 +17,9 @@
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/error.h"
-#include "atmo/memory.h"
 #include "atmo/image.h"
+#include "atmo/memory.h"
+#include "atmo/night_sky.h"
 #include "atmo/render.h"
 #include "commands.h"
 #include "models/reference_model.h"
@@ -81,6 +82,7 @@ RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command)
     }
     parameters.sun_angular_radius_rad = 0.5 * d * std::numbers::pi / 180.0;
   }
+  if (command.no_night_glow) parameters.night_sky.enabled = false;
   plan.unit = ParseRadianceUnit(command.unit);
   if (command.xyz && plan.unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
   // The models answer per unit solar irradiance; in physical units the colour conversion brings
@@ -378,17 +380,30 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // A frame of a deterministic CPU model. In luminance the channels are folded into linear sRGB
   // while the frame is rendered (RenderViewFolded): a spectral frame costs about a 3-channel one.
   const std::vector<glm::vec3> srgb_weights = ColourWeights(convert, ImageColour::kLinearSrgb);
-  const auto render_cpu = [&](const RenderSettings& frame, const RowProgress& progress = {}) {
+  // The night sky of a frame (include/atmo/night_sky.h): the ecliptic of the date and place when
+  // the sun comes from --date, else the default one.
+  const auto night_sky_for = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated) {
+    const glm::dvec3 pole = dated ? EclipticPoleDirection(dated->julian_day_utc, *command.sun.latitude_deg,
+                                                          *command.sun.longitude_deg)
+                                  : glm::dvec3(0.0);
+    return NightSky(model_parameters, std::max(frame.altitude_m, 0.0),
+                    SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg), pole);
+  };
+  const auto render_cpu = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated,
+                              const RowProgress& progress = {}) {
     const auto view_start = std::chrono::steady_clock::now();
     const std::unique_ptr<SkyView> sky =
         model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+    const NightSky night = night_sky_for(frame, dated);
     view_s += seconds_since(view_start);
+    RadianceTerms terms = frame.terms;
+    terms.night_sky = &night;
     const auto frame_start = std::chrono::steady_clock::now();
     Image image;
     if (unit != RadianceUnit::kLuminance) {
-      image = RenderView(*sky, frame.camera, frame.terms, model_parameters.solar_irradiance, progress);
+      image = RenderView(*sky, frame.camera, terms, model_parameters.solar_irradiance, progress);
     } else {
-      image = RenderViewFolded(*sky, frame.camera, frame.terms, srgb_weights, progress);
+      image = RenderViewFolded(*sky, frame.camera, terms, srgb_weights, progress);
       image.colour_space = ColourSpace::kLinearSrgb;
     }
     frame_s += seconds_since(frame_start);
@@ -416,19 +431,22 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       const auto frame_start = std::chrono::steady_clock::now();
       Image image;
       Image standard_error;  // of a Monte Carlo model's radiance
+      const NightSky night = night_sky_for(frame, sun);
       if (model != nullptr && IsMonteCarlo(*model)) {
         ProgressiveSettings progressive;
         progressive.samples_per_pixel = command.spp.value_or(0);
+        frame.terms.night_sky = &night;
         const ProgressiveImage result = RenderProgressive(*model, frame, progressive);
         set_metadata("atmo:standardErrorChannels", "stderr.NAME: the standard error of channel NAME (same unit), the EXR layer stderr");
         set_metadata("atmo:samplesPerPixel", std::to_string(result.samples_per_pixel));
         image = result.radiance;
         standard_error = result.standard_error;
       } else if (model != nullptr) {
-        image = render_cpu(frame);
+        image = render_cpu(frame, sun);
       } else {
 #ifdef ATMO_HAVE_GL
         image = RenderOnGl(*context, common, model_parameters, frame);
+        AddNightSky(night.Scaled(model_parameters.solar_irradiance), frame.camera, image);
 #endif
       }
       const double frame_ms =
@@ -446,9 +464,12 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     // and --png get OpenEXR's layout of them, the other outputs the cube itself.
     const std::unique_ptr<SkyView> sky =
         model->View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
+    const NightSky night = night_sky_for(settings, plan.dated_sun);
+    RadianceTerms terms = settings.terms;
+    terms.night_sky = &night;
     Cubemap cube = unit == RadianceUnit::kLuminance
-                       ? RenderCubemapFolded(*sky, command.face_size, settings.terms, srgb_weights)
-                       : RenderCubemap(*sky, command.face_size, settings.terms, model_parameters.solar_irradiance);
+                       ? RenderCubemapFolded(*sky, command.face_size, terms, srgb_weights)
+                       : RenderCubemap(*sky, command.face_size, terms, model_parameters.solar_irradiance);
     if (unit == RadianceUnit::kLuminance) {
       for (Image& face : cube.faces) face.colour_space = ColourSpace::kLinearSrgb;
     }
@@ -485,7 +506,10 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       written = write(pass.radiance, &pass.standard_error, render_ms);
     };
     const auto passes_start = std::chrono::steady_clock::now();
-    image = RenderProgressive(*model, settings, progressive).radiance;
+    const NightSky night = night_sky_for(settings, plan.dated_sun);
+    RenderSettings with_night = settings;
+    with_night.terms.night_sky = &night;
+    image = RenderProgressive(*model, with_night, progressive).radiance;
     frame_s = seconds_since(passes_start) - outputs.write_s();
     progress.Finish();
   } else {
@@ -497,12 +521,14 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       const gl::Context context;
       const auto gl_start = std::chrono::steady_clock::now();
       image = RenderOnGl(context, common, model_parameters, settings);
+      AddNightSky(night_sky_for(settings, plan.dated_sun).Scaled(model_parameters.solar_irradiance), settings.camera,
+                  image);
       frame_s = seconds_since(gl_start);
     } else {
-      image = render_cpu(settings, rows);
+      image = render_cpu(settings, plan.dated_sun, rows);
     }
 #else
-    image = render_cpu(settings, rows);
+    image = render_cpu(settings, plan.dated_sun, rows);
 #endif
     progress.Finish();
     render_ms = 1e3 * (view_s + frame_s);

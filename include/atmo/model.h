@@ -36,9 +36,15 @@ namespace atmo {
 using ModelOptions = std::map<std::string, std::string>;
 
 // What RadianceBatch adds to the scattered radiance, for images.
+class NightSky;
+
 struct RadianceTerms {
   bool sun_disc = true;  // the sun disc, attenuated by the view transmittance
   bool ground = true;    // the light the Lambertian ground reflects, attenuated (rays that meet it)
+  // The night sky's own light (airglow, zodiacal light; include/atmo/night_sky.h), made for the
+  // same parameters, altitude and sun. Like the sun disc it is added by the renderers (RenderView,
+  // RenderViewFolded, the cube maps, the GL renderers), not by RadianceBatch. Not owned.
+  const NightSky* night_sky = nullptr;
 };
 
 // A model bound to one observer altitude and one sun direction: what a frame needs. Creating it

@@ -91,6 +91,24 @@ struct Medium {
   bool operator==(const Medium&) const = default;
 };
 
+// The light of the night sky that no model scatters from the sun: the airglow of the upper
+// atmosphere and the zodiacal light (src/atmo/physics/night_sky.cc, docs/night.md). It is added
+// to images, cube maps and illuminance by the renderers (atmo::NightSky), attenuated by the
+// atmosphere in front of it; the scattering tables do not depend on it.
+struct NightSkySettings {
+  bool enabled = true;
+  // Airglow: a shell of uniform emission centred at `airglow_altitude_m`, `airglow_thickness_m`
+  // thick, whose zenith brightness seen from outside the atmosphere is `airglow_scale` times the
+  // ESO sky model's (Noll et al. 2012, 130 sfu of solar radio flux).
+  double airglow_scale = 1.0;
+  double airglow_altitude_m = 92e3;
+  double airglow_thickness_m = 16e3;
+  // Zodiacal light: `zodiacal_scale` times Leinert et al. 1998's Table 17.
+  double zodiacal_scale = 1.0;
+
+  bool operator==(const NightSkySettings&) const = default;
+};
+
 struct AtmosphereParameters {
   std::string name = "custom";  // the preset it came from, or "custom"
   Geometry geometry = Geometry::kSpherical;
@@ -115,6 +133,8 @@ struct AtmosphereParameters {
   // Display defaults that come with a preset: tone-mapping exposure and the observer altitude.
   double exposure = 10.0;
   double observer_altitude_m = 0.0;
+  // The night sky's own light (spherical geometry only; ignored by a half-space).
+  NightSkySettings night_sky;
 
   std::size_t channel_count() const { return wavelengths_nm.size(); }
   bool operator==(const AtmosphereParameters&) const = default;

@@ -18,6 +18,7 @@
 
 #include "atmo/image.h"
 #include "atmo/model.h"
+#include "atmo/night_sky.h"
 
 namespace atmo {
 
@@ -50,7 +51,8 @@ constexpr int kMaxImageSide = 16384;
 // One image channel per model channel (per wavelength: 3 for the RGB presets, N for a spectral
 // atmosphere; atmo::ConvertImage in atmo/colour.h turns them into colour and physical units).
 // Throws atmo::Error for invalid settings (non-finite angles, a resolution outside
-// [1, kMaxImageSide], a field of view outside (0, 180)).
+// [1, kMaxImageSide], a field of view outside (0, 180)). The night sky of the model's parameters
+// (NightSkySettings, with the default ecliptic) is added unless settings.terms.night_sky gives one.
 Image Render(const Model& model, const RenderSettings& settings);
 
 // Renders a prepared view (its per-view tables already built) through a camera: the frame pass
@@ -69,6 +71,12 @@ Image RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& 
 // frame's (a render loop's target: no allocation, zero fill or page faults per frame).
 void RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& terms,
                 std::span<const double> solar_irradiance, Image& image, const RowProgress& progress = {});
+
+// Adds a night sky's per-pixel pass (NightSky::Scaled or NightSky::Fold, as many outputs as the
+// image has channels) to an image rendered through `camera`: what RenderView does with
+// RadianceTerms::night_sky, for images made elsewhere (the GL renderers after read-back). Throws
+// atmo::Error for a size or channel mismatch.
+void AddNightSky(const NightSky::Folded& night, const Camera& camera, Image& image);
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
 // (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the

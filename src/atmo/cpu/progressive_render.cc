@@ -16,6 +16,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "atmo/night_sky.h"
 #include "atmo/render.h"
 #include "cpu/camera.h"
 #include "cpu/path_tracer.h"
@@ -87,6 +88,8 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   // image's unit (times the solar irradiance).
   Image disc(width, height, static_cast<int>(nc));
   if (settings.terms.sun_disc) AddSunDisc(sky, settings.camera, irradiance, disc);
+  // The night sky's direct light, deterministic like the disc (include/atmo/night_sky.h).
+  if (settings.terms.night_sky != nullptr) settings.terms.night_sky->Scaled(irradiance).Add(views, disc.pixels);
 
   std::vector<double> sum(pixel_count * nc, 0.0);
   std::vector<double> sum_sq(pixel_count * nc, 0.0);

@@ -5,12 +5,14 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "atmo/night_sky.h"
 #include "cpu/camera.h"
 #include "cpu/sun_disc.h"
 
@@ -23,6 +25,25 @@ void CheckFinite(double value, const char* name) {
 
 void CheckChannels(std::size_t channels) {
   if (channels == 0) throw Error("rendering an image needs at least one channel");
+}
+
+const NightSky& CheckedNightSky(const RadianceTerms& terms, std::size_t channels) {
+  if (terms.night_sky->channel_count() != channels) {
+    throw Error("the night sky has " + std::to_string(terms.night_sky->channel_count()) +
+                " channels and the sky " + std::to_string(channels));
+  }
+  return *terms.night_sky;
+}
+
+// The night sky's per-pixel pass (an empty one without terms.night_sky).
+NightSky::Folded NightSkyScaled(const RadianceTerms& terms, std::size_t channels, std::span<const double> scale) {
+  if (terms.night_sky == nullptr) return {};
+  return CheckedNightSky(terms, channels).Scaled(scale);
+}
+
+NightSky::Folded NightSkyFolded(const RadianceTerms& terms, std::size_t channels, std::span<const glm::vec3> weights) {
+  if (terms.night_sky == nullptr) return {};
+  return CheckedNightSky(terms, channels).Fold(weights, 3);
 }
 
 }  // namespace
@@ -86,9 +107,41 @@ Image Render(const Model& model, const RenderSettings& settings) {
   CheckFinite(settings.sun_elevation_deg, "sun elevation");
   CheckFinite(settings.sun_azimuth_deg, "sun azimuth");
   CheckChannels(model.channel_count());
-  const std::unique_ptr<SkyView> sky =
-      model.View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
-  return RenderView(*sky, settings.camera, settings.terms, model.parameters().solar_irradiance);
+  const glm::dvec3 sun = SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg);
+  const std::unique_ptr<SkyView> sky = model.View(settings.altitude_m, sun);
+  RadianceTerms terms = settings.terms;
+  std::optional<NightSky> night;
+  if (terms.night_sky == nullptr && settings.altitude_m >= 0.0) {
+    terms.night_sky = &night.emplace(model.parameters(), settings.altitude_m, sun);
+  }
+  return RenderView(*sky, settings.camera, terms, model.parameters().solar_irradiance);
+}
+
+void AddNightSky(const NightSky::Folded& night, const Camera& camera_settings, Image& image) {
+  ValidateCamera(camera_settings);
+  if (image.width != camera_settings.width || image.height != camera_settings.height ||
+      image.channels != night.outputs()) {
+    throw Error("AddNightSky: the image does not match the camera or the night sky's outputs");
+  }
+  const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const int width = camera_settings.width;
+  const std::size_t nc = static_cast<std::size_t>(image.channels);
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<int>(0, image.height), [&](const oneapi::tbb::blocked_range<int>& rows) {
+    std::vector<glm::dvec3> views(width);
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      if (camera.kind == shared::kCameraPerspective) {
+        PerspectiveRowDirections(camera, y, views);
+      } else {
+        for (int x = 0; x < width; ++x) {
+          shared::vec3 direction;
+          views[x] = shared::GetCameraRayDirection(camera, shared::vec2(x + 0.5, y + 0.5), direction) ? direction
+                                                                                                   : glm::dvec3(0.0);
+        }
+      }
+      night.Add(views, std::span<float>(&image.pixels[static_cast<std::size_t>(y) * width * nc],
+                                        static_cast<std::size_t>(width) * nc));
+    }
+  });
 }
 
 namespace {
@@ -161,11 +214,13 @@ void RenderView(const SkyView& sky, const Camera& camera_settings, const Radianc
   // their centres.
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
+  const NightSky::Folded night = NightSkyScaled(terms, n, solar_irradiance);
   RenderRows(camera_settings, static_cast<int>(n), [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatch(views, sky_terms, row);
     for (std::size_t x = 0; x < views.size(); ++x) {
       for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
     }
+    night.Add(views, row);
   }, progress, image);
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
 }
@@ -185,8 +240,10 @@ void RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const R
   if (weights.size() != n) throw Error("RenderViewFolded needs one weight per channel");
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
+  const NightSky::Folded night = NightSkyFolded(terms, n, weights);
   RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatchFolded(views, sky_terms, weights, row);
+    night.Add(views, row);
   }, progress, image);
   if (terms.sun_disc) {
     // The disc pass with the disc's radiance folded by the same weights (solar irradiance 1: the

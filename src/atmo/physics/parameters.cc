@@ -282,6 +282,15 @@ void Validate(const AtmosphereParameters& p) {
          FormatNumber(p.observer_altitude_m) + ")");
   }
   CheckRange("observer_altitude_m", p.observer_altitude_m, -kMaxLength_m, kMaxLength_m, "m");
+
+  const NightSkySettings& night = p.night_sky;
+  CheckRange("night_sky.airglow_scale", night.airglow_scale, 0.0, 1e3, "");
+  CheckRange("night_sky.zodiacal_scale", night.zodiacal_scale, 0.0, 1e3, "");
+  CheckRange("night_sky.airglow_thickness_m", night.airglow_thickness_m, 1.0, 1e6, "m");
+  CheckRange("night_sky.airglow_altitude_m", night.airglow_altitude_m, 0.0, kMaxLength_m, "m");
+  if (!(night.airglow_altitude_m - 0.5 * night.airglow_thickness_m >= 0.0)) {
+    Fail("night_sky: the airglow layer must lie above the ground (airglow_altitude_m >= airglow_thickness_m / 2)");
+  }
 }
 
 // FNV-1a, 64 bit (Fowler, Noll, Vo): offset basis 14695981039346656037, prime 1099511628211,
@@ -291,6 +300,8 @@ std::uint64_t ParameterHash(const AtmosphereParameters& parameters) {
   // computed for a preset serve an identical "custom" config.
   AtmosphereParameters unnamed = parameters;
   unnamed.name = "custom";
+  // The night sky's light is added to images, not to the tables: it does not change the hash.
+  unnamed.night_sky = NightSkySettings{};
   std::uint64_t hash = 14695981039346656037ull;
   for (const char c : ToJson(unnamed)) {
     hash ^= static_cast<unsigned char>(c);

@@ -254,6 +254,16 @@ std::string ToJson(const AtmosphereParameters& p) {
   j["solar_irradiance"] = p.solar_irradiance;
   j["exposure"] = p.exposure;
   j["observer_altitude_m"] = p.observer_altitude_m;
+  // Only when it differs from the default, so that the presets' JSON and hashes stay what they were.
+  if (!(p.night_sky == NightSkySettings{})) {
+    OrderedJson night;
+    night["enabled"] = p.night_sky.enabled;
+    night["airglow_scale"] = p.night_sky.airglow_scale;
+    night["airglow_altitude_m"] = p.night_sky.airglow_altitude_m;
+    night["airglow_thickness_m"] = p.night_sky.airglow_thickness_m;
+    night["zodiacal_scale"] = p.night_sky.zodiacal_scale;
+    j["night_sky"] = night;
+  }
   return j.dump(2) + "\n";
 }
 
@@ -280,7 +290,7 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   CheckKeys(root, "",
             {"preset", "geometry", "ground_radius_m", "top_radius_m", "wavelengths_nm", "rayleigh",
              "mie", "ozone", "water_vapor", "ground_albedo", "sun_angular_radius_rad", "sun_limb_darkening", "solar_irradiance",
-             "exposure", "observer_altitude_m", "aerosol"});
+             "exposure", "observer_altitude_m", "aerosol", "night_sky"});
 
   std::string preset_name(kDefaultPreset);
   if (const auto it = root.find("preset"); it != root.end()) {
@@ -325,6 +335,19 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   ReadPerChannel(root, "", "solar_irradiance", channel_count, p.solar_irradiance);
   ReadNumber(root, "", "exposure", p.exposure);
   ReadNumber(root, "", "observer_altitude_m", p.observer_altitude_m);
+  if (const auto it = root.find("night_sky"); it != root.end()) {
+    CheckObject(*it, "night_sky");
+    CheckKeys(*it, "night_sky",
+              {"enabled", "airglow_scale", "airglow_altitude_m", "airglow_thickness_m", "zodiacal_scale"});
+    if (const auto enabled = it->find("enabled"); enabled != it->end()) {
+      if (!enabled->is_boolean()) Fail("night_sky.enabled must be true or false");
+      p.night_sky.enabled = enabled->get<bool>();
+    }
+    ReadNumber(*it, "night_sky", "airglow_scale", p.night_sky.airglow_scale);
+    ReadNumber(*it, "night_sky", "airglow_altitude_m", p.night_sky.airglow_altitude_m);
+    ReadNumber(*it, "night_sky", "airglow_thickness_m", p.night_sky.airglow_thickness_m);
+    ReadNumber(*it, "night_sky", "zodiacal_scale", p.night_sky.zodiacal_scale);
+  }
   // "aerosol" replaces the Mie medium by an OPAC aerosol (docs/aerosols.md), after the other keys.
   if (const auto it = root.find("aerosol"); it != root.end()) ApplyAerosolRequest(p, ReadAerosol(*it));
 

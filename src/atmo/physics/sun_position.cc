@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numbers>
 #include <string>
 
 #include <libnova/dynamical_time.h>
@@ -16,6 +17,7 @@
 #include <libnova/parallax.h>
 
 #include "atmo/error.h"
+#include "atmo/night_sky.h"
 
 namespace atmo {
 
@@ -170,6 +172,13 @@ double ApparentSiderealTimeDeg(double julian_day_utc, const ln_nutation& nutatio
                           t * t * t / 38710000.0;
   const double epsilon = kDegToRad * (nutation.ecliptic + nutation.obliquity);
   return Wrap360(mean_deg + nutation.longitude * std::cos(epsilon));
+}
+
+// libnova keeps its last Earth position and nutation in globals (caches without a lock): one
+// caller at a time, and each result independent of the calls before (NutationAt).
+std::mutex& LibnovaMutex() {
+  static std::mutex mutex;
+  return mutex;
 }
 
 }  // namespace
@@ -335,10 +344,7 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
     throw Error("the sun's position needs a finite pressure >= 0, temperature > -273 C and observer height");
   }
 
-  // libnova keeps its last Earth position and nutation in globals (caches without a lock): one
-  // caller at a time, and each result independent of the calls before (NutationAt).
-  static std::mutex libnova_mutex;
-  const std::lock_guard<std::mutex> lock(libnova_mutex);
+  const std::lock_guard<std::mutex> lock(LibnovaMutex());
 
   // The ephemeris runs on Terrestrial Time: JDE = JD(UT) + Delta T.
   const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
@@ -398,6 +404,28 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
     sun.elevation_deg += RefractionDeg(sun.geometric_elevation_deg, options.pressure_mbar, options.temperature_c);
   }
   return sun;
+}
+
+}  // namespace atmo
+
+namespace atmo {
+
+glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, double longitude_deg) {
+  ComputeSunPosition(julian_day_utc, latitude_deg, longitude_deg);  // validates the input alike
+  const std::lock_guard<std::mutex> lock(LibnovaMutex());
+  const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
+  const ln_nutation nutation = NutationAt(jde);
+  // The ecliptic's north pole is at right ascension 270 degrees and declination 90 - epsilon
+  // (true equator and equinox of date); horizontal as the sun's place above (Meeus eqs. 13.5, 13.6).
+  const double epsilon = kDegToRad * (nutation.ecliptic + nutation.obliquity);
+  const double delta = 0.5 * std::numbers::pi - epsilon;
+  const double lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
+  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + lng - 270.0);
+  const double phi = kDegToRad * latitude_deg;
+  const glm::dvec3 local(-std::cos(delta) * std::sin(hour_angle),
+                         std::cos(phi) * std::sin(delta) - std::sin(phi) * std::cos(delta) * std::cos(hour_angle),
+                         std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle));
+  return glm::normalize(local);
 }
 
 }  // namespace atmo

@@ -1,0 +1,120 @@
+// The night sky's own light: the airglow of the upper atmosphere and the zodiacal light, attenuated
+// by the atmosphere in front of them (docs/night.md). No sky model scatters it from the sun, so the
+// renderers add it to the model's radiance as they add the sun disc: RenderView, RenderViewFolded
+// and the cube maps through RadianceTerms::night_sky, the GL renderers after read-back, and
+// atmo::ComputeIlluminance in its own column.
+//
+// To use it:
+//   const atmo::NightSky night(parameters, /*altitude_m=*/0.0, sun_direction);   // ecliptic: default
+//   std::vector<double> L(parameters.channel_count());
+//   night.Radiance(view, L);            // sr^-1 per unit solar irradiance, like SkyView::Radiance
+//   atmo::RadianceTerms terms;
+//   terms.night_sky = &night;           // RenderView adds it to every pixel
+//
+// Units. Like every model's radiance, per unit solar irradiance at the top of the atmosphere and per
+// channel: a channel's value times the solar spectrum at its wavelength is the spectral radiance
+// (atmo::SpectralConversion). The airglow's line spectrum is projected onto the channels so that
+// its CIE XYZ (and so its luminance) is exact whatever the channel count; the zodiacal light has
+// the sun's spectrum (Leinert et al. 1998, section 8, to first order), which is the same value in
+// every channel.
+//
+// Geometry. The airglow is a spherical shell of uniform emission (NightSkySettings): a ray picks up
+// the emission along its length inside the shell, which brightens the sky towards the horizon (the
+// van Rhijn effect) without the thin-layer formula's singularity at the limb seen from space. The
+// emission a ray meets after it has passed below the shell (all of it, for an observer below the
+// shell) is attenuated by the ray's transmittance to the top of the atmosphere; what it meets
+// before (an observer in space, looking through the shell) is not, the air above the shell being
+// negligible. The zodiacal light comes from outside the atmosphere: attenuated by the
+// transmittance, 0 on rays that meet the ground. What scatters out of these rays is not scattered
+// back in by this class (the direct, attenuated light only); the reference model traces it fully
+// and docs/night.md gives the difference.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "atmo/parameters.h"
+
+namespace atmo {
+
+// The ecliptic's north pole in the observer's frame (x east, y north, z up) when neither a date nor
+// a place gives it: the pole as high as it can be at right angles to the sun, so that the ecliptic
+// runs through the sun as low as a great circle can. The zenith is then at ecliptic latitude
+// 90 degrees minus the sun's depression, where the zodiacal light is faintest: the condition of the
+// published dark-sky measurements (docs/night.md). With a date and a place
+// (EclipticPoleDirection) the zodiacal light is where it is that night.
+glm::dvec3 DefaultEclipticPole(const glm::dvec3& sun_direction);
+
+// The ecliptic's north pole (of date: mean obliquity, equinox of date) in the local frame of an
+// observer at `latitude_deg`, `longitude_deg` (east +) at `julian_day_utc`. Throws atmo::Error as
+// ComputeSunPosition does for bad input.
+glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, double longitude_deg);
+
+class NightSky {
+ public:
+  // The night sky seen from `altitude_m` with the sun along `sun_direction` (unit); the ecliptic's
+  // north pole `ecliptic_pole` (unit, at right angles to the sun; a zero vector: DefaultEclipticPole).
+  // Precomputes the transmittance and the airglow path per view zenith angle (about 10 ms for 15
+  // channels). Inactive (Radiance 0) when parameters.night_sky.enabled is false or the geometry is
+  // a half-space. Throws atmo::Error for a non-finite or negative altitude or a non-unit direction.
+  NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
+           const glm::dvec3& ecliptic_pole = glm::dvec3(0.0));
+
+  bool active() const { return active_; }
+  std::size_t channel_count() const { return channel_count_; }
+  const glm::dvec3& ecliptic_pole() const { return ecliptic_pole_; }
+
+  // Airglow plus zodiacal light along `view` (unit), per channel, into `out` (channel_count()).
+  void Radiance(const glm::dvec3& view, std::span<double> out) const;
+  void AirglowRadiance(const glm::dvec3& view, std::span<double> out) const;
+  void ZodiacalRadiance(const glm::dvec3& view, std::span<double> out) const;
+
+  // The airglow's radiance per channel at the top of the atmosphere looking down the zenith of the
+  // shell, unattenuated (the channels' projection of the ESO spectrum times airglow_scale).
+  const std::vector<double>& airglow_zenith() const { return airglow_zenith_; }
+  // The zodiacal light's brightness at 500 nm in W m^-2 sr^-1 nm^-1 along `view`, outside the
+  // atmosphere (Leinert et al. 1998, Table 17, times zodiacal_scale).
+  double ZodiacalBrightness500(const glm::dvec3& view) const;
+
+  // Adds sum_c weights[c][k] L_c(view) to out[m i + k] for every direction i (m = weights' width,
+  // 1 to 3 for vec3 weights, `outputs`): the per-pixel pass of the renderers. The weights are folded
+  // into the tables once (Fold), so a pixel costs the same for 3 or 40 channels. Directions of
+  // length 0 are skipped.
+  class Folded {
+   public:
+    void Add(std::span<const glm::dvec3> views, std::span<float> out) const;
+    int outputs() const { return outputs_; }
+
+   private:
+    friend class NightSky;
+    const NightSky* night_ = nullptr;
+    int outputs_ = 0;
+    std::vector<float> airglow_;   // [angle][output]
+    std::vector<float> transmitted_;  // [angle][output]: sum_c w_ck T_c, times the zodiacal light
+  };
+  // `weights` has channel_count() entries; `outputs` of their components are used (1..3).
+  Folded Fold(std::span<const glm::vec3> weights, int outputs) const;
+  // The same with weights[c] = scale[c] in output c (outputs = channel count, up to any number):
+  // the unfolded image of RenderView, each channel times its solar irradiance.
+  Folded Scaled(std::span<const double> scale) const;
+
+ private:
+  // Index and fraction of the view zenith angle in the per-angle tables.
+  void Locate(double mu, int& index, double& fraction) const;
+  double ZodiacalTableValue(const glm::dvec3& view) const;
+
+  bool active_ = false;
+  std::size_t channel_count_ = 0;
+  glm::dvec3 sun_direction_{0.0, 0.0, 1.0};
+  glm::dvec3 ecliptic_pole_{1.0, 0.0, 0.0};
+  glm::dvec3 ecliptic_third_{0.0, 1.0, 0.0};  // pole x sun: towards increasing ecliptic longitude
+  std::vector<double> airglow_zenith_;
+  double zodiacal_relative_ = 0.0;  // per unit of Table 17: relative radiance (grey)
+  // Per view zenith angle (kAngles samples, uniform in angle over [0, pi]) and channel.
+  std::vector<double> airglow_path_;  // [angle][channel]: attenuated airglow, per unit zenith brightness
+  std::vector<double> transmittance_;  // [angle][channel]: to the top of the atmosphere; 0 on the ground
+};
+
+}  // namespace atmo

@@ -1,0 +1,366 @@
+// The night sky's own light: airglow and zodiacal light (include/atmo/night_sky.h, docs/night.md).
+#include "atmo/night_sky.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/colour.h"
+#include "atmo/error.h"
+#include "atmo/gas_absorption.h"
+#include "atmo/spectrum.h"
+#include "physics/data/airglow_table.h"
+#include "physics/data/zodiacal_light_table.h"
+#include "physics/shared_parameters.h"
+#include "shared/shared.h"
+
+namespace atmo {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+// View zenith angles of the per-angle tables, uniform over [0, pi]: 0.088 degrees apart, fine
+// enough that the linear interpolation of the attenuated airglow errs by < 0.1 % above 1 degree
+// of elevation (NightSky.TablesInterpolateTheDirectComputation).
+constexpr int kAngles = 2049;
+// Trapezoid intervals of the transmittance quadrature (shared/transmittance.glsl: 40 err by at
+// most 2.5e-3).
+constexpr int kTransmittanceIntervals = 64;
+
+// The airglow table's spectral radiance at `nm` (W m^-2 sr^-1 nm^-1), 0 outside it.
+double AirglowSpectralRadiance(int bin) { return data::kAirglowZenith[bin] * 1e-9; }
+double AirglowBinNm(int bin) { return data::kAirglowFirstNm + bin; }
+
+// The airglow per channel (relative: per unit solar irradiance) whose CIE XYZ equals the table's.
+// Start from each channel's band mean over the solar spectrum at its wavelength, then add the
+// smallest correction (least squares in the channels) that makes XYZ exact: with 3 channels that is
+// the solution of the 3 x 3 system, with many it barely moves the band means.
+std::vector<double> ProjectAirglow(std::span<const double> wavelengths_nm) {
+  const std::size_t n = wavelengths_nm.size();
+  const SpectralConversion convert(wavelengths_nm);
+  glm::dvec3 target(0.0);
+  for (int i = 0; i < data::kAirglowCount; ++i) {
+    target += AirglowSpectralRadiance(i) * CieColourMatching(AirglowBinNm(i));  // 1 nm bins
+  }
+  // Bands halfway to the neighbours in wavelength order (the presets list theirs from red to blue).
+  std::vector<std::size_t> order(n);
+  for (std::size_t c = 0; c < n; ++c) order[c] = c;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return wavelengths_nm[a] < wavelengths_nm[b]; });
+  std::vector<double> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = wavelengths_nm[order[i]];
+  const std::vector<WavelengthBand> sorted_bands = ChannelBands(sorted);
+  std::vector<WavelengthBand> bands(n);
+  for (std::size_t i = 0; i < n; ++i) bands[order[i]] = sorted_bands[i];
+  std::vector<double> g(n, 0.0);
+  for (std::size_t c = 0; c < n; ++c) {
+    double sum = 0.0;
+    int count = 0;
+    for (int i = 0; i < data::kAirglowCount; ++i) {
+      const double nm = AirglowBinNm(i);
+      if (nm >= bands[c].lower_nm && nm < bands[c].upper_nm) {
+        sum += AirglowSpectralRadiance(i);
+        ++count;
+      }
+    }
+    const double mean = count > 0 ? sum / count
+                                  : AirglowSpectralRadiance(std::clamp(
+                                        static_cast<int>(std::lround(wavelengths_nm[c] - data::kAirglowFirstNm)), 0,
+                                        data::kAirglowCount - 1));
+    g[c] = mean / convert.solar_irradiance()[c];
+  }
+  const std::vector<glm::dvec3>& w = convert.xyz_weights();
+  glm::dvec3 current(0.0);
+  glm::dmat3 gram(0.0);  // W W^T
+  for (std::size_t c = 0; c < n; ++c) {
+    current += w[c] * g[c];
+    gram += glm::outerProduct(w[c], w[c]);
+  }
+  if (std::abs(glm::determinant(gram)) > 0.0) {
+    const glm::dvec3 lambda = glm::inverse(gram) * (target - current);
+    for (std::size_t c = 0; c < n; ++c) g[c] += glm::dot(w[c], lambda);
+  }
+  return g;
+}
+
+// Length of the part of [0, t_end] along the ray from radius r at zenith cosine mu that lies inside
+// the sphere of radius rho, split at t_split: (before, after).
+std::array<double, 2> LengthInsideSphere(double r, double mu, double rho, double t_end, double t_split) {
+  const double discriminant = r * r * (mu * mu - 1.0) + rho * rho;
+  if (discriminant <= 0.0) return {0.0, 0.0};
+  const double root = std::sqrt(discriminant);
+  const double t0 = std::max(-r * mu - root, 0.0);
+  const double t1 = std::min(-r * mu + root, t_end);
+  if (t1 <= t0) return {0.0, 0.0};
+  const double before = std::max(0.0, std::min(t1, t_split) - t0);
+  const double after = std::max(0.0, t1 - std::max(t0, t_split));
+  return {before, after};
+}
+
+// The zodiacal light resampled on a 1-degree grid of |lambda - lambda_sun| (0..180) and |beta|
+// (0..90), bilinear between Table 17's entries; the cells without a measurement near the sun take
+// the nearest measured value of their latitude column.
+struct ZodiacalGrid {
+  std::array<std::array<double, 91>, 181> value{};
+  ZodiacalGrid() {
+    double table[data::kZodiacalLongitudeCount][data::kZodiacalLatitudeCount];
+    for (int b = 0; b < data::kZodiacalLatitudeCount; ++b) {
+      int first = 0;
+      while (data::kZodiacalLight500[first][b] <= 0.0) ++first;
+      for (int l = 0; l < data::kZodiacalLongitudeCount; ++l) {
+        table[l][b] = data::kZodiacalLight500[std::max(l, first)][b];
+      }
+    }
+    const auto locate = [](const double* grid, int count, double x, int& i, double& f) {
+      i = 0;
+      while (i + 2 < count && x > grid[i + 1]) ++i;
+      f = std::clamp((x - grid[i]) / (grid[i + 1] - grid[i]), 0.0, 1.0);
+    };
+    for (int lon = 0; lon <= 180; ++lon) {
+      int i;
+      double fi;
+      locate(data::kZodiacalLongitudeDeg, data::kZodiacalLongitudeCount, lon, i, fi);
+      for (int lat = 0; lat <= 90; ++lat) {
+        int j;
+        double fj;
+        locate(data::kZodiacalLatitudeDeg, data::kZodiacalLatitudeCount, lat, j, fj);
+        value[lon][lat] = (1 - fi) * ((1 - fj) * table[i][j] + fj * table[i][j + 1]) +
+                          fi * ((1 - fj) * table[i + 1][j] + fj * table[i + 1][j + 1]);
+      }
+    }
+  }
+  // Bilinear on the 1-degree grid.
+  double At(double lon_deg, double lat_deg) const {
+    const double x = std::clamp(lon_deg, 0.0, 180.0);
+    const double y = std::clamp(lat_deg, 0.0, 90.0);
+    const int i = std::min(static_cast<int>(x), 179);
+    const int j = std::min(static_cast<int>(y), 89);
+    const double fx = x - i;
+    const double fy = y - j;
+    return (1 - fx) * ((1 - fy) * value[i][j] + fy * value[i][j + 1]) +
+           fx * ((1 - fy) * value[i + 1][j] + fy * value[i + 1][j + 1]);
+  }
+};
+
+const ZodiacalGrid& Zodiacal() {
+  static const ZodiacalGrid grid;
+  return grid;
+}
+
+bool IsUnit(const glm::dvec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::abs(glm::length(v) - 1.0) < 1e-6;
+}
+
+}  // namespace
+
+glm::dvec3 DefaultEclipticPole(const glm::dvec3& sun_direction) {
+  const glm::dvec3 up(0.0, 0.0, 1.0);
+  glm::dvec3 pole = up - glm::dot(up, sun_direction) * sun_direction;
+  // The sun at the zenith or nadir: any pole at right angles to it; the north one.
+  if (glm::length(pole) < 1e-9) pole = glm::dvec3(0.0, 1.0, 0.0);
+  return glm::normalize(pole);
+}
+
+NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
+                   const glm::dvec3& ecliptic_pole)
+    : channel_count_(parameters.channel_count()) {
+  if (!std::isfinite(altitude_m) || altitude_m < 0.0) {
+    throw Error("the night sky needs a finite altitude >= 0 m (got " + std::to_string(altitude_m) + ")");
+  }
+  if (!IsUnit(sun_direction)) throw Error("the night sky needs a unit sun direction");
+  const NightSkySettings& settings = parameters.night_sky;
+  active_ = settings.enabled && parameters.geometry == Geometry::kSpherical && channel_count_ > 0;
+  if (!active_) return;
+  sun_direction_ = sun_direction;
+  if (glm::length(ecliptic_pole) == 0.0) {
+    ecliptic_pole_ = DefaultEclipticPole(sun_direction);
+  } else {
+    if (!IsUnit(ecliptic_pole)) throw Error("the ecliptic pole must be a unit vector");
+    // At right angles to the sun by construction of the ecliptic; remove rounding.
+    ecliptic_pole_ = glm::normalize(ecliptic_pole - glm::dot(ecliptic_pole, sun_direction) * sun_direction);
+  }
+  ecliptic_third_ = glm::cross(ecliptic_pole_, sun_direction_);
+
+  airglow_zenith_ = ProjectAirglow(parameters.wavelengths_nm);
+  for (double& g : airglow_zenith_) g *= settings.airglow_scale;
+  // Table 17's unit (1e-8 W m^-2 sr^-1 um^-1 = 1e-11 W m^-2 sr^-1 nm^-1) over the solar spectral
+  // irradiance at 500 nm: a solar-spectrum radiance per unit solar irradiance.
+  zodiacal_relative_ = settings.zodiacal_scale * 1e-11 / SolarSpectralIrradiance(500.0);
+
+  const std::size_t n = channel_count_;
+  const std::size_t batches = ChannelBatchCount(n);
+  std::vector<shared::AtmosphereParameters> shared_batches;
+  for (std::size_t b = 0; b < batches; ++b) shared_batches.push_back(ToSharedParameters(parameters, b));
+  const double bottom = parameters.ground_radius_m;
+  const double top = parameters.top_radius_m;
+  const double r = bottom + altitude_m;
+  const double shell_low = bottom + settings.airglow_altitude_m - 0.5 * settings.airglow_thickness_m;
+  const double shell_high = shell_low + settings.airglow_thickness_m;
+  airglow_path_.assign(static_cast<std::size_t>(kAngles) * n, 0.0);
+  transmittance_.assign(static_cast<std::size_t>(kAngles) * n, 0.0);
+  oneapi::tbb::parallel_for(0, kAngles, [&](int a) {
+    const double theta = kPi * a / (kAngles - 1);
+    const double mu = std::cos(theta);
+    const bool hits_ground = r * r * (mu * mu - 1.0) + bottom * bottom >= 0.0 && mu < 0.0;
+    const double t_end = hits_ground ? -r * mu - std::sqrt(std::max(r * r * (mu * mu - 1.0) + bottom * bottom, 0.0))
+                                     : std::numeric_limits<double>::infinity();
+    // Where the ray first goes below the shell: from there on, the air lies between the emission
+    // and the observer.
+    double t_below = std::numeric_limits<double>::infinity();
+    if (r < shell_low) {
+      t_below = 0.0;
+    } else {
+      const double d = r * r * (mu * mu - 1.0) + shell_low * shell_low;
+      if (d > 0.0 && -r * mu - std::sqrt(d) > 0.0) t_below = -r * mu - std::sqrt(d);
+    }
+    const auto high = LengthInsideSphere(r, mu, shell_high, t_end, t_below);
+    const auto low = LengthInsideSphere(r, mu, shell_low, t_end, t_below);
+    const double near = (high[0] - low[0]) / settings.airglow_thickness_m;
+    const double far = (high[1] - low[1]) / settings.airglow_thickness_m;
+    // Transmittance along the whole ray through the atmosphere (0 where it meets the ground).
+    for (std::size_t b = 0; b < batches; ++b) {
+      shared::vec3 value(0.0);
+      if (!hits_ground) {
+        double r_start = r;
+        double mu_start = mu;
+        bool crosses = true;
+        if (r > top) {
+          const double d = r * r * (mu * mu - 1.0) + top * top;
+          crosses = d > 0.0 && mu < 0.0;
+          if (crosses) {
+            const double entry = -r * mu - std::sqrt(d);
+            r_start = top;
+            mu_start = std::clamp((r * mu + entry) / top, -1.0, 1.0);
+          }
+        }
+        value = crosses ? shared::ComputeTransmittanceToTopAtmosphereBoundary(shared_batches[b], r_start, mu_start,
+                                                                              kTransmittanceIntervals)
+                        : shared::vec3(1.0);
+      }
+      for (std::size_t k = 0; k < 3 && 3 * b + k < n; ++k) {
+        const std::size_t c = 3 * b + k;
+        const double tc = value[static_cast<int>(k)];
+        transmittance_[static_cast<std::size_t>(a) * n + c] = tc;
+        airglow_path_[static_cast<std::size_t>(a) * n + c] = airglow_zenith_[c] * (near + far * tc);
+      }
+    }
+  });
+}
+
+void NightSky::Locate(double mu, int& index, double& fraction) const {
+  const double x = std::acos(std::clamp(mu, -1.0, 1.0)) * ((kAngles - 1) / kPi);
+  index = std::min(static_cast<int>(x), kAngles - 2);
+  fraction = x - index;
+}
+
+// Table 17's value along `view` (its unit), from the ecliptic coordinates relative to the sun.
+double NightSky::ZodiacalTableValue(const glm::dvec3& view) const {
+  const double beta = std::asin(std::min(std::abs(glm::dot(view, ecliptic_pole_)), 1.0));
+  const double lon = std::abs(std::atan2(glm::dot(view, ecliptic_third_), glm::dot(view, sun_direction_)));
+  return Zodiacal().At(lon * (180.0 / kPi), beta * (180.0 / kPi));
+}
+
+double NightSky::ZodiacalBrightness500(const glm::dvec3& view) const {
+  if (!active_) return 0.0;
+  return ZodiacalTableValue(view) * zodiacal_relative_ * SolarSpectralIrradiance(500.0);
+}
+
+void NightSky::AirglowRadiance(const glm::dvec3& view, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+  if (!active_) return;
+  int a;
+  double f;
+  Locate(view.z, a, f);
+  for (std::size_t c = 0; c < channel_count_; ++c) {
+    out[c] = (1 - f) * airglow_path_[a * channel_count_ + c] + f * airglow_path_[(a + 1) * channel_count_ + c];
+  }
+}
+
+void NightSky::ZodiacalRadiance(const glm::dvec3& view, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+  if (!active_) return;
+  int a;
+  double f;
+  Locate(view.z, a, f);
+  const double z = ZodiacalTableValue(view) * zodiacal_relative_;
+  for (std::size_t c = 0; c < channel_count_; ++c) {
+    out[c] = z * ((1 - f) * transmittance_[a * channel_count_ + c] + f * transmittance_[(a + 1) * channel_count_ + c]);
+  }
+}
+
+void NightSky::Radiance(const glm::dvec3& view, std::span<double> out) const {
+  std::vector<double> zodiacal(channel_count_);
+  AirglowRadiance(view, out);
+  ZodiacalRadiance(view, zodiacal);
+  for (std::size_t c = 0; c < channel_count_; ++c) out[c] += zodiacal[c];
+}
+
+NightSky::Folded NightSky::Fold(std::span<const glm::vec3> weights, int outputs) const {
+  if (weights.size() != channel_count_) throw Error("NightSky::Fold needs one weight per channel");
+  if (outputs < 1 || outputs > 3) throw Error("NightSky::Fold folds into 1 to 3 outputs");
+  Folded folded;
+  folded.night_ = this;
+  folded.outputs_ = outputs;
+  if (!active_) return folded;
+  const std::size_t n = channel_count_;
+  folded.airglow_.assign(static_cast<std::size_t>(kAngles) * outputs, 0.0f);
+  folded.transmitted_.assign(static_cast<std::size_t>(kAngles) * outputs, 0.0f);
+  for (int a = 0; a < kAngles; ++a) {
+    for (int k = 0; k < outputs; ++k) {
+      double airglow = 0.0;
+      double transmitted = 0.0;
+      for (std::size_t c = 0; c < n; ++c) {
+        airglow += weights[c][k] * airglow_path_[a * n + c];
+        transmitted += weights[c][k] * transmittance_[a * n + c];
+      }
+      folded.airglow_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(airglow);
+      folded.transmitted_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(transmitted * zodiacal_relative_);
+    }
+  }
+  return folded;
+}
+
+NightSky::Folded NightSky::Scaled(std::span<const double> scale) const {
+  if (scale.size() != channel_count_) throw Error("NightSky::Scaled needs one value per channel");
+  Folded folded;
+  folded.night_ = this;
+  const std::size_t n = channel_count_;
+  folded.outputs_ = static_cast<int>(n);
+  if (!active_) return folded;
+  folded.airglow_.assign(static_cast<std::size_t>(kAngles) * n, 0.0f);
+  folded.transmitted_.assign(static_cast<std::size_t>(kAngles) * n, 0.0f);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(kAngles) * n; ++i) {
+    folded.airglow_[i] = static_cast<float>(scale[i % n] * airglow_path_[i]);
+    folded.transmitted_[i] = static_cast<float>(scale[i % n] * transmittance_[i] * zodiacal_relative_);
+  }
+  return folded;
+}
+
+void NightSky::Folded::Add(std::span<const glm::dvec3> views, std::span<float> out) const {
+  if (night_ == nullptr || !night_->active_) return;
+  const std::size_t m = static_cast<std::size_t>(outputs_);
+  const bool zodiacal = night_->zodiacal_relative_ > 0.0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const glm::dvec3& v = views[i];
+    if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) continue;
+    int a;
+    double f;
+    night_->Locate(v.z, a, f);
+    double z = 0.0;
+    if (zodiacal) z = night_->ZodiacalTableValue(v);
+    const float* a0 = &airglow_[a * m];
+    const float* t0 = &transmitted_[a * m];
+    const float fa = static_cast<float>(f);
+    const float fz = static_cast<float>(z);
+    float* o = &out[i * m];
+    for (std::size_t k = 0; k < m; ++k) {
+      o[k] += (1.0f - fa) * (a0[k] + fz * t0[k]) + fa * (a0[m + k] + fz * t0[m + k]);
+    }
+  }
+}
+
+}  // namespace atmo
