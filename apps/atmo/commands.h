@@ -216,6 +216,7 @@ struct SampleCommand {
   // relative (docs/design.md §4: sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1 per
   // wavelength row) or luminance (one row per point: luminance_cd_m2, stderr).
   std::string unit = "relative";
+  bool night_sky = false;  // add the night sky's own light to the radiance (include/atmo/night_sky.h)
   SunOptions sun;  // --date: the sun zenith of the single query from a date and place
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
@@ -281,6 +282,7 @@ int RunPrecompute(const CommonOptions& common, const PrecomputeCommand& command)
 struct IlluminanceCommand {
   std::vector<double> sun_elevations_deg = {30.0};
   std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
+  bool no_night_glow = false;        // leave the night sky's own light out
 };
 int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& command);
 

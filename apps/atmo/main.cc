@@ -180,6 +180,8 @@ int main(int argc, char** argv) {
   CLI::Option* grid = sample_app->add_option(
       "--grid", sample.grid_path, "CSV with header altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg");
   sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
+  sample_app->add_flag("--night-sky", sample.night_sky,
+                       "add the night sky's own light (airglow, zodiacal light; docs/night.md) to the radiance, as images show it");
   sample_app->add_option("--unit", sample.unit,
                          "relative (sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1) or luminance "
                          "(cd/m^2, one row per point)")
@@ -342,6 +344,8 @@ int main(int argc, char** argv) {
   AddOptionalNumber(illuminance_app, "--altitude", illuminance.altitude_m,
                     "observer altitude in metres [default: the preset's]")
       ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
+  illuminance_app->add_flag("--no-night-glow", illuminance.no_night_glow,
+                            "leave the night sky's own light (airglow, zodiacal light) out of night_sky_* and the global");
 
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;

@@ -5,12 +5,15 @@
 //            transmittance,stderr
 //
 // One output row per input row and channel, channels in the order of parameters.wavelengths_nm.
+// `radiance` is the model's scattered light; with --night-sky it also holds the night sky's own
+// light (airglow and zodiacal light, include/atmo/night_sky.h, default ecliptic), as images do.
 // Angles are in degrees; the sun lies at compass azimuth 0 and the view at `azimuth_deg`, so the
 // azimuth is the one between the horizontal projections of the view and sun directions.
 //
 // Points that share an altitude and a sun share one view. With --backend gl, model hillaire
 // computes its tables and every point of a view on the GPU (one pass over the view's directions);
 // models elek and source4d compute their tables on the GPU and answer from them.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -25,6 +28,7 @@
 #include "atmo/spectrum.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/night_sky.h"
 #include "commands.h"
 #include "grid.h"
 #include "progress_bar.h"
@@ -80,8 +84,9 @@ glm::dvec3 SunOf(const PointGroup& group) { return DirectionFromZenithAzimuth(gl
 using GroupEvaluator = std::function<void(const PointGroup& group, std::vector<SampleResult>& results)>;
 
 // Every point through `evaluate`, group by group, and the whole CSV text in the input order.
-std::string EvaluatePoints(const std::vector<double>& wavelengths_nm, const std::vector<SamplePoint>& points,
-                           RadianceUnit unit, const GroupEvaluator& evaluate) {
+std::string EvaluatePoints(const AtmosphereParameters& parameters, const std::vector<SamplePoint>& points,
+                           RadianceUnit unit, bool night_sky, const GroupEvaluator& evaluate) {
+  const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
   std::vector<SampleResult> results(points.size());
   ProgressBar progress("sample");
   std::size_t done = 0;
@@ -89,6 +94,15 @@ std::string EvaluatePoints(const std::vector<double>& wavelengths_nm, const std:
     progress.Update(static_cast<double>(done), static_cast<double>(points.size()));
     try {
       evaluate(group, results);
+      if (night_sky) {
+        const NightSky night(parameters, std::max(group.altitude_m, 0.0), SunOf(group));
+        std::vector<double> glow(wavelengths_nm.size());
+        for (std::size_t k = 0; k < group.indices.size(); ++k) {
+          night.Radiance(group.views[k], glow);
+          std::vector<double>& radiance = results[group.indices[k]].radiance;
+          for (std::size_t c = 0; c < glow.size(); ++c) radiance[c] += glow[c];
+        }
+      }
     } catch (const Error& error) {
       const std::string& where = points[group.indices.front()].location;
       throw Error((where.empty() ? "" : where + ": ") + error.what());
@@ -194,12 +208,12 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
     const gl::Context context;
     gl::HillaireGl sky(context, parameters, GlHillaireSettings(common));
     sky.Precompute();
-    csv = EvaluatePoints(parameters.wavelengths_nm, points, unit, HillaireGlEvaluator(sky));
+    csv = EvaluatePoints(parameters, points, unit, command.night_sky, HillaireGlEvaluator(sky));
   }
 #endif
   if (csv.empty()) {
     const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
-    csv = EvaluatePoints(parameters.wavelengths_nm, points, unit, ModelEvaluator(*model));
+    csv = EvaluatePoints(parameters, points, unit, command.night_sky, ModelEvaluator(*model));
   }
 
   if (command.out_path.empty()) {

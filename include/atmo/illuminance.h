@@ -10,10 +10,13 @@
 // transmittance towards the sun's centre), with the luminous weights of atmo::SpectralConversion.
 // diffuse: the scattered radiance of the upper hemisphere, integral of L cos(theta) d(omega) (the
 // sun disc excluded, the ground below the horizon not seen), by a midpoint rule in zenith and
-// azimuth. global = diffuse + direct x cos(sun zenith) (0 for a sun below the horizon).
+// azimuth. night sky: the same integral of the night sky's own light (airglow and zodiacal light,
+// include/atmo/night_sky.h) when the settings give one. global = diffuse + night sky + direct x
+// cos(sun zenith) (the direct part 0 for a sun below the horizon).
 #pragma once
 
 #include "atmo/model.h"
+#include "atmo/night_sky.h"
 #include "atmo/parameters.h"
 
 namespace atmo {
@@ -22,15 +25,19 @@ struct Illuminance {
   double direct_normal_lux = 0.0;
   double direct_horizontal_lux = 0.0;
   double diffuse_horizontal_lux = 0.0;
+  double night_sky_horizontal_lux = 0.0;  // airglow and zodiacal light, attenuated
   double global_horizontal_lux = 0.0;
   // The same, radiometric, over 360..830 nm, W m^-2.
   double direct_normal_w_m2 = 0.0;
   double diffuse_horizontal_w_m2 = 0.0;
+  double night_sky_horizontal_w_m2 = 0.0;
 };
 
 struct IlluminanceSettings {
   int zenith_steps = 90;    // 1 degree
   int azimuth_steps = 180;  // 2 degrees
+  // The night sky of the same parameters, altitude and sun; none: night_sky_* stay 0. Not owned.
+  const NightSky* night_sky = nullptr;
 };
 
 // Throws atmo::Error for step counts outside [2, 4096] or a view whose channels do not match the

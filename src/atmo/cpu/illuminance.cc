@@ -45,6 +45,17 @@ Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& p
     for (std::size_t c = 0; c < n; ++c) hemisphere[c] += weights[k] * radiance[k * n + c];
   }
 
+  std::vector<double> night(n, 0.0);  // per channel: the night sky's integral of r cos(theta) d(omega)
+  if (settings.night_sky != nullptr) {
+    if (settings.night_sky->channel_count() != n) throw Error("the night sky's channels do not match the parameters");
+    std::vector<double> ones(n, 1.0);
+    std::vector<float> glow(views.size() * n, 0.0f);
+    settings.night_sky->Scaled(ones).Add(views, glow);
+    for (std::size_t k = 0; k < views.size(); ++k) {
+      for (std::size_t c = 0; c < n; ++c) night[c] += weights[k] * glow[k * n + c];
+    }
+  }
+
   std::vector<double> transmittance(n);
   const glm::dvec3 sun = glm::normalize(sky.sun_direction());
   sky.Transmittance(sun, transmittance);
@@ -55,7 +66,9 @@ Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& p
   e.direct_horizontal_lux = e.direct_normal_lux * std::max(0.0, sun.z);
   e.diffuse_horizontal_lux = convert.Luminance(hemisphere);
   e.diffuse_horizontal_w_m2 = convert.Radiance(hemisphere);
-  e.global_horizontal_lux = e.diffuse_horizontal_lux + e.direct_horizontal_lux;
+  e.night_sky_horizontal_lux = convert.Luminance(night);
+  e.night_sky_horizontal_w_m2 = convert.Radiance(night);
+  e.global_horizontal_lux = e.diffuse_horizontal_lux + e.night_sky_horizontal_lux + e.direct_horizontal_lux;
   return e;
 }
 
