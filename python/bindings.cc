@@ -40,6 +40,7 @@
 #include "atmo/cubemap.h"
 #include "atmo/ibl.h"
 #include "atmo/illuminance.h"
+#include "atmo/night_sky.h"
 #include "atmo/sun_position.h"
 #include "atmo/engine_target.h"
 #include "atmo/colour.h"
@@ -462,6 +463,7 @@ struct RenderRequest {
   std::string unit = "luminance";
   bool xyz = false;
   std::uint64_t spp = 0;  // Monte Carlo models; 0: their samples option
+  bool night_sky = true;  // the night sky's own light (include/atmo/night_sky.h)
 };
 
 // One frame as `atmo render` makes it on the CPU backend. Returns (image H x W x C, alpha H x W or
@@ -482,7 +484,14 @@ py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
     // The models answer per unit solar irradiance: a relative frame multiplies by the preset's
     // solar_irradiance, physical units bring in the solar spectrum through the conversion.
     const std::vector<double>& irradiance = unit == RadianceUnit::kRelative ? parameters.solar_irradiance : ones;
-    const RadianceTerms terms{request.sun_disc, request.ground};
+    RadianceTerms terms{request.sun_disc, request.ground};
+    // The night sky's own light, as `atmo render` adds it (default ecliptic).
+    std::optional<NightSky> night;
+    if (request.night_sky && std::isfinite(request.altitude_m) && std::isfinite(request.sun_elevation_deg) &&
+        std::isfinite(request.sun_azimuth_deg)) {
+      terms.night_sky = &night.emplace(parameters, std::max(request.altitude_m, 0.0),
+                                       SunDirection(request.sun_elevation_deg, request.sun_azimuth_deg));
+    }
     const ImageColour colour = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
                                : request.xyz                   ? ImageColour::kXyz
                                                                : ImageColour::kLinearSrgb;
@@ -812,14 +821,19 @@ PYBIND11_MODULE(_atmo, m) {
            py::arg("sun_azimuth_deg"))
       .def(
           "illuminance",
-          [](const PyModel& self, double altitude_m, double sun_elevation_deg) {
+          [](const PyModel& self, double altitude_m, double sun_elevation_deg, bool night_sky) {
             Illuminance e;
             {
               py::gil_scoped_release release;
               // As `atmo illuminance`: the solar spectrum comes in by colour, the model at irradiance 1.
               const Model& model = self.UnitIrradianceModel();
-              const std::unique_ptr<SkyView> sky = model.View(altitude_m, SunDirection(sun_elevation_deg, 0.0));
-              e = ComputeIlluminance(*sky, model.parameters());
+              const glm::dvec3 sun = SunDirection(sun_elevation_deg, 0.0);
+              const std::unique_ptr<SkyView> sky = model.View(altitude_m, sun);
+              // The night sky's own light in its own column and in the global, as the command.
+              const NightSky night(model.parameters(), std::max(altitude_m, 0.0), sun);
+              IlluminanceSettings settings;
+              if (night_sky) settings.night_sky = &night;
+              e = ComputeIlluminance(*sky, model.parameters(), settings);
             }
             py::dict d;
             d["direct_normal_lux"] = e.direct_normal_lux;
@@ -828,9 +842,11 @@ PYBIND11_MODULE(_atmo, m) {
             d["global_horizontal_lux"] = e.global_horizontal_lux;
             d["direct_normal_w_m2"] = e.direct_normal_w_m2;
             d["diffuse_horizontal_w_m2"] = e.diffuse_horizontal_w_m2;
+            d["night_sky_horizontal_lux"] = e.night_sky_horizontal_lux;
+            d["night_sky_horizontal_w_m2"] = e.night_sky_horizontal_w_m2;
             return d;
           },
-          py::arg("altitude_m"), py::arg("sun_elevation_deg"))
+          py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("night_sky"))
       .def("sample", &Sample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
            py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
       .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
@@ -843,14 +859,15 @@ PYBIND11_MODULE(_atmo, m) {
           "render",
           [](const PyModel& self, const std::string& camera, int width, int height, double fov_deg, double yaw_deg,
              double pitch_deg, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg, bool sun_disc,
-             bool ground, const std::string& unit, bool xyz, std::uint64_t spp) {
+             bool ground, const std::string& unit, bool xyz, std::uint64_t spp, bool night_sky) {
             RenderRequest request{camera,   width,    height, fov_deg, yaw_deg, pitch_deg, altitude_m, sun_elevation_deg,
-                                  sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp};
+                                  sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp,     night_sky};
             return RenderFrame(self, request);
           },
           py::arg("camera"), py::arg("width"), py::arg("height"), py::arg("fov_deg"), py::arg("yaw_deg"),
           py::arg("pitch_deg"), py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("sun_azimuth_deg"),
-          py::arg("sun_disc"), py::arg("ground"), py::arg("unit"), py::arg("xyz"), py::arg("spp"));
+          py::arg("sun_disc"), py::arg("ground"), py::arg("unit"), py::arg("xyz"), py::arg("spp"),
+          py::arg("night_sky"));
 
   m.def("camera_directions", &CameraDirections, py::arg("camera"), py::arg("width"), py::arg("height"),
         py::arg("fov_deg"), py::arg("yaw_deg"), py::arg("pitch_deg"));

@@ -317,21 +317,22 @@ class Model:
         return list(self._model.export_tables(os.fspath(name), float(altitude_m), float(sun_elevation_deg),
                                               float(sun_azimuth_deg)))
 
-    def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None) -> dict:
+    def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None, night_sky: bool = True) -> dict:
         """What `atmo illuminance` prints for one sun elevation (include/atmo/illuminance.h): the sun's
         and the sky's light on a horizontal plane, direct_normal_lux, direct_horizontal_lux,
         diffuse_horizontal_lux, global_horizontal_lux, and direct_normal_w_m2 and
-        diffuse_horizontal_w_m2 over 360-830 nm."""
+        diffuse_horizontal_w_m2 over 360-830 nm; night_sky_horizontal_lux and _w_m2, the night
+        sky's own light (docs/night.md), part of the global unless night_sky=False."""
         if altitude_m is None:
             altitude_m = self.observer_altitude_m
-        return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg)))
+        return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg), bool(night_sky)))
 
     def render(self, width: int = 1280, height: Optional[int] = None, camera: Optional[str] = None, *,
                fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
                sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0,
                altitude_m: Optional[float] = None, sun_disc: bool = True, ground: bool = True,
                unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False,
-               target: Optional[str] = None):
+               target: Optional[str] = None, night_sky: bool = True):
         """One frame as `atmo render` renders it (same defaults), as a float32 H x W x C array.
 
         camera: perspective (fov_deg, yaw_deg, pitch_deg), fisheye (all-sky; 0 outside the
@@ -343,6 +344,8 @@ class Model:
         With full=True, returns a Frame (alpha, channel names, EXR metadata, standard error).
         target: an equirect as that program reads it, fixed in the world (engine_targets();
         docs/environment.md): camera defaults to equirect and yaw_deg to the program's centre.
+        night_sky: add the night sky's own light, airglow and zodiacal light (docs/night.md), as
+        `atmo render` does; False is its --no-night-glow.
         """
         convention = None
         if target is not None:
@@ -378,7 +381,7 @@ class Model:
         image, alpha, names, colour_space, envmap, standard_error = self._model.render(
             camera, int(width), int(height), float(fov_deg), float(yaw_deg), float(pitch_deg), float(altitude_m),
             float(sun_elevation_deg), float(sun_azimuth_deg), bool(sun_disc), bool(ground), unit, bool(xyz),
-            int(spp))
+            int(spp), bool(night_sky))
         if not full:
             return image
         metadata = {

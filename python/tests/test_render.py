@@ -21,13 +21,13 @@ def test_every_camera_gives_a_float32_image(earth, camera, size, shape):
 
 def test_relative_frame_equals_radiance_batch_of_its_pixel_directions(earth):
     # The frame pass is RadianceBatch on the camera's pixel directions times the preset's solar
-    # irradiance (the sun disc has its own pixel-integrated pass: left out here). The sun lies at
-    # compass azimuth 0, the convention of radiance_batch and sample.
+    # irradiance (the sun disc and the night sky have their own passes: left out here). The sun lies
+    # at compass azimuth 0, the convention of radiance_batch and sample.
     for camera, (w, h), kwargs in [("perspective", (40, 24), dict(fov_deg=70.0, yaw_deg=30.0, pitch_deg=5.0)),
                                    ("fisheye", (32, 32), dict(yaw_deg=0.0)),
                                    ("equirect", (48, 24), dict(yaw_deg=0.0))]:
         image = earth.render(w, h, camera, unit="relative", sun_disc=False, sun_elevation_deg=25.0,
-                             sun_azimuth_deg=0.0, **kwargs)
+                             sun_azimuth_deg=0.0, night_sky=False, **kwargs)
         directions = atmo.camera_directions(w, h, camera, **kwargs)
         batch = earth.radiance_batch(0.0, 65.0, directions, ground=True)
         expected = batch * earth.solar_irradiance.astype(np.float32)
@@ -170,11 +170,27 @@ def test_illuminance_is_the_clis(cli):
     row = parse_csv(cli("illuminance", "--preset", "earth-spectral", "--sun-elevation", "25"))[0]
     e = model.illuminance(25.0)
     for key in ("direct_normal_lux", "diffuse_horizontal_lux", "global_horizontal_lux", "direct_normal_w_m2",
-                "diffuse_horizontal_w_m2"):
+                "diffuse_horizontal_w_m2", "night_sky_horizontal_lux", "night_sky_horizontal_w_m2"):
         assert e[key] == pytest.approx(row[key], rel=1e-5), key
     assert e["global_horizontal_lux"] == pytest.approx(e["diffuse_horizontal_lux"] + e["direct_horizontal_lux"])
     night = model.illuminance(-20.0)
     assert night["direct_normal_lux"] == 0.0 and night["global_horizontal_lux"] < 1e-2
+    # The night sky's own light (docs/night.md): most of what is left with the sun 30 degrees down.
+    dark = model.illuminance(-30.0)
+    assert 4e-4 < dark["night_sky_horizontal_lux"] < 1.5e-3
+    assert dark["global_horizontal_lux"] == pytest.approx(dark["diffuse_horizontal_lux"] + dark["night_sky_horizontal_lux"])
+    assert model.illuminance(-30.0, night_sky=False)["night_sky_horizontal_lux"] == 0.0
+
+
+def test_night_sky_is_in_renders_as_in_the_clis(cli, tmp_path):
+    """render adds the night sky as `atmo render` does; night_sky=False is --no-night-glow."""
+    model = atmo.Model("hillaire", preset="earth")
+    lit = model.render(32, camera="fisheye", sun_elevation_deg=-30.0)
+    dark = model.render(32, camera="fisheye", sun_elevation_deg=-30.0, night_sky=False)
+    assert float(dark.max()) == 0.0
+    zenith = lit[16, 16]
+    luminance = 0.2126 * zenith[0] + 0.7152 * zenith[1] + 0.0722 * zenith[2]
+    assert 1.2e-4 < luminance < 2.7e-4  # the published dark sky (tests/night_sky_test.cc)
 
 
 def test_sun_position_is_where_render_date_puts_the_sun(cli, tmp_path):
