@@ -281,5 +281,26 @@ TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
   for (float v : ReadExr(dir_ / "black.exr").pixels) ASSERT_EQ(v, 0.0f);
 }
 
+#ifdef ATMO_HAVE_GL
+// The gl backend adds the same night sky after read-back (on Mesa's llvmpipe in CI).
+TEST_F(NightCli, GlBackendAddsTheSameNightSky) {
+  for (const char* backend : {"cpu", "gl"}) {
+    const testing::RunResult r = Run(std::string("render --backend ") + backend +
+                                     " --sun-elevation -30 --camera fisheye --width 24 --height 24 --unit relative -o " +
+                                     backend);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const Image cpu = ReadExr(dir_ / "cpu.exr");
+  const Image gl = ReadExr(dir_ / "gl.exr");
+  ASSERT_EQ(cpu.pixels.size(), gl.pixels.size());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < cpu.pixels.size(); ++i) {
+    EXPECT_NEAR(gl.pixels[i], cpu.pixels[i], 1e-6 * std::abs(cpu.pixels[i]) + 1e-15);
+    sum += cpu.pixels[i];
+  }
+  EXPECT_GT(sum, 0.0);
+}
+#endif
+
 }  // namespace
 }  // namespace atmo

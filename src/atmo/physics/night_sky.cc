@@ -24,10 +24,10 @@ namespace atmo {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-// View zenith angles of the per-angle tables, uniform over [0, pi]: 0.088 degrees apart, fine
-// enough that the linear interpolation of the attenuated airglow errs by < 0.1 % above 1 degree
-// of elevation (NightSky.TablesInterpolateTheDirectComputation).
-constexpr int kAngles = 2049;
+// Entries of the per-angle tables, uniform in the cosine mu of the view zenith angle over [-1, 1]
+// (a lookup without acos): 0.028 degrees apart at the horizon, where the attenuated airglow
+// changes fastest, 1.8 degrees at the zenith, where it is flat.
+constexpr int kAngles = 4097;
 // Trapezoid intervals of the transmittance quadrature (shared/transmittance.glsl: 40 err by at
 // most 2.5e-3).
 constexpr int kTransmittanceIntervals = 64;
@@ -151,6 +151,43 @@ const ZodiacalGrid& Zodiacal() {
   return grid;
 }
 
+// The same resampled on |sin beta| in [0, 1] and cos(elongation) in [-1, 1], the two dot products
+// of a view with the ecliptic's pole and the sun, so that a pixel needs no inverse trigonometry:
+// cos(elongation) = cos(beta) cos(lambda - lambda_sun).
+struct ZodiacalDotGrid {
+  static constexpr int kSin = 129;
+  static constexpr int kCos = 513;
+  std::vector<float> value = std::vector<float>(static_cast<std::size_t>(kSin) * kCos);
+  ZodiacalDotGrid() {
+    const ZodiacalGrid& grid = Zodiacal();
+    for (int i = 0; i < kSin; ++i) {
+      const double sin_beta = static_cast<double>(i) / (kSin - 1);
+      const double cos_beta = std::sqrt(std::max(0.0, 1.0 - sin_beta * sin_beta));
+      for (int j = 0; j < kCos; ++j) {
+        const double cos_elongation = -1.0 + 2.0 * j / (kCos - 1);
+        const double c = cos_beta > 0.0 ? std::clamp(cos_elongation / cos_beta, -1.0, 1.0) : 0.0;
+        value[static_cast<std::size_t>(i) * kCos + j] =
+            static_cast<float>(grid.At(std::acos(c) * (180.0 / kPi), std::asin(sin_beta) * (180.0 / kPi)));
+      }
+    }
+  }
+  float At(double abs_sin_beta, double cos_elongation) const {
+    const double x = std::min(abs_sin_beta, 1.0) * (kSin - 1);
+    const double y = (std::clamp(cos_elongation, -1.0, 1.0) + 1.0) * (0.5 * (kCos - 1));
+    const int i = std::min(static_cast<int>(x), kSin - 2);
+    const int j = std::min(static_cast<int>(y), kCos - 2);
+    const float fx = static_cast<float>(x - i);
+    const float fy = static_cast<float>(y - j);
+    const float* row = &value[static_cast<std::size_t>(i) * kCos + j];
+    return (1.0f - fx) * ((1.0f - fy) * row[0] + fy * row[1]) + fx * ((1.0f - fy) * row[kCos] + fy * row[kCos + 1]);
+  }
+};
+
+const ZodiacalDotGrid& ZodiacalDots() {
+  static const ZodiacalDotGrid grid;
+  return grid;
+}
+
 bool IsUnit(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::abs(glm::length(v) - 1.0) < 1e-6;
 }
@@ -203,8 +240,7 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
   airglow_path_.assign(static_cast<std::size_t>(kAngles) * n, 0.0);
   transmittance_.assign(static_cast<std::size_t>(kAngles) * n, 0.0);
   oneapi::tbb::parallel_for(0, kAngles, [&](int a) {
-    const double theta = kPi * a / (kAngles - 1);
-    const double mu = std::cos(theta);
+    const double mu = std::clamp(-1.0 + 2.0 * a / (kAngles - 1), -1.0, 1.0);
     const bool hits_ground = r * r * (mu * mu - 1.0) + bottom * bottom >= 0.0 && mu < 0.0;
     const double t_end = hits_ground ? -r * mu - std::sqrt(std::max(r * r * (mu * mu - 1.0) + bottom * bottom, 0.0))
                                      : std::numeric_limits<double>::infinity();
@@ -252,7 +288,7 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
 }
 
 void NightSky::Locate(double mu, int& index, double& fraction) const {
-  const double x = std::acos(std::clamp(mu, -1.0, 1.0)) * ((kAngles - 1) / kPi);
+  const double x = (std::clamp(mu, -1.0, 1.0) + 1.0) * (0.5 * (kAngles - 1));
   index = std::min(static_cast<int>(x), kAngles - 2);
   fraction = x - index;
 }
@@ -340,26 +376,46 @@ NightSky::Folded NightSky::Scaled(std::span<const double> scale) const {
   return folded;
 }
 
+namespace {
+
+// The per-pixel loop of Folded::Add, with the output count a template parameter when it is 3 (the
+// colour of every luminance render: the inner loop then unrolls) and a run-time one otherwise.
+template <int kFixed>
+void AddNightSkyPixels(std::span<const glm::dvec3> views, std::span<float> out, std::size_t outputs,
+                       const float* airglow, const float* transmitted, const glm::dvec3& pole,
+                       const glm::dvec3& sun, const ZodiacalDotGrid* dots) {
+  const std::size_t m = kFixed > 0 ? static_cast<std::size_t>(kFixed) : outputs;
+  constexpr double kScale = 0.5 * (kAngles - 1);
+  float* o = out.data();
+  for (std::size_t i = 0; i < views.size(); ++i, o += m) {
+    const glm::dvec3 v = views[i];
+    if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) continue;
+    const double x = (std::clamp(v.z, -1.0, 1.0) + 1.0) * kScale;
+    const int a = std::min(static_cast<int>(x), kAngles - 2);
+    const float f = static_cast<float>(x - a);
+    const float z = dots != nullptr ? dots->At(std::abs(pole.x * v.x + pole.y * v.y + pole.z * v.z),
+                                               sun.x * v.x + sun.y * v.y + sun.z * v.z)
+                                    : 0.0f;
+    const float* a0 = airglow + a * m;
+    const float* t0 = transmitted + a * m;
+    for (std::size_t k = 0; k < m; ++k) {
+      o[k] += (1.0f - f) * (a0[k] + z * t0[k]) + f * (a0[m + k] + z * t0[m + k]);
+    }
+  }
+}
+
+}  // namespace
+
 void NightSky::Folded::Add(std::span<const glm::dvec3> views, std::span<float> out) const {
   if (night_ == nullptr || !night_->active_) return;
+  const ZodiacalDotGrid* dots = night_->zodiacal_relative_ > 0.0 ? &ZodiacalDots() : nullptr;
   const std::size_t m = static_cast<std::size_t>(outputs_);
-  const bool zodiacal = night_->zodiacal_relative_ > 0.0;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    const glm::dvec3& v = views[i];
-    if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) continue;
-    int a;
-    double f;
-    night_->Locate(v.z, a, f);
-    double z = 0.0;
-    if (zodiacal) z = night_->ZodiacalTableValue(v);
-    const float* a0 = &airglow_[a * m];
-    const float* t0 = &transmitted_[a * m];
-    const float fa = static_cast<float>(f);
-    const float fz = static_cast<float>(z);
-    float* o = &out[i * m];
-    for (std::size_t k = 0; k < m; ++k) {
-      o[k] += (1.0f - fa) * (a0[k] + fz * t0[k]) + fa * (a0[m + k] + fz * t0[m + k]);
-    }
+  if (m == 3) {
+    AddNightSkyPixels<3>(views, out, m, airglow_.data(), transmitted_.data(), night_->ecliptic_pole_,
+                         night_->sun_direction_, dots);
+  } else {
+    AddNightSkyPixels<0>(views, out, m, airglow_.data(), transmitted_.data(), night_->ecliptic_pole_,
+                         night_->sun_direction_, dots);
   }
 }
 
