@@ -192,6 +192,23 @@ CLI::Option* AddSunOptions(CLI::App* app, SunOptions& sun) {
   return date;
 }
 
+void AddMoonOptions(CLI::App* app, MoonOptions& moon, CLI::Option* date) {
+  CLI::Option* elevation = AddOptionalNumber(app, "--moon-elevation", moon.elevation_deg,
+                                             "a moon by hand: its elevation in degrees, [-90, 90] (with --moon-phase)")
+                               ->check(RangeOf(-90.0, 90.0));
+  CLI::Option* azimuth = AddOptionalNumber(app, "--moon-azimuth", moon.azimuth_deg,
+                                           "its compass azimuth in degrees [default: opposite the sun]")
+                             ->check(RangeOf(-360.0, 360.0));
+  CLI::Option* phase = AddOptionalNumber(app, "--moon-phase", moon.phase_deg,
+                                         "its phase angle in degrees, [0, 180]: 0 full, 90 quarter, 180 new")
+                           ->check(RangeOf(0.0, 180.0));
+  CLI::Option* none = app->add_flag("--no-moon", moon.no_moon, "leave the moon of --date out");
+  for (CLI::Option* option : {elevation, azimuth, phase}) {
+    if (date != nullptr) option->excludes(date);
+    option->excludes(none);
+  }
+}
+
 void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   app->add_option("--camera", render.camera, "perspective, fisheye, equirect or cubemap")
       ->check(CLI::IsMember({"perspective", "fisheye", "equirect", "cubemap"}))
@@ -311,6 +328,7 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
       ->capture_default_str();
   CLI::Option* render_date = AddSunOptions(app, render.sun);
   render_date->excludes(app->get_option("--sun-elevation"))->excludes(app->get_option("--sun-azimuth"));
+  AddMoonOptions(app, render.moon, render_date);
   CLI::Option* until = app->add_option(
       "--until", render.sun.until, "time-lapse: frames from --date every --step up to this ISO 8601 date-time");
   CLI::Option* step = app->add_option("--step", render.sun.step, "time-lapse step: 10min, 30s, 1h30min, 2d");

@@ -56,6 +56,10 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common);
 // A date needs a place and a place a date. Returns the --date option, for the caller's excludes.
 CLI::Option* AddSunOptions(CLI::App* app, SunOptions& sun);
 
+// --moon-elevation, --moon-azimuth, --moon-phase, --no-moon (sun_options.h, MoonOptions): the angle
+// flags exclude `date` (the moon then comes from the date, unless --no-moon).
+void AddMoonOptions(CLI::App* app, MoonOptions& moon, CLI::Option* date);
+
 // The flags of `atmo render` that do not land in RenderCommand directly.
 struct RenderFlags {
   std::string output;  // -o NAME

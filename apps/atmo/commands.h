@@ -129,6 +129,7 @@ struct RenderCommand {
   std::optional<double> sun_size_deg;  // the sun's angular diameter; default: 2 x sun_angular_radius_rad
   bool no_ground = false;
   bool no_night_glow = false;  // leave the airglow and zodiacal light out (NightSkySettings::enabled)
+  MoonOptions moon;            // --moon-*, --no-moon
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG
   // Monte Carlo paths per pixel (model reference only; default: its `samples` option).
@@ -283,6 +284,8 @@ struct IlluminanceCommand {
   std::vector<double> sun_elevations_deg = {30.0};
   std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
   bool no_night_glow = false;        // leave the night sky's own light out
+  SunOptions sun;                    // --date: one row for the sun and moon of that instant and place
+  MoonOptions moon;                  // --moon-*, --no-moon
 };
 int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& command);
 

@@ -46,6 +46,7 @@ using atmo::cli::AddCommonOptions;
 using atmo::cli::AddNumber;
 using atmo::cli::AddOptionalNumber;
 using atmo::cli::AddPathCount;
+using atmo::cli::AddMoonOptions;
 using atmo::cli::AddSunOptions;
 using atmo::cli::CommonOptions;
 using atmo::cli::JoinNames;
@@ -344,6 +345,9 @@ int main(int argc, char** argv) {
   AddOptionalNumber(illuminance_app, "--altitude", illuminance.altitude_m,
                     "observer altitude in metres [default: the preset's]")
       ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
+  CLI::Option* illuminance_date = AddSunOptions(illuminance_app, illuminance.sun);
+  illuminance_date->excludes(illuminance_app->get_option("--sun-elevation"));
+  AddMoonOptions(illuminance_app, illuminance.moon, illuminance_date);
   illuminance_app->add_flag("--no-night-glow", illuminance.no_night_glow,
                             "leave the night sky's own light (airglow, zodiacal light) out of night_sky_* and the global");
 

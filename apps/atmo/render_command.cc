@@ -19,6 +19,7 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/memory.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/render.h"
 #include "commands.h"
@@ -358,6 +359,17 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckMemory(cubemap ? Format("a cube map of %d-texel faces", command.face_size)
                    : Format("a %dx%d render", command.width, command.height),
               40.0 * pixels);
+  // The moon's light renders through a CPU model's second view (RadianceTerms::moon) for now.
+  const bool wants_moon = !command.moon.no_moon && (command.moon.elevation_deg || command.moon.azimuth_deg ||
+                                                    command.moon.phase_deg || HasDate(command.sun));
+  if (wants_moon && (on_gl || common.model == "reference")) {
+    if (command.moon.elevation_deg || command.moon.phase_deg || command.moon.azimuth_deg) {
+      throw Error("the moon renders on the cpu backend with a deterministic model for now (not " +
+                  (on_gl ? std::string("--backend gl") : std::string("model reference")) + ")");
+    }
+    std::fprintf(stderr, "atmo: warning: the moon of --date is left out: it renders on the cpu backend with a "
+                         "deterministic model for now\n");
+  }
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const auto precompute_start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, model_parameters);
@@ -389,15 +401,40 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     return NightSky(model_parameters, std::max(frame.altitude_m, 0.0),
                     SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg), pole);
   };
+  // The moon of a frame (include/atmo/moon.h): by hand, or from the date; its own view of the model.
+  struct FrameMoon {
+    std::optional<Moon> moon;
+    std::unique_ptr<SkyView> sky;
+  };
+  const auto moon_for = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated) {
+    FrameMoon result;
+    const std::optional<MoonPosition> place =
+        ResolveMoon(command.moon, command.sun, frame.sun_azimuth_deg,
+                    dated ? std::optional<double>(dated->julian_day_utc) : std::nullopt);
+    if (!place) return result;
+    const glm::dvec3 direction = SunDirection(place->elevation_deg, place->azimuth_deg);
+    result.moon.emplace(direction, place->phase_angle_deg, place->distance_km, model_parameters.wavelengths_nm,
+                        SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+    result.sky = model->View(frame.altitude_m, direction);
+    set_metadata("atmo:moonElevationDeg", Format("%.10g", place->elevation_deg));
+    set_metadata("atmo:moonAzimuthDeg", Format("%.10g", place->azimuth_deg));
+    set_metadata("atmo:moonPhaseDeg", Format("%.10g", place->phase_angle_deg));
+    return result;
+  };
   const auto render_cpu = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated,
                               const RowProgress& progress = {}) {
     const auto view_start = std::chrono::steady_clock::now();
     const std::unique_ptr<SkyView> sky =
         model->View(frame.altitude_m, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
     const NightSky night = night_sky_for(frame, dated);
+    const FrameMoon moon = moon_for(frame, dated);
     view_s += seconds_since(view_start);
     RadianceTerms terms = frame.terms;
     terms.night_sky = &night;
+    if (moon.moon) {
+      terms.moon = &*moon.moon;
+      terms.moon_sky = moon.sky.get();
+    }
     const auto frame_start = std::chrono::steady_clock::now();
     Image image;
     if (unit != RadianceUnit::kLuminance) {
@@ -465,8 +502,13 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     const std::unique_ptr<SkyView> sky =
         model->View(settings.altitude_m, SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg));
     const NightSky night = night_sky_for(settings, plan.dated_sun);
+    const FrameMoon moon = moon_for(settings, plan.dated_sun);
     RadianceTerms terms = settings.terms;
     terms.night_sky = &night;
+    if (moon.moon) {
+      terms.moon = &*moon.moon;
+      terms.moon_sky = moon.sky.get();
+    }
     Cubemap cube = unit == RadianceUnit::kLuminance
                        ? RenderCubemapFolded(*sky, command.face_size, terms, srgb_weights)
                        : RenderCubemap(*sky, command.face_size, terms, model_parameters.solar_irradiance);

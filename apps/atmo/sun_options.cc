@@ -107,6 +107,26 @@ SunAtInstant SunAt(const SunOptions& sun, double julian_day_utc) {
 
 SunAtInstant SunAtDate(const SunOptions& sun) { return SunAt(sun, ParseIsoDateTime(sun.date)); }
 
+std::optional<MoonPosition> ResolveMoon(const MoonOptions& moon, const SunOptions& sun, double sun_azimuth_deg,
+                                        const std::optional<double>& julian_day_utc) {
+  if (moon.no_moon) return std::nullopt;
+  const bool by_hand = moon.elevation_deg || moon.azimuth_deg || moon.phase_deg;
+  if (by_hand) {
+    if (!moon.elevation_deg || !moon.phase_deg) {
+      throw Error("a moon by hand needs --moon-elevation and --moon-phase (--moon-azimuth: default opposite the sun)");
+    }
+    MoonPosition place;
+    place.elevation_deg = *moon.elevation_deg;
+    place.azimuth_deg = moon.azimuth_deg.value_or(std::fmod(sun_azimuth_deg + 180.0, 360.0));
+    place.phase_angle_deg = *moon.phase_deg;
+    return place;
+  }
+  if (julian_day_utc && sun.latitude_deg && sun.longitude_deg) {
+    return ComputeMoonPosition(*julian_day_utc, *sun.latitude_deg, *sun.longitude_deg);
+  }
+  return std::nullopt;
+}
+
 std::vector<std::pair<std::string, std::string>> SunMetadata(const SunOptions& sun, const SunAtInstant& at) {
   return {
       {"atmo:date", at.date_utc},

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "atmo/moon.h"
 #include "atmo/sun_position.h"
 
 namespace atmo::cli {
@@ -27,6 +28,21 @@ struct SunOptions {
   std::string mp4_path;  // empty: no video
   double fps = 24.0;     // frames per second of the MP4
 };
+
+// The moon (include/atmo/moon.h) of `atmo render` and `atmo illuminance`: by hand with the three
+// angle flags, or from --date (the ephemeris) unless --no-moon.
+struct MoonOptions {
+  std::optional<double> elevation_deg;
+  std::optional<double> azimuth_deg;  // default: opposite the sun
+  std::optional<double> phase_deg;    // phase angle: 0 full, 180 new
+  bool no_moon = false;
+};
+
+// The moon's place for one sun: by hand (the angle flags), from the date of `dated` (the
+// ephemeris, for --latitude and --longitude), or none (no flags and no date, or --no-moon).
+// Throws atmo::Error for a moon flag without --moon-elevation and --moon-phase.
+std::optional<MoonPosition> ResolveMoon(const MoonOptions& moon, const SunOptions& sun, double sun_azimuth_deg,
+                                        const std::optional<double>& julian_day_utc);
 
 // The most frames a time-lapse may have.
 constexpr std::size_t kMaxTimeLapseFrames = 100000;

@@ -11,11 +11,14 @@
 // diffuse: the scattered radiance of the upper hemisphere, integral of L cos(theta) d(omega) (the
 // sun disc excluded, the ground below the horizon not seen), by a midpoint rule in zenith and
 // azimuth. night sky: the same integral of the night sky's own light (airglow and zodiacal light,
-// include/atmo/night_sky.h) when the settings give one. global = diffuse + night sky + direct x
-// cos(sun zenith) (the direct part 0 for a sun below the horizon).
+// include/atmo/night_sky.h) when the settings give one. moon: the same for the moon (its direct
+// light through the transmittance towards it, its scattered light from the moon's view, each times
+// its relative irradiance). global = diffuse + night sky + direct x cos(sun zenith) (the direct
+// part 0 for a sun below the horizon) + the moon's direct horizontal and diffuse.
 #pragma once
 
 #include "atmo/model.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/parameters.h"
 
@@ -26,6 +29,10 @@ struct Illuminance {
   double direct_horizontal_lux = 0.0;
   double diffuse_horizontal_lux = 0.0;
   double night_sky_horizontal_lux = 0.0;  // airglow and zodiacal light, attenuated
+  // The moon (when the settings give one): its transmitted light and its light scattered by the sky.
+  double moon_direct_normal_lux = 0.0;
+  double moon_direct_horizontal_lux = 0.0;
+  double moon_diffuse_horizontal_lux = 0.0;
   double global_horizontal_lux = 0.0;
   // The same, radiometric, over 360..830 nm, W m^-2.
   double direct_normal_w_m2 = 0.0;
@@ -38,6 +45,9 @@ struct IlluminanceSettings {
   int azimuth_steps = 180;  // 2 degrees
   // The night sky of the same parameters, altitude and sun; none: night_sky_* stay 0. Not owned.
   const NightSky* night_sky = nullptr;
+  // The moon and the model's view for a sun in its direction (RadianceTerms::moon): both or neither.
+  const Moon* moon = nullptr;
+  const SkyView* moon_sky = nullptr;
 };
 
 // Throws atmo::Error for step counts outside [2, 4096] or a view whose channels do not match the

@@ -36,6 +36,8 @@ namespace atmo {
 using ModelOptions = std::map<std::string, std::string>;
 
 // What RadianceBatch adds to the scattered radiance, for images.
+class Moon;
+class SkyView;
 class NightSky;
 
 struct RadianceTerms {
@@ -45,6 +47,12 @@ struct RadianceTerms {
   // same parameters, altitude and sun. Like the sun disc it is added by the renderers (RenderView,
   // RenderViewFolded, the cube maps, the GL renderers), not by RadianceBatch. Not owned.
   const NightSky* night_sky = nullptr;
+  // The moon (include/atmo/moon.h) and the model's view for a sun in the moon's direction, made for
+  // the same altitude: the renderers add its disc (attenuated, with the phase) and its light as the
+  // model scatters it (moon_sky's radiance times the moon's relative irradiance), with the lit
+  // ground when `ground`. Both or neither; not owned.
+  const Moon* moon = nullptr;
+  const SkyView* moon_sky = nullptr;
 };
 
 // A model bound to one observer altitude and one sun direction: what a frame needs. Creating it

@@ -56,6 +56,26 @@ Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& p
     }
   }
 
+  std::vector<double> moon_diffuse(n, 0.0);
+  std::vector<double> moon_direct(n, 0.0);
+  double moon_up = 0.0;
+  if ((settings.moon == nullptr) != (settings.moon_sky == nullptr)) {
+    throw Error("the moon's illuminance needs both its Moon and its view");
+  }
+  if (settings.moon != nullptr) {
+    const std::vector<double>& r = settings.moon->relative_irradiance();
+    if (r.size() != n || settings.moon_sky->channel_count() != n) throw Error("the moon's channels do not match the parameters");
+    std::vector<float> moonlit(views.size() * n);
+    settings.moon_sky->RadianceBatch(views, RadianceTerms{/*sun_disc=*/false, /*ground=*/false}, moonlit);
+    for (std::size_t k = 0; k < views.size(); ++k) {
+      for (std::size_t c = 0; c < n; ++c) moon_diffuse[c] += weights[k] * moonlit[k * n + c] * r[c];
+    }
+    const glm::dvec3 moon = glm::normalize(settings.moon->direction());
+    settings.moon_sky->Transmittance(moon, moon_direct);
+    for (std::size_t c = 0; c < n; ++c) moon_direct[c] *= r[c];
+    moon_up = std::max(0.0, moon.z);
+  }
+
   std::vector<double> transmittance(n);
   const glm::dvec3 sun = glm::normalize(sky.sun_direction());
   sky.Transmittance(sun, transmittance);
@@ -68,7 +88,11 @@ Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& p
   e.diffuse_horizontal_w_m2 = convert.Radiance(hemisphere);
   e.night_sky_horizontal_lux = convert.Luminance(night);
   e.night_sky_horizontal_w_m2 = convert.Radiance(night);
-  e.global_horizontal_lux = e.diffuse_horizontal_lux + e.night_sky_horizontal_lux + e.direct_horizontal_lux;
+  e.moon_direct_normal_lux = convert.Luminance(moon_direct);
+  e.moon_direct_horizontal_lux = e.moon_direct_normal_lux * moon_up;
+  e.moon_diffuse_horizontal_lux = convert.Luminance(moon_diffuse);
+  e.global_horizontal_lux = e.diffuse_horizontal_lux + e.night_sky_horizontal_lux + e.direct_horizontal_lux +
+                            e.moon_direct_horizontal_lux + e.moon_diffuse_horizontal_lux;
   return e;
 }
 

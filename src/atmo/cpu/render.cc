@@ -12,6 +12,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "cpu/camera.h"
 #include "cpu/sun_disc.h"
@@ -33,6 +34,53 @@ const NightSky& CheckedNightSky(const RadianceTerms& terms, std::size_t channels
                 " channels and the sky " + std::to_string(channels));
   }
   return *terms.night_sky;
+}
+
+void CheckMoon(const RadianceTerms& terms, std::size_t channels) {
+  if ((terms.moon == nullptr) != (terms.moon_sky == nullptr)) throw Error("the moon needs both its Moon and its view");
+  if (terms.moon != nullptr && (terms.moon->relative_irradiance().size() != channels ||
+                                terms.moon_sky->channel_count() != channels)) {
+    throw Error("the moon's channels do not match the sky's");
+  }
+}
+
+// The terms of the moon's own view: its scattered light (and the moonlit ground), no sun disc.
+RadianceTerms MoonSkyTerms(const RadianceTerms& terms) {
+  RadianceTerms moon_terms;
+  moon_terms.sun_disc = false;
+  moon_terms.ground = terms.ground;
+  return moon_terms;
+}
+
+// The moon's disc through `camera`: the disc's radiance attenuated by the moon view's transmittance,
+// folded by `fold` (channels -> outputs; identity when null) and times `scale` per output.
+void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<const glm::vec3> fold,
+                 std::span<const double> scale, Image& image) {
+  const Moon& moon = *terms.moon;
+  const SkyView& moon_sky = *terms.moon_sky;
+  const std::size_t n = moon_sky.channel_count();
+  AddSunDisc(
+      camera, moon.direction(), moon.angular_radius_rad(),
+      [&](const glm::dvec3& view, std::span<double> out) {
+        thread_local std::vector<double> disc, transmittance;
+        disc.resize(n);
+        transmittance.resize(n);
+        moon.DiscRadiance(view, disc);
+        bool lit = false;
+        for (double d : disc) lit = lit || d > 0.0;
+        if (lit) moon_sky.Transmittance(view, transmittance);
+        for (std::size_t c = 0; c < n; ++c) disc[c] = lit ? disc[c] * transmittance[c] : 0.0;
+        if (fold.empty()) {
+          for (std::size_t c = 0; c < n; ++c) out[c] = disc[c];
+          return;
+        }
+        for (int k = 0; k < 3; ++k) {
+          double sum = 0.0;
+          for (std::size_t c = 0; c < n; ++c) sum += fold[c][k] * disc[c];
+          out[k] = sum;
+        }
+      },
+      scale, image);
 }
 
 // The night sky's per-pixel pass (an empty one without terms.night_sky).
@@ -215,14 +263,28 @@ void RenderView(const SkyView& sky, const Camera& camera_settings, const Radianc
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
   const NightSky::Folded night = NightSkyScaled(terms, n, solar_irradiance);
+  CheckMoon(terms, n);
+  const RadianceTerms moon_terms = MoonSkyTerms(terms);
+  std::vector<float> moon_scale(n, 0.0f);
+  if (terms.moon != nullptr) {
+    for (std::size_t c = 0; c < n; ++c) moon_scale[c] = static_cast<float>(terms.moon->relative_irradiance()[c] * solar_irradiance[c]);
+  }
   RenderRows(camera_settings, static_cast<int>(n), [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatch(views, sky_terms, row);
     for (std::size_t x = 0; x < views.size(); ++x) {
       for (std::size_t c = 0; c < n; ++c) row[n * x + c] *= irradiance[c];
     }
+    if (terms.moon_sky != nullptr) {
+      // The moonlit sky: the model's sky for a sun in the moon's direction, times the moon's irradiance.
+      thread_local std::vector<float> moonlit;
+      moonlit.assign(row.size(), 0.0f);
+      terms.moon_sky->RadianceBatch(views, moon_terms, moonlit);
+      for (std::size_t i = 0; i < row.size(); ++i) row[i] += moonlit[i] * moon_scale[i % n];
+    }
     night.Add(views, row);
   }, progress, image);
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
+  if (terms.moon != nullptr && terms.sun_disc) AddMoonDisc(terms, camera_settings, {}, solar_irradiance, image);
 }
 
 Image RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const RadianceTerms& terms,
@@ -241,10 +303,26 @@ void RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const R
   RadianceTerms sky_terms = terms;
   sky_terms.sun_disc = false;
   const NightSky::Folded night = NightSkyFolded(terms, n, weights);
+  CheckMoon(terms, n);
+  const RadianceTerms moon_terms = MoonSkyTerms(terms);
+  std::vector<glm::vec3> moon_weights(n, glm::vec3(0.0f));
+  if (terms.moon != nullptr) {
+    for (std::size_t c = 0; c < n; ++c) moon_weights[c] = weights[c] * static_cast<float>(terms.moon->relative_irradiance()[c]);
+  }
   RenderRows(camera_settings, 3, [&](std::span<const glm::dvec3> views, std::span<float> row) {
     sky.RadianceBatchFolded(views, sky_terms, weights, row);
+    if (terms.moon_sky != nullptr) {
+      thread_local std::vector<float> moonlit;
+      moonlit.assign(row.size(), 0.0f);
+      terms.moon_sky->RadianceBatchFolded(views, moon_terms, moon_weights, moonlit);
+      for (std::size_t i = 0; i < row.size(); ++i) row[i] += moonlit[i];
+    }
     night.Add(views, row);
   }, progress, image);
+  if (terms.moon != nullptr && terms.sun_disc) {
+    const std::vector<double> ones(3, 1.0);
+    AddMoonDisc(terms, camera_settings, weights, ones, image);
+  }
   if (terms.sun_disc) {
     // The disc pass with the disc's radiance folded by the same weights (solar irradiance 1: the
     // weights carry the units).

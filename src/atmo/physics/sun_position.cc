@@ -12,11 +12,13 @@
 #include <libnova/dynamical_time.h>
 #include <libnova/earth.h>
 #include <libnova/julian_day.h>
+#include <libnova/lunar.h>
 #include <libnova/ln_types.h>
 #include <libnova/nutation.h>
 #include <libnova/parallax.h>
 
 #include "atmo/error.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 
 namespace atmo {
@@ -426,6 +428,43 @@ glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, dou
                          std::cos(phi) * std::sin(delta) - std::sin(phi) * std::cos(delta) * std::cos(hour_angle),
                          std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle));
   return glm::normalize(local);
+}
+
+}  // namespace atmo
+
+namespace atmo {
+
+MoonPosition ComputeMoonPosition(double julian_day_utc, double latitude_deg, double longitude_deg) {
+  ComputeSunPosition(julian_day_utc, latitude_deg, longitude_deg);  // validates the input alike
+  const std::lock_guard<std::mutex> lock(LibnovaMutex());
+  const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
+  // Geocentric apparent place (ELP 2000-82, Meeus ch. 47; libnova's series take Terrestrial Time).
+  ln_equ_posn geocentric{};
+  ln_get_lunar_equ_coords(jde, &geocentric);
+  MoonPosition moon;
+  const double geocentric_km = ln_get_lunar_earth_dist(jde);
+  moon.phase_angle_deg = ln_get_lunar_phase(jde);
+  // Topocentric: the observer's parallax, up to a degree for the moon (Meeus ch. 40).
+  ln_lnlat_posn observer{};
+  observer.lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
+  observer.lat = latitude_deg;
+  ln_equ_posn parallax{};
+  ln_get_parallax(&geocentric, geocentric_km / 149597870.7, &observer, 0.0, julian_day_utc, &parallax);
+  const double ra_deg = geocentric.ra + parallax.ra;
+  const double dec_deg = geocentric.dec + parallax.dec;
+  const ln_nutation nutation = NutationAt(jde);
+  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + observer.lng - ra_deg);
+  const double phi = kDegToRad * latitude_deg, delta = kDegToRad * dec_deg;
+  const double sin_elevation =
+      std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle);
+  const double azimuth_from_south =
+      std::atan2(std::sin(hour_angle), std::cos(hour_angle) * std::sin(phi) - std::tan(delta) * std::cos(phi));
+  moon.elevation_deg = std::asin(std::clamp(sin_elevation, -1.0, 1.0)) / kDegToRad;
+  moon.azimuth_deg = Wrap360(azimuth_from_south / kDegToRad + 180.0);
+  // From the observer: the geocentric distance less the observer's offset towards the moon
+  // (Earth radius times the sine of the elevation, to first order).
+  moon.distance_km = geocentric_km - 6371.0 * std::max(-1.0, std::min(1.0, sin_elevation));
+  return moon;
 }
 
 }  // namespace atmo

@@ -1,0 +1,256 @@
+// The moon (include/atmo/moon.h, docs/night.md): its photometry against published levels, its disc's
+// energy and phase, its place from the ephemeris, and moonlight through the renderers.
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "atmo/colour.h"
+#include "atmo/error.h"
+#include "atmo/illuminance.h"
+#include "atmo/model.h"
+#include "atmo/moon.h"
+#include "atmo/render.h"
+#include "atmo/spectrum.h"
+#include "atmo/sun_position.h"
+#include "cli_fixture.h"
+
+namespace atmo {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+glm::dvec3 Elevated(double elevation_deg, double azimuth_deg) {
+  return DirectionFromZenithAzimuth(glm::radians(90.0 - elevation_deg), glm::radians(azimuth_deg));
+}
+
+AtmosphereParameters UnitIrradiance(const char* preset) {
+  AtmosphereParameters p = Preset(preset);
+  p.solar_irradiance.assign(p.channel_count(), 1.0);
+  return p;
+}
+
+// Horizontal illuminance of the moon alone (direct + scattered) with the sun far below.
+Illuminance MoonIlluminance(const Model& model, double moon_elevation_deg, double phase_deg) {
+  const AtmosphereParameters& p = model.parameters();
+  const glm::dvec3 sun = Elevated(-40.0, 0.0);
+  const glm::dvec3 direction = Elevated(moon_elevation_deg, 180.0);
+  const Moon moon(direction, phase_deg, kMoonReferenceDistanceKm, p.wavelengths_nm, sun);
+  const auto sky = model.View(0.0, sun);
+  const auto moon_sky = model.View(0.0, direction);
+  IlluminanceSettings settings;
+  settings.moon = &moon;
+  settings.moon_sky = moon_sky.get();
+  return ComputeIlluminance(*sky, p, settings);
+}
+
+// A full moon 60 degrees up lights a horizontal plane with 0.17-0.33 lx (the range from the
+// published values: 0.27 lx at the zenith at mean distance from Janiczek and DeYoung 1987, 0.31 lx
+// outside the atmosphere from Krisciunas and Schaefer 1991, eqs. 8-9); a quarter moon gives 0.06 to
+// 0.13 of it (the phase law of the same sources: 10^(-0.4 (0.026 x 90 + 4e-9 x 90^4)) = 0.09).
+TEST(Moon, FullAndQuarterMoonLightThePublishedIlluminance) {
+  for (const char* preset : {"earth-spectral", "us-standard"}) {
+    const auto model = CreateModel("hillaire", UnitIrradiance(preset));
+    const Illuminance full = MoonIlluminance(*model, 60.0, 0.0);
+    const double full_lux = full.moon_direct_horizontal_lux + full.moon_diffuse_horizontal_lux;
+    EXPECT_GE(full_lux, 0.17) << preset;
+    EXPECT_LE(full_lux, 0.33) << preset;
+    EXPECT_NEAR(full.global_horizontal_lux, full_lux, 1e-12);  // no night sky in these settings, sun down
+    const Illuminance quarter = MoonIlluminance(*model, 60.0, 90.0);
+    const double ratio = (quarter.moon_direct_horizontal_lux + quarter.moon_diffuse_horizontal_lux) / full_lux;
+    EXPECT_GE(ratio, 0.06) << preset;
+    EXPECT_LE(ratio, 0.13) << preset;
+    // The scattered moonlight is a sky's share of it, as for the sun 60 degrees up.
+    EXPECT_GT(full.moon_diffuse_horizontal_lux, 0.05 * full_lux);
+    EXPECT_LT(full.moon_diffuse_horizontal_lux, 0.3 * full_lux);
+    // Below the horizon the moon lights nothing directly.
+    const Illuminance set = MoonIlluminance(*model, -5.0, 0.0);
+    EXPECT_EQ(set.moon_direct_horizontal_lux, 0.0);
+  }
+}
+
+// ROLO's reflectance: reddish (higher at 700 than at 400 nm), falling with the phase angle, with the
+// opposition surge, held below the fit's 1.55 degrees.
+TEST(Moon, ReflectanceFollowsTheRoloModel) {
+  EXPECT_GT(LunarDiskReflectance(700.0, 10.0), 1.3 * LunarDiskReflectance(400.0, 10.0));
+  double previous = LunarDiskReflectance(550.0, 1.55);
+  for (double g = 5.0; g <= 150.0; g += 5.0) {
+    const double a = LunarDiskReflectance(550.0, g);
+    EXPECT_LT(a, previous) << g;
+    previous = a;
+  }
+  // The surge: from 5 to 1.55 degrees the reflectance rises by far more than the linear trend gives.
+  EXPECT_GT(LunarDiskReflectance(550.0, 1.55) / LunarDiskReflectance(550.0, 5.0), 1.15);
+  EXPECT_EQ(LunarDiskReflectance(550.0, 0.0), LunarDiskReflectance(550.0, 1.55));
+  // Kieffer and Stone's full-moon albedo near 550 nm is about 0.1-0.15.
+  EXPECT_GT(LunarDiskReflectance(550.0, 7.0), 0.09);
+  EXPECT_LT(LunarDiskReflectance(550.0, 7.0), 0.15);
+  EXPECT_THROW(LunarDiskReflectance(550.0, 181.0), Error);
+  EXPECT_THROW(LunarDiskReflectance(550.0, std::nan("")), Error);
+}
+
+// The disc's shape integrates to 1 over the sky (a Monte Carlo estimate independent of the
+// normalising grid), is lit on the side towards the sun's place, and its lit area follows the phase.
+TEST(Moon, DiscCarriesTheIrradianceWithThePhase) {
+  const std::vector<double> wavelengths = {680.0, 550.0, 440.0};
+  const glm::dvec3 direction = Elevated(30.0, 100.0);
+  const glm::dvec3 sun = Elevated(-20.0, 280.0);
+  for (double phase : {0.0, 60.0, 90.0, 150.0}) {
+    const Moon moon(direction, phase, 384400.0, wavelengths, sun);
+    const double radius = moon.angular_radius_rad();
+    EXPECT_NEAR(radius, std::asin(1737.4 / 384400.0), 1e-12);
+    // Uniform directions in the cap of 1.5 radii around the moon.
+    const glm::dvec3 e1 = glm::normalize(glm::cross(direction, glm::dvec3(0, 0, 1)));
+    const glm::dvec3 e2 = glm::cross(direction, e1);
+    const double cap = 1.5 * radius;
+    const double cap_solid_angle = 2.0 * kPi * (1.0 - std::cos(cap));
+    double sum = 0.0;
+    int lit = 0;
+    const int n = 4000000;
+    std::uint64_t state = 12345;
+    const auto uniform = [&] {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    for (int k = 0; k < n; ++k) {
+      const double cos_theta = 1.0 - uniform() * (1.0 - std::cos(cap));
+      const double phi = 2.0 * kPi * uniform();
+      const double sin_theta = std::sqrt(1.0 - cos_theta * cos_theta);
+      const glm::dvec3 view = cos_theta * direction + sin_theta * (std::cos(phi) * e1 + std::sin(phi) * e2);
+      const double shape = moon.DiscShape(view);
+      sum += shape;
+      lit += shape > 0.0;
+    }
+    EXPECT_NEAR(sum * cap_solid_angle / n, 1.0, 0.01) << phase;
+    // The lit fraction of the disc: (1 + cos i) / 2 of its area.
+    const double disc_fraction = (1.0 - std::cos(radius)) / (1.0 - std::cos(cap));
+    EXPECT_NEAR(static_cast<double>(lit) / n / disc_fraction, 0.5 * (1.0 + std::cos(glm::radians(phase))), 0.01) << phase;
+  }
+  // The bright limb faces the sun's place in the sky.
+  const Moon quarter(direction, 90.0, 384400.0, wavelengths, sun);
+  const glm::dvec3 towards_sun = glm::normalize(sun - glm::dot(sun, direction) * direction);
+  const double offset = 0.6 * quarter.angular_radius_rad();
+  EXPECT_GT(quarter.DiscShape(glm::normalize(direction + offset * towards_sun)), 0.0);
+  EXPECT_EQ(quarter.DiscShape(glm::normalize(direction - offset * towards_sun)), 0.0);
+  EXPECT_THROW(Moon(direction, -1.0, 384400.0, wavelengths, sun), Error);
+  EXPECT_THROW(Moon(direction, 200.0, 384400.0, wavelengths, sun), Error);
+  EXPECT_THROW(Moon(glm::dvec3(0, 0, 2), 10.0, 384400.0, wavelengths, sun), Error);
+}
+
+// The renderers add the moon: its disc with the irradiance it carries (summed over the pixels'
+// solid angles), and the moonlit sky, which is the model's sky for a sun in the moon's direction
+// times the moon's relative irradiance.
+TEST(Moon, RenderersAddTheMoonsDiscAndLight) {
+  const AtmosphereParameters p = Preset("earth");
+  const auto model = CreateModel("hillaire", p);
+  const glm::dvec3 sun = Elevated(-35.0, 0.0);
+  const glm::dvec3 direction = Elevated(40.0, 180.0);
+  const Moon moon(direction, 30.0, 384400.0, p.wavelengths_nm, sun);
+  const auto sky = model->View(0.0, sun);
+  const auto moon_sky = model->View(0.0, direction);
+  RadianceTerms terms;
+  terms.moon = &moon;
+  terms.moon_sky = moon_sky.get();
+  // A narrow camera on the moon: the disc's energy.
+  Camera camera{CameraKind::kPerspective, 96, 96, 2.0, 180.0, 40.0};
+  const Image with = RenderView(*sky, camera, terms, p.solar_irradiance);
+  RadianceTerms no_disc = terms;
+  no_disc.sun_disc = false;
+  const Image without_disc = RenderView(*sky, camera, no_disc, p.solar_irradiance);
+  const double tan_half = std::tan(glm::radians(1.0));
+  std::vector<double> energy(3, 0.0);
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      const double u = ((x + 0.5) / camera.width * 2.0 - 1.0) * tan_half;
+      const double v = ((y + 0.5) / camera.height * 2.0 - 1.0) * tan_half;
+      const double pixel = (2.0 * tan_half / camera.width) * (2.0 * tan_half / camera.height) /
+                           std::pow(1.0 + u * u + v * v, 1.5);
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t i = (static_cast<std::size_t>(y) * camera.width + x) * 3 + c;
+        energy[c] += (with.pixels[i] - without_disc.pixels[i]) * pixel;
+      }
+    }
+  }
+  std::vector<double> transmittance(3);
+  moon_sky->Transmittance(direction, transmittance);
+  for (int c = 0; c < 3; ++c) {
+    const double expected = moon.relative_irradiance()[c] * transmittance[c] * p.solar_irradiance[c];
+    EXPECT_NEAR(energy[c], expected, 0.01 * expected) << c;
+  }
+  // Away from the disc: the moonlit sky.
+  const Camera wide{CameraKind::kFisheye, 32, 32};
+  const Image lit = RenderView(*sky, wide, no_disc, p.solar_irradiance);
+  RadianceTerms moon_only;
+  moon_only.sun_disc = false;
+  const Image as_sun = RenderView(*moon_sky, wide, moon_only, p.solar_irradiance);
+  double total = 0.0;
+  for (std::size_t i = 0; i < lit.pixels.size(); ++i) {
+    const double expected = as_sun.pixels[i] * moon.relative_irradiance()[i % 3];
+    EXPECT_NEAR(lit.pixels[i], expected, 1e-5 * expected + 1e-20);
+    total += lit.pixels[i];
+  }
+  EXPECT_GT(total, 0.0);
+}
+
+// libnova's ephemeris as ComputeMoonPosition uses it: the phase angle is the supplement of the
+// moon's elongation from the sun (to the sun's parallax, < 0.2 degrees), a full moon is nearly
+// opposite the sun, and the distance is the geocentric one of Meeus's Example 47.a less the
+// observer's offset.
+TEST(Moon, EphemerisIsConsistentWithTheSun) {
+  for (const char* date : {"2026-12-24T01:28Z", "2026-12-04T03:00Z", "2027-01-10T18:00Z", "2027-02-01T06:00Z"}) {
+    const double jd = ParseIsoDateTime(date);
+    const SunPosition sun = ComputeSunPosition(jd, 46.5, 7.9);
+    const MoonPosition moon = ComputeMoonPosition(jd, 46.5, 7.9);
+    const double elongation = glm::degrees(std::acos(glm::dot(Elevated(sun.geometric_elevation_deg, sun.azimuth_deg),
+                                                              Elevated(moon.elevation_deg, moon.azimuth_deg))));
+    EXPECT_NEAR(moon.phase_angle_deg, 180.0 - elongation, 1.2) << date;  // + the moon's parallax
+    EXPECT_GT(moon.distance_km, 350000.0);
+    EXPECT_LT(moon.distance_km, 410000.0);
+  }
+  // 2026-12-24 01:28 UTC is a full moon.
+  EXPECT_LT(ComputeMoonPosition(ParseIsoDateTime("2026-12-24T01:28Z"), 46.5, 7.9).phase_angle_deg, 6.0);
+  // Meeus Example 47.a: 1992 April 12, 0h TD: distance 368 409.7 km from the Earth's centre.
+  const double jd = ParseIsoDateTime("1992-04-12T00:00Z") - 59.0 / 86400.0;
+  const MoonPosition meeus = ComputeMoonPosition(jd, 0.0, 0.0);
+  EXPECT_NEAR(meeus.distance_km + 6371.0 * std::sin(glm::radians(meeus.elevation_deg)), 368409.7, 5.0);
+}
+
+class MoonCli : public testing::CliFixture {};
+
+TEST_F(MoonCli, MoonByHandAndByDateAndItsBadInput) {
+  testing::RunResult r = Run("illuminance --preset earth --sun-elevation -30 --moon-elevation 60 --moon-phase 0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = testing::Lines(r.out);
+  ASSERT_EQ(lines.size(), 2u);
+  const std::vector<std::string> header = testing::Split(lines[0]);
+  const std::vector<std::string> row = testing::Split(lines[1]);
+  ASSERT_EQ(header.size(), row.size());
+  double global = 0.0, direct = 0.0, diffuse = 0.0, night = 0.0;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == "global_horizontal_lux") global = std::stod(row[i]);
+    if (header[i] == "moon_direct_horizontal_lux") direct = std::stod(row[i]);
+    if (header[i] == "moon_diffuse_horizontal_lux") diffuse = std::stod(row[i]);
+    if (header[i] == "night_sky_horizontal_lux") night = std::stod(row[i]);
+  }
+  EXPECT_NEAR(global, direct + diffuse + night, 1e-5 * global);
+  EXPECT_GT(direct, 0.15);
+  // By date: a row for that instant, with the moon's place.
+  r = Run("illuminance --date 2026-12-24T01:28Z --latitude 46.5 --longitude 7.9");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_EQ(testing::Lines(r.out).size(), 2u);
+  // A moon by hand renders; bad input is one line and writes nothing.
+  r = Run("render --sun-elevation -30 --moon-elevation 30 --moon-phase 45 --width 32 --height 18 -o moon");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* bad : {"--moon-elevation 30 --moon-phase 200", "--moon-elevation 95 --moon-phase 10",
+                          "--moon-azimuth 10", "--moon-elevation 30 --moon-phase nan"}) {
+    const testing::RunResult refused = Run(std::string("render --sun-elevation -30 -o refused ") + bad);
+    EXPECT_NE(refused.exit_code, 0) << bad;
+    EXPECT_EQ(testing::Lines(refused.err).size(), 1u) << bad << ": " << refused.err;
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "refused.png")) << bad;
+  }
+}
+
+}  // namespace
+}  // namespace atmo
