@@ -36,6 +36,7 @@
 #include <glm/glm.hpp>
 
 #include "atmo/parameters.h"
+#include "atmo/stars.h"
 
 namespace atmo {
 
@@ -62,6 +63,19 @@ class NightSky {
   NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
            const glm::dvec3& ecliptic_pole = glm::dvec3(0.0));
 
+  // Adds the stars of `catalogue` (kept by reference: it must outlive this) placed by `frame`, and
+  // takes the ecliptic from the frame. The renderers then draw each star into the pixel its
+  // direction falls in with its irradiance (StarRelativeIrradiance) times the transmittance over
+  // the pixel's solid angle: its energy is right at any resolution.
+  void SetStars(const StarCatalogue& catalogue, const CelestialFrame& frame);
+  const StarCatalogue* stars() const { return stars_; }
+  const CelestialFrame& frame() const { return frame_; }
+  // Per star of the catalogue: its irradiance over the sun's per channel (star-major).
+  const std::vector<double>& star_irradiance() const { return star_irradiance_; }
+  // The transmittance to the top of the atmosphere along a view of zenith cosine `mu` (0 on the
+  // ground), per channel, from the tables.
+  void Transmittance(double mu, std::span<double> out) const;
+
   bool active() const { return active_; }
   std::size_t channel_count() const { return channel_count_; }
   const glm::dvec3& ecliptic_pole() const { return ecliptic_pole_; }
@@ -86,6 +100,9 @@ class NightSky {
    public:
     void Add(std::span<const glm::dvec3> views, std::span<float> out) const;
     int outputs() const { return outputs_; }
+    const NightSky* night() const { return night_; }
+    // The fold: output k of channel c is weights()[c * outputs() + k].
+    const std::vector<float>& weights() const { return weights_; }
 
    private:
     friend class NightSky;
@@ -93,6 +110,7 @@ class NightSky {
     int outputs_ = 0;
     std::vector<float> airglow_;   // [angle][output]
     std::vector<float> transmitted_;  // [angle][output]: sum_c w_ck T_c, times the zodiacal light
+    std::vector<float> weights_;      // [channel][output]
   };
   // `weights` has channel_count() entries; `outputs` of their components are used (1..3).
   Folded Fold(std::span<const glm::vec3> weights, int outputs) const;
@@ -115,6 +133,10 @@ class NightSky {
   // Per view zenith angle (kAngles samples, uniform in angle over [0, pi]) and channel.
   std::vector<double> airglow_path_;  // [angle][channel]: attenuated airglow, per unit zenith brightness
   std::vector<double> transmittance_;  // [angle][channel]: to the top of the atmosphere; 0 on the ground
+  const StarCatalogue* stars_ = nullptr;
+  CelestialFrame frame_;
+  std::vector<double> star_irradiance_;
+  std::vector<double> wavelengths_nm_;
 };
 
 }  // namespace atmo

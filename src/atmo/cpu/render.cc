@@ -83,6 +83,41 @@ void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<con
       scale, image);
 }
 
+}  // namespace
+
+// The stars of a night sky through `camera`: each star into the pixel its direction falls in, its
+// irradiance times the transmittance over the pixel's solid angle, folded as `night` folds.
+void AddStars(const NightSky::Folded& night_folded, const Camera& camera_settings, Image& image) {
+  const NightSky* night = night_folded.night();
+  if (night == nullptr || night->stars() == nullptr) return;
+  const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const std::size_t n = night->channel_count();
+  const std::size_t m = static_cast<std::size_t>(night_folded.outputs());
+  const std::vector<float>& w = night_folded.weights();
+  const std::vector<Star>& stars = night->stars()->stars();
+  const std::vector<double>& irradiance = night->star_irradiance();
+  std::vector<double> transmittance(n);
+  for (std::size_t i = 0; i < stars.size(); ++i) {
+    const glm::dvec3 d = night->frame().ToLocal(stars[i]);
+    shared::vec2 frag;
+    if (!shared::GetCameraFragCoordFromDirection(camera, d, frag)) continue;
+    const int x = static_cast<int>(std::floor(frag.x));
+    const int y = static_cast<int>(std::floor(frag.y));
+    if (x < 0 || y < 0 || x >= camera_settings.width || y >= camera_settings.height) continue;
+    night->Transmittance(d.z, transmittance);
+    const double solid_angle = shared::GetCameraPixelSolidAngle(camera, shared::ivec2(x, y));
+    if (!(solid_angle > 0.0)) continue;
+    float* pixel = &image.pixels[(static_cast<std::size_t>(y) * camera_settings.width + x) * m];
+    for (std::size_t c = 0; c < n; ++c) {
+      const double value = irradiance[i * n + c] * transmittance[c] / solid_angle;
+      if (value == 0.0) continue;
+      for (std::size_t k = 0; k < m; ++k) pixel[k] += static_cast<float>(w[c * m + k] * value);
+    }
+  }
+}
+
+namespace {
+
 // The night sky's per-pixel pass (an empty one without terms.night_sky).
 NightSky::Folded NightSkyScaled(const RadianceTerms& terms, std::size_t channels, std::span<const double> scale) {
   if (terms.night_sky == nullptr) return {};
@@ -190,6 +225,7 @@ void AddNightSky(const NightSky::Folded& night, const Camera& camera_settings, I
                                         static_cast<std::size_t>(width) * nc));
     }
   });
+  AddStars(night, camera_settings, image);
 }
 
 namespace {
@@ -283,6 +319,7 @@ void RenderView(const SkyView& sky, const Camera& camera_settings, const Radianc
     }
     night.Add(views, row);
   }, progress, image);
+  AddStars(night, camera_settings, image);
   if (terms.sun_disc) AddSunDisc(sky, camera_settings, solar_irradiance, image);
   if (terms.moon != nullptr && terms.sun_disc) AddMoonDisc(terms, camera_settings, {}, solar_irradiance, image);
 }
@@ -319,6 +356,7 @@ void RenderViewFolded(const SkyView& sky, const Camera& camera_settings, const R
     }
     night.Add(views, row);
   }, progress, image);
+  AddStars(night, camera_settings, image);
   if (terms.moon != nullptr && terms.sun_disc) {
     const std::vector<double> ones(3, 1.0);
     AddMoonDisc(terms, camera_settings, weights, ones, image);

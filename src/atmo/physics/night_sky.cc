@@ -222,6 +222,7 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
   }
   ecliptic_third_ = glm::cross(ecliptic_pole_, sun_direction_);
 
+  wavelengths_nm_ = parameters.wavelengths_nm;
   airglow_zenith_ = ProjectAirglow(parameters.wavelengths_nm);
   for (double& g : airglow_zenith_) g *= settings.airglow_scale;
   // Table 17's unit (1e-8 W m^-2 sr^-1 um^-1 = 1e-11 W m^-2 sr^-1 nm^-1) over the solar spectral
@@ -287,6 +288,30 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
   });
 }
 
+void NightSky::SetStars(const StarCatalogue& catalogue, const CelestialFrame& frame) {
+  frame_ = frame;
+  if (!active_) return;
+  stars_ = &catalogue;
+  ecliptic_pole_ = glm::normalize(frame.EclipticPole() - glm::dot(frame.EclipticPole(), sun_direction_) * sun_direction_);
+  ecliptic_third_ = glm::cross(ecliptic_pole_, sun_direction_);
+  const std::size_t n = channel_count_;
+  star_irradiance_.assign(catalogue.stars().size() * n, 0.0);
+  for (std::size_t i = 0; i < catalogue.stars().size(); ++i) {
+    StarRelativeIrradiance(catalogue.stars()[i], wavelengths_nm_, std::span<double>(&star_irradiance_[i * n], n));
+  }
+}
+
+void NightSky::Transmittance(double mu, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+  if (!active_) return;
+  int a;
+  double f;
+  Locate(mu, a, f);
+  for (std::size_t c = 0; c < channel_count_ && c < out.size(); ++c) {
+    out[c] = (1 - f) * transmittance_[a * channel_count_ + c] + f * transmittance_[(a + 1) * channel_count_ + c];
+  }
+}
+
 void NightSky::Locate(double mu, int& index, double& fraction) const {
   const double x = (std::clamp(mu, -1.0, 1.0) + 1.0) * (0.5 * (kAngles - 1));
   index = std::min(static_cast<int>(x), kAngles - 2);
@@ -341,6 +366,9 @@ NightSky::Folded NightSky::Fold(std::span<const glm::vec3> weights, int outputs)
   Folded folded;
   folded.night_ = this;
   folded.outputs_ = outputs;
+  for (std::size_t c = 0; c < weights.size(); ++c) {
+    for (int k = 0; k < outputs; ++k) folded.weights_.push_back(weights[c][k]);
+  }
   if (!active_) return folded;
   const std::size_t n = channel_count_;
   folded.airglow_.assign(static_cast<std::size_t>(kAngles) * outputs, 0.0f);
@@ -366,6 +394,8 @@ NightSky::Folded NightSky::Scaled(std::span<const double> scale) const {
   folded.night_ = this;
   const std::size_t n = channel_count_;
   folded.outputs_ = static_cast<int>(n);
+  folded.weights_.assign(n * n, 0.0f);
+  for (std::size_t c = 0; c < n; ++c) folded.weights_[c * n + c] = static_cast<float>(scale[c]);
   if (!active_) return folded;
   folded.airglow_.assign(static_cast<std::size_t>(kAngles) * n, 0.0f);
   folded.transmitted_.assign(static_cast<std::size_t>(kAngles) * n, 0.0f);
