@@ -329,6 +329,11 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   CLI::Option* render_date = AddSunOptions(app, render.sun);
   render_date->excludes(app->get_option("--sun-elevation"))->excludes(app->get_option("--sun-azimuth"));
   AddMoonOptions(app, render.moon, render_date);
+  CLI::Option* no_stars = app->add_flag("--no-stars", render.no_stars, "leave the stars out (docs/night.md)");
+  app->add_option("--star-catalogue", render.star_catalogue,
+                  "folder of Stellarium 0.22 star files (stars_0_0v0_8.cat, stars_1_0v0_8.cat) [default: Debian's "
+                  "stellarium-data, /usr/share/stellarium/stars/default, when installed]")
+      ->excludes(no_stars);
   CLI::Option* until = app->add_option(
       "--until", render.sun.until, "time-lapse: frames from --date every --step up to this ISO 8601 date-time");
   CLI::Option* step = app->add_option("--step", render.sun.step, "time-lapse step: 10min, 30s, 1h30min, 2d");

@@ -130,6 +130,8 @@ struct RenderCommand {
   bool no_ground = false;
   bool no_night_glow = false;  // leave the airglow and zodiacal light out (NightSkySettings::enabled)
   MoonOptions moon;            // --moon-*, --no-moon
+  bool no_stars = false;       // leave the stars out
+  std::string star_catalogue;  // a folder of Stellarium star files; empty: Debian's stellarium-data if installed
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG
   // Monte Carlo paths per pixel (model reference only; default: its `samples` option).
@@ -286,6 +288,7 @@ struct IlluminanceCommand {
   bool no_night_glow = false;        // leave the night sky's own light out
   SunOptions sun;                    // --date: one row for the sun and moon of that instant and place
   MoonOptions moon;                  // --moon-*, --no-moon
+  bool no_stars = false;             // leave the stars out of the night sky's column
 };
 int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& command);
 

@@ -3,6 +3,7 @@
 // for the sun and moon of a --date. The night sky's own light and the moon have their own columns.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 
 #include "atmo/error.h"
@@ -10,6 +11,7 @@
 #include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/render.h"
+#include "atmo/stars.h"
 #include "commands.h"
 
 namespace atmo::cli {
@@ -34,6 +36,12 @@ int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& comman
   } else {
     for (double elevation : command.sun_elevations_deg) rows.push_back({elevation, 180.0, std::nullopt});
   }
+  // The stars when Debian's stellarium-data is installed (docs/night.md), unless --no-stars.
+  std::error_code error;
+  const StarCatalogue* catalogue =
+      !command.no_stars && std::filesystem::is_directory(StarCatalogue::DefaultFolder(), error)
+          ? &StarCatalogue::Default()
+          : nullptr;
   std::printf("altitude_m,sun_elevation_deg,direct_normal_lux,direct_horizontal_lux,diffuse_horizontal_lux,"
               "global_horizontal_lux,direct_normal_w_m2,diffuse_horizontal_w_m2,night_sky_horizontal_lux,"
               "night_sky_horizontal_w_m2,moon_elevation_deg,moon_phase_deg,moon_direct_horizontal_lux,"
@@ -45,7 +53,13 @@ int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& comman
     const glm::dvec3 pole = row.julian_day_utc ? EclipticPoleDirection(*row.julian_day_utc, *command.sun.latitude_deg,
                                                                        *command.sun.longitude_deg)
                                                : glm::dvec3(0.0);
-    const NightSky night(parameters, std::max(altitude_m, 0.0), sun, pole);
+    NightSky night(parameters, std::max(altitude_m, 0.0), sun, pole);
+    if (catalogue != nullptr) {
+      night.SetStars(*catalogue, row.julian_day_utc ? CelestialFrame::FromDate(*row.julian_day_utc,
+                                                                               *command.sun.latitude_deg,
+                                                                               *command.sun.longitude_deg)
+                                                    : CelestialFrame::FromSun(sun));
+    }
     IlluminanceSettings settings;
     settings.night_sky = &night;
     const std::optional<MoonPosition> place = ResolveMoon(command.moon, command.sun, row.azimuth_deg, row.julian_day_utc);

@@ -348,6 +348,8 @@ int main(int argc, char** argv) {
   CLI::Option* illuminance_date = AddSunOptions(illuminance_app, illuminance.sun);
   illuminance_date->excludes(illuminance_app->get_option("--sun-elevation"));
   AddMoonOptions(illuminance_app, illuminance.moon, illuminance_date);
+  illuminance_app->add_flag("--no-stars", illuminance.no_stars,
+                            "leave the stars (Debian's stellarium-data, when installed) out of night_sky_*");
   illuminance_app->add_flag("--no-night-glow", illuminance.no_night_glow,
                             "leave the night sky's own light (airglow, zodiacal light) out of night_sky_* and the global");
 

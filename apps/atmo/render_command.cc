@@ -22,6 +22,7 @@
 #include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/render.h"
+#include "atmo/stars.h"
 #include "commands.h"
 #include "models/reference_model.h"
 #include "progress_bar.h"
@@ -67,6 +68,26 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
     case RadianceUnit::kRelative: break;
   }
   return "sr^-1 per unit solar irradiance, times solar_irradiance (" + JoinValues(solar_irradiance) + ")";
+}
+
+// The star catalogue of a render: --star-catalogue (an error if it cannot be read), else Debian's
+// stellarium-data when it is installed; none with --no-stars, for a half-space, or (with a warning)
+// when no catalogue is installed.
+const StarCatalogue* LoadStarsFor(const RenderCommand& command, const AtmosphereParameters& parameters) {
+  if (command.no_stars || parameters.geometry != Geometry::kSpherical) return nullptr;
+  if (!command.star_catalogue.empty()) {
+    static std::optional<StarCatalogue> given;
+    given = StarCatalogue::Load(command.star_catalogue);
+    return &*given;
+  }
+  std::error_code error;
+  if (!std::filesystem::is_directory(StarCatalogue::DefaultFolder(), error)) {
+    std::fprintf(stderr, "atmo: warning: no stars: no catalogue at %s (install Debian's stellarium-data, or give "
+                         "--star-catalogue; --no-stars silences this)\n",
+                 StarCatalogue::DefaultFolder().string().c_str());
+    return nullptr;
+  }
+  return &StarCatalogue::Default();
 }
 
 }  // namespace
@@ -394,12 +415,21 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   const std::vector<glm::vec3> srgb_weights = ColourWeights(convert, ImageColour::kLinearSrgb);
   // The night sky of a frame (include/atmo/night_sky.h): the ecliptic of the date and place when
   // the sun comes from --date, else the default one.
+  // The stars: the catalogue of --star-catalogue, else Debian's stellarium-data when installed
+  // (left out with a warning when not); the sky placed by the date and place, or by the sun.
+  const StarCatalogue* catalogue = LoadStarsFor(command, model_parameters);
   const auto night_sky_for = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated) {
+    const glm::dvec3 sun = SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg);
     const glm::dvec3 pole = dated ? EclipticPoleDirection(dated->julian_day_utc, *command.sun.latitude_deg,
                                                           *command.sun.longitude_deg)
                                   : glm::dvec3(0.0);
-    return NightSky(model_parameters, std::max(frame.altitude_m, 0.0),
-                    SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg), pole);
+    NightSky night(model_parameters, std::max(frame.altitude_m, 0.0), sun, pole);
+    if (catalogue != nullptr) {
+      night.SetStars(*catalogue, dated ? CelestialFrame::FromDate(dated->julian_day_utc, *command.sun.latitude_deg,
+                                                                  *command.sun.longitude_deg)
+                                       : CelestialFrame::FromSun(sun));
+    }
+    return night;
   };
   // The moon of a frame (include/atmo/moon.h): by hand, or from the date; its own view of the model.
   struct FrameMoon {

@@ -28,7 +28,7 @@ struct Illuminance {
   double direct_normal_lux = 0.0;
   double direct_horizontal_lux = 0.0;
   double diffuse_horizontal_lux = 0.0;
-  double night_sky_horizontal_lux = 0.0;  // airglow and zodiacal light, attenuated
+  double night_sky_horizontal_lux = 0.0;  // airglow, zodiacal light and the stars of NightSky::SetStars, attenuated
   // The moon (when the settings give one): its transmitted light and its light scattered by the sky.
   double moon_direct_normal_lux = 0.0;
   double moon_direct_horizontal_lux = 0.0;

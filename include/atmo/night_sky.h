@@ -57,9 +57,10 @@ class NightSky {
  public:
   // The night sky seen from `altitude_m` with the sun along `sun_direction` (unit); the ecliptic's
   // north pole `ecliptic_pole` (unit, at right angles to the sun; a zero vector: DefaultEclipticPole).
-  // Precomputes the transmittance and the airglow path per view zenith angle (about 10 ms for 15
-  // channels). Inactive (Radiance 0) when parameters.night_sky.enabled is false or the geometry is
-  // a half-space. Throws atmo::Error for a non-finite or negative altitude or a non-unit direction.
+  // Precomputes the transmittance and the airglow path per view zenith angle (about 4 ms for 15
+  // channels). Radiance is 0 when parameters.night_sky.enabled is false (the stars of SetStars
+  // remain), and the whole night sky, stars included, is inactive for a half-space. Throws
+  // atmo::Error for a non-finite or negative altitude or a non-unit direction.
   NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
            const glm::dvec3& ecliptic_pole = glm::dvec3(0.0));
 
@@ -77,6 +78,7 @@ class NightSky {
   void Transmittance(double mu, std::span<double> out) const;
 
   bool active() const { return active_; }
+  bool glow() const { return active_ && glow_; }
   std::size_t channel_count() const { return channel_count_; }
   const glm::dvec3& ecliptic_pole() const { return ecliptic_pole_; }
 
@@ -124,6 +126,7 @@ class NightSky {
   double ZodiacalTableValue(const glm::dvec3& view) const;
 
   bool active_ = false;
+  bool glow_ = false;  // the airglow and zodiacal light (NightSkySettings::enabled)
   std::size_t channel_count_ = 0;
   glm::dvec3 sun_direction_{0.0, 0.0, 1.0};
   glm::dvec3 ecliptic_pole_{1.0, 0.0, 0.0};

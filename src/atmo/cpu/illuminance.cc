@@ -54,6 +54,16 @@ Illuminance ComputeIlluminance(const SkyView& sky, const AtmosphereParameters& p
     for (std::size_t k = 0; k < views.size(); ++k) {
       for (std::size_t c = 0; c < n; ++c) night[c] += weights[k] * glow[k * n + c];
     }
+    // The stars: point sources, each its attenuated irradiance times the cosine of its zenith angle.
+    if (const StarCatalogue* stars = settings.night_sky->stars(); stars != nullptr) {
+      std::vector<double> t(n);
+      for (std::size_t i = 0; i < stars->stars().size(); ++i) {
+        const glm::dvec3 d = settings.night_sky->frame().ToLocal(stars->stars()[i]);
+        if (d.z <= 0.0) continue;
+        settings.night_sky->Transmittance(d.z, t);
+        for (std::size_t c = 0; c < n; ++c) night[c] += settings.night_sky->star_irradiance()[i * n + c] * t[c] * d.z;
+      }
+    }
   }
 
   std::vector<double> moon_diffuse(n, 0.0);

@@ -210,7 +210,9 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
   }
   if (!IsUnit(sun_direction)) throw Error("the night sky needs a unit sun direction");
   const NightSkySettings& settings = parameters.night_sky;
-  active_ = settings.enabled && parameters.geometry == Geometry::kSpherical && channel_count_ > 0;
+  // The tables serve the stars too (SetStars), which --no-night-glow (enabled false) keeps.
+  active_ = parameters.geometry == Geometry::kSpherical && channel_count_ > 0;
+  glow_ = settings.enabled;
   if (!active_) return;
   sun_direction_ = sun_direction;
   if (glm::length(ecliptic_pole) == 0.0) {
@@ -224,10 +226,10 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
 
   wavelengths_nm_ = parameters.wavelengths_nm;
   airglow_zenith_ = ProjectAirglow(parameters.wavelengths_nm);
-  for (double& g : airglow_zenith_) g *= settings.airglow_scale;
+  for (double& g : airglow_zenith_) g *= glow_ ? settings.airglow_scale : 0.0;
   // Table 17's unit (1e-8 W m^-2 sr^-1 um^-1 = 1e-11 W m^-2 sr^-1 nm^-1) over the solar spectral
   // irradiance at 500 nm: a solar-spectrum radiance per unit solar irradiance.
-  zodiacal_relative_ = settings.zodiacal_scale * 1e-11 / SolarSpectralIrradiance(500.0);
+  zodiacal_relative_ = glow_ ? settings.zodiacal_scale * 1e-11 / SolarSpectralIrradiance(500.0) : 0.0;
 
   const std::size_t n = channel_count_;
   const std::size_t batches = ChannelBatchCount(n);
@@ -437,7 +439,7 @@ void AddNightSkyPixels(std::span<const glm::dvec3> views, std::span<float> out, 
 }  // namespace
 
 void NightSky::Folded::Add(std::span<const glm::dvec3> views, std::span<float> out) const {
-  if (night_ == nullptr || !night_->active_) return;
+  if (night_ == nullptr || !night_->active_ || !night_->glow_) return;
   const ZodiacalDotGrid* dots = night_->zodiacal_relative_ > 0.0 ? &ZodiacalDots() : nullptr;
   const std::size_t m = static_cast<std::size_t>(outputs_);
   if (m == 3) {
