@@ -18,6 +18,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -41,6 +42,7 @@
 #include "atmo/ibl.h"
 #include "atmo/illuminance.h"
 #include "atmo/night_sky.h"
+#include "atmo/stars.h"
 #include "atmo/sun_position.h"
 #include "atmo/engine_target.h"
 #include "atmo/colour.h"
@@ -466,6 +468,13 @@ struct RenderRequest {
   bool night_sky = true;  // the night sky's own light (include/atmo/night_sky.h)
 };
 
+// Debian's stellarium-data's stars when installed (include/atmo/stars.h), else none.
+const StarCatalogue* InstalledStars() {
+  std::error_code error;
+  if (!std::filesystem::is_directory(StarCatalogue::DefaultFolder(), error)) return nullptr;
+  return &StarCatalogue::Default();
+}
+
 // One frame as `atmo render` makes it on the CPU backend. Returns (image H x W x C, alpha H x W or
 // None, channel names, colour space, standard error H x W x C or None).
 py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
@@ -489,8 +498,12 @@ py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
     std::optional<NightSky> night;
     if (request.night_sky && std::isfinite(request.altitude_m) && std::isfinite(request.sun_elevation_deg) &&
         std::isfinite(request.sun_azimuth_deg)) {
-      terms.night_sky = &night.emplace(parameters, std::max(request.altitude_m, 0.0),
-                                       SunDirection(request.sun_elevation_deg, request.sun_azimuth_deg));
+      const glm::dvec3 sun = SunDirection(request.sun_elevation_deg, request.sun_azimuth_deg);
+      terms.night_sky = &night.emplace(parameters, std::max(request.altitude_m, 0.0), sun);
+      // The stars, as `atmo render` adds them, when Debian's stellarium-data is installed.
+      if (const StarCatalogue* stars = InstalledStars(); stars != nullptr) {
+        night->SetStars(*stars, CelestialFrame::FromSun(sun));
+      }
     }
     const ImageColour colour = unit == RadianceUnit::kRadiance ? ImageColour::kSpectral
                                : request.xyz                   ? ImageColour::kXyz
@@ -830,7 +843,10 @@ PYBIND11_MODULE(_atmo, m) {
               const glm::dvec3 sun = SunDirection(sun_elevation_deg, 0.0);
               const std::unique_ptr<SkyView> sky = model.View(altitude_m, sun);
               // The night sky's own light in its own column and in the global, as the command.
-              const NightSky night(model.parameters(), std::max(altitude_m, 0.0), sun);
+              NightSky night(model.parameters(), std::max(altitude_m, 0.0), sun);
+              if (const StarCatalogue* stars = InstalledStars(); stars != nullptr && night_sky) {
+                night.SetStars(*stars, CelestialFrame::FromSun(sun));
+              }
               IlluminanceSettings settings;
               if (night_sky) settings.night_sky = &night;
               e = ComputeIlluminance(*sky, model.parameters(), settings);

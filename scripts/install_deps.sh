@@ -8,7 +8,9 @@
 # its runtime libraries are for the sanitizer and libFuzzer build of .ci/run (scripts/fuzz.sh).
 # With --tests it also installs what only the tests run: blender, which renders
 # `atmo render --target blender` maps in tests/engine_target_test.cc (a large package, so the
-# README's first command, which builds and runs only the CLI, leaves it out).
+# README's first command, which builds and runs only the CLI, leaves it out). stellarium-data is the
+# star catalogue that atmo reads at run time for its night skies (docs/night.md; GPL-2+, not
+# shipped); with --no-install-recommends it does not pull Stellarium itself.
 set -euo pipefail
 
 SUDO=""
@@ -26,6 +28,7 @@ PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest python3-venv python3-setuptools python3-wheel
   libimgui-dev libstb-dev
   clang libclang-rt-14-dev
+  stellarium-data
 )
 if [ "${1:-}" = "--tests" ]; then
   PACKAGES+=(blender)

@@ -14,11 +14,7 @@
 
 namespace atmo::cli {
 
-namespace {
-
 void PrintWarning(const std::string& message) { std::fprintf(stderr, "atmo: warning: %s\n", message.c_str()); }
-
-}  // namespace
 
 // Rejects "nan", "inf" and anything that is not a number (CLI11 would accept nan and inf).
 const CLI::Validator kFinite = CLI::Validator(

@@ -50,6 +50,9 @@ CLI::Option* AddPathCount(CLI::App* app, const std::string& name, std::optional<
 inline constexpr double kMinExposure = 1e-10;
 inline constexpr double kMaxExposure = 1e10;
 inline constexpr double kMaxEv100 = 32.0;
+// Prints `atmo: warning: <message>` as one line on stderr.
+void PrintWarning(const std::string& message);
+
 // --model, --preset, --config, --backend, --threads, --seed, --option, --spectral.
 void AddCommonOptions(CLI::App* app, CommonOptions& common);
 // --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.

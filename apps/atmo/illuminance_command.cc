@@ -81,7 +81,7 @@ int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& comman
       std::printf("%.6g,%.6g,%.6g,%.6g\n", place->elevation_deg, place->phase_angle_deg, e.moon_direct_horizontal_lux,
                   e.moon_diffuse_horizontal_lux);
     } else {
-      std::printf(",,0,0\n");
+      std::printf("nan,nan,0,0\n");  // no moon
     }
   }
   return 0;

@@ -97,8 +97,7 @@ void GroupFlags(CLI::App* app) {
   }
 }
 
-// Prints `atmo: warning: <message>` as one line on stderr.
-void PrintWarning(const std::string& message) { std::fprintf(stderr, "atmo: warning: %s\n", message.c_str()); }
+using atmo::cli::PrintWarning;
 
 // Levenshtein distance (insertions, deletions, substitutions), for "did you mean".
 std::size_t EditDistance(const std::string& a, const std::string& b) {

@@ -23,6 +23,7 @@
 #include "atmo/night_sky.h"
 #include "atmo/render.h"
 #include "atmo/stars.h"
+#include "cli_flags.h"
 #include "commands.h"
 #include "models/reference_model.h"
 #include "progress_bar.h"
@@ -82,9 +83,8 @@ const StarCatalogue* LoadStarsFor(const RenderCommand& command, const Atmosphere
   }
   std::error_code error;
   if (!std::filesystem::is_directory(StarCatalogue::DefaultFolder(), error)) {
-    std::fprintf(stderr, "atmo: warning: no stars: no catalogue at %s (install Debian's stellarium-data, or give "
-                         "--star-catalogue; --no-stars silences this)\n",
-                 StarCatalogue::DefaultFolder().string().c_str());
+    PrintWarning("no stars: no catalogue at " + StarCatalogue::DefaultFolder().string() +
+                 " (install Debian's stellarium-data, or give --star-catalogue; --no-stars silences this)");
     return nullptr;
   }
   return &StarCatalogue::Default();
@@ -388,8 +388,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
       throw Error("the moon renders on the cpu backend with a deterministic model for now (not " +
                   (on_gl ? std::string("--backend gl") : std::string("model reference")) + ")");
     }
-    std::fprintf(stderr, "atmo: warning: the moon of --date is left out: it renders on the cpu backend with a "
-                         "deterministic model for now\n");
+    PrintWarning("the moon of --date is left out: it renders on the cpu backend with a deterministic model for now");
   }
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const auto precompute_start = std::chrono::steady_clock::now();

@@ -53,6 +53,11 @@ glm::dvec3 DefaultEclipticPole(const glm::dvec3& sun_direction);
 // ComputeSunPosition does for bad input.
 glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, double longitude_deg);
 
+// Brings a linear Rec.709 colour with a negative component into the gamut by mixing it with the
+// grey of the same luminance (Y = 0.2126 R + 0.7152 G + 0.0722 B kept), just enough that the lowest
+// component is 0; a colour of luminance <= 0 becomes black.
+void ClipToGamut(float* rgb);
+
 class NightSky {
  public:
   // The night sky seen from `altitude_m` with the sun along `sun_direction` (unit); the ecliptic's
@@ -114,7 +119,9 @@ class NightSky {
     std::vector<float> transmitted_;  // [angle][output]: sum_c w_ck T_c, times the zodiacal light
     std::vector<float> weights_;      // [channel][output]
   };
-  // `weights` has channel_count() entries; `outputs` of their components are used (1..3).
+  // `weights` has channel_count() entries; `outputs` of their components are used (1..3). With 3
+  // outputs (linear sRGB), a colour outside the gamut (the airglow's orange lines seen through
+  // much air give a negative blue) is brought in by ClipToGamut.
   Folded Fold(std::span<const glm::vec3> weights, int outputs) const;
   // The same with weights[c] = scale[c] in output c (outputs = channel count, up to any number):
   // the unfolded image of RenderView, each channel times its solar irradiance.

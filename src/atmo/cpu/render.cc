@@ -97,6 +97,7 @@ void AddStars(const NightSky::Folded& night_folded, const Camera& camera_setting
   const std::vector<Star>& stars = night->stars()->stars();
   const std::vector<double>& irradiance = night->star_irradiance();
   std::vector<double> transmittance(n);
+  std::vector<float> star(m);
   for (std::size_t i = 0; i < stars.size(); ++i) {
     const glm::dvec3 d = night->frame().ToLocal(stars[i]);
     shared::vec2 frag;
@@ -104,15 +105,21 @@ void AddStars(const NightSky::Folded& night_folded, const Camera& camera_setting
     const int x = static_cast<int>(std::floor(frag.x));
     const int y = static_cast<int>(std::floor(frag.y));
     if (x < 0 || y < 0 || x >= camera_settings.width || y >= camera_settings.height) continue;
+    // A fisheye pixel whose centre is outside the circle stays empty (a star on the rim is lost).
+    if (!image.alpha.empty() && image.alpha[static_cast<std::size_t>(y) * camera_settings.width + x] == 0.0f) continue;
     night->Transmittance(d.z, transmittance);
     const double solid_angle = shared::GetCameraPixelSolidAngle(camera, shared::ivec2(x, y));
     if (!(solid_angle > 0.0)) continue;
     float* pixel = &image.pixels[(static_cast<std::size_t>(y) * camera_settings.width + x) * m];
+    std::fill(star.begin(), star.end(), 0.0f);
+    const std::size_t outputs = m;
     for (std::size_t c = 0; c < n; ++c) {
       const double value = irradiance[i * n + c] * transmittance[c] / solid_angle;
       if (value == 0.0) continue;
-      for (std::size_t k = 0; k < m; ++k) pixel[k] += static_cast<float>(w[c * m + k] * value);
+      for (std::size_t k = 0; k < outputs; ++k) star[k] += static_cast<float>(w[c * m + k] * value);
     }
+    if (outputs == 3) ClipToGamut(star.data());  // a red star low in the sky may leave linear sRGB
+    for (std::size_t k = 0; k < outputs; ++k) pixel[k] += star[k];
   }
 }
 

@@ -194,6 +194,18 @@ bool IsUnit(const glm::dvec3& v) {
 
 }  // namespace
 
+void ClipToGamut(float* rgb) {
+  const float lowest = std::min({rgb[0], rgb[1], rgb[2]});
+  if (lowest >= 0.0f) return;
+  const float y = 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+  if (y <= 0.0f) {
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    return;
+  }
+  const float t = -lowest / (y - lowest);
+  for (int k = 0; k < 3; ++k) rgb[k] = std::max(0.0f, (1.0f - t) * rgb[k] + t * y);
+}
+
 glm::dvec3 DefaultEclipticPole(const glm::dvec3& sun_direction) {
   const glm::dvec3 up(0.0, 0.0, 1.0);
   glm::dvec3 pole = up - glm::dot(up, sun_direction) * sun_direction;
@@ -385,6 +397,10 @@ NightSky::Folded NightSky::Fold(std::span<const glm::vec3> weights, int outputs)
       }
       folded.airglow_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(airglow);
       folded.transmitted_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(transmitted * zodiacal_relative_);
+    }
+    if (outputs == 3) {
+      ClipToGamut(&folded.airglow_[static_cast<std::size_t>(a) * 3]);
+      ClipToGamut(&folded.transmitted_[static_cast<std::size_t>(a) * 3]);
     }
   }
   return folded;
