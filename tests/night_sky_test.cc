@@ -299,6 +299,24 @@ TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
       Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --no-night-glow --no-stars -o black");
   ASSERT_EQ(off.exit_code, 0) << off.err;
   for (float v : ReadExr(dir_ / "black.exr").pixels) ASSERT_EQ(v, 0.0f);
+  // --night-vision: the eye's view in the PNG (scotopic at -30), refused for relative units.
+  const testing::RunResult seen =
+      Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --night-vision -o seen");
+  ASSERT_EQ(seen.exit_code, 0) << seen.err;
+  ImageMetadata metadata;
+  ReadExr(dir_ / "seen.exr", &metadata);
+  bool found = false;
+  for (const auto& [key, value] : metadata) {
+    if (key == "atmo:nightVisionPhotopicFraction") {
+      found = true;
+      EXPECT_EQ(value, "0");
+    }
+  }
+  EXPECT_TRUE(found);
+  const testing::RunResult refused = Run("render --night-vision --unit relative -o refused");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_EQ(testing::Lines(refused.err).size(), 1u) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "refused.png"));
 }
 
 #ifdef ATMO_HAVE_GL

@@ -326,6 +326,9 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   render_date->excludes(app->get_option("--sun-elevation"))->excludes(app->get_option("--sun-azimuth"));
   AddMoonOptions(app, render.moon, render_date);
   CLI::Option* no_stars = app->add_flag("--no-stars", render.no_stars, "leave the stars out (docs/night.md)");
+  app->add_flag("--night-vision", render.night_vision,
+                "the PNG as the eye sees in the dark: mesopic and scotopic vision (CIE 191), colour fading to blue-grey "
+                "(docs/night.md); the EXR stays physical");
   app->add_option("--star-catalogue", render.star_catalogue,
                   "folder of Stellarium 0.22 star files (stars_0_0v0_8.cat, stars_1_0v0_8.cat) [default: Debian's "
                   "stellarium-data, /usr/share/stellarium/stars/default, when installed]")

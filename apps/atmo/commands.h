@@ -131,6 +131,7 @@ struct RenderCommand {
   bool no_night_glow = false;  // leave the airglow and zodiacal light out (NightSkySettings::enabled)
   MoonOptions moon;            // --moon-*, --no-moon
   bool no_stars = false;       // leave the stars out
+  bool night_vision = false;   // the PNG as the eye sees in the dark (include/atmo/night_vision.h)
   std::string star_catalogue;  // a folder of Stellarium star files; empty: Debian's stellarium-data if installed
   std::string exr_path = "sky.exr";  // empty: no EXR
   std::string png_path = "sky.png";  // empty: no PNG

@@ -21,6 +21,7 @@
 #include "atmo/memory.h"
 #include "atmo/moon.h"
 #include "atmo/night_sky.h"
+#include "atmo/night_vision.h"
 #include "atmo/render.h"
 #include "atmo/stars.h"
 #include "cli_flags.h"
@@ -106,6 +107,9 @@ RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command)
   }
   if (command.no_night_glow) parameters.night_sky.enabled = false;
   plan.unit = ParseRadianceUnit(command.unit);
+  if (command.night_vision && plan.unit == RadianceUnit::kRelative) {
+    throw Error("--night-vision needs physical units: --unit luminance or radiance");
+  }
   if (command.xyz && plan.unit != RadianceUnit::kLuminance) throw Error("--xyz needs --unit luminance");
   // The models answer per unit solar irradiance; in physical units the colour conversion brings
   // in the solar spectrum, so the model's images are rendered with solar_irradiance 1.
@@ -244,6 +248,11 @@ std::vector<std::string> RenderOutputs::Write(const std::string& exr_path, const
   ToneMapping png_mapping = plan_.mapping;
   if (!png_path.empty()) {
     display = legacy_png_ || is_colour ? image : ConvertImage(image, convert_, ImageColour::kLinearSrgb);
+    if (command.night_vision) {
+      // The eye at night, before the exposure that adapts to what it sees (docs/night.md).
+      const double m = ApplyNightVision(display, NightVision(plan_.parameters.wavelengths_nm));
+      SetMetadata("atmo:nightVisionPhotopicFraction", Format("%.4g", m));
+    }
     if (command.exposure) {
       png_mapping.exposure = *command.exposure;
     } else if (command.ev100) {

@@ -51,6 +51,11 @@ class SpectralConversion {
   glm::dvec3 Xyz(std::span<const double> relative) const;
   // Luminance in cd/m^2.
   double Luminance(std::span<const double> relative) const;
+  // Scotopic luminance in scotopic cd/m^2: 1700 lm/W x integral of V'(lambda) L(lambda)
+  // (ScotopicEfficiency, include/atmo/spectrum.h).
+  double ScotopicLuminance(std::span<const double> relative) const;
+  // Its weights: ScotopicLuminance(r) = sum_i scotopic_weights()[i] * r_i.
+  const std::vector<double>& scotopic_weights() const { return scotopic_weights_; }
   // Radiance integrated over 360..830 nm, W m^-2 sr^-1.
   double Radiance(std::span<const double> relative) const;
   // Linear Rec.709 / sRGB (D65) whose luminance is in cd/m^2.
@@ -66,6 +71,7 @@ class SpectralConversion {
   std::vector<double> wavelengths_nm_;
   std::vector<glm::dvec3> xyz_weights_;
   std::vector<double> radiance_weights_;
+  std::vector<double> scotopic_weights_;
   std::vector<double> solar_irradiance_;
 };
 

@@ -26,6 +26,13 @@ inline constexpr double kSpectrumMaxNm = 830.0;
 // Luminous efficacy of radiation at 555 nm, lm/W: luminance = 683 * integral of y-bar L d(lambda).
 inline constexpr double kMaxLuminousEfficacy = 683.0;
 
+// Luminous efficacy of scotopic (rod) vision at its 507 nm peak, lm/W: 683 / V'(555 nm) = 683 / 0.402.
+inline constexpr double kMaxScotopicEfficacy = 1700.0;
+
+// The CIE 1951 scotopic luminous efficiency V'(lambda) at `wavelength_nm`, linear between the 5 nm
+// entries of src/atmo/physics/data/scotopic_table.h, 0 outside 380..780 nm.
+double ScotopicEfficiency(double wavelength_nm);
+
 // CIE 1931 2-degree colour-matching functions (x-bar, y-bar, z-bar) at `wavelength_nm`, linear
 // between the 5 nm entries, 0 outside [360, 830] nm.
 glm::dvec3 CieColourMatching(double wavelength_nm);

@@ -80,6 +80,7 @@ SpectralConversion::SpectralConversion(std::span<const double> wavelengths_nm)
 
   xyz_weights_.assign(n, glm::dvec3(0.0));
   radiance_weights_.assign(n, 0.0);
+  scotopic_weights_.assign(n, 0.0);
   solar_irradiance_.resize(n);
   for (std::size_t i = 0; i < n; ++i) solar_irradiance_[i] = SolarSpectralIrradiance(wavelengths_nm_[i]);
   const int steps = static_cast<int>(kSpectrumMaxNm - kSpectrumMinNm);
@@ -88,11 +89,13 @@ SpectralConversion::SpectralConversion(std::span<const double> wavelengths_nm)
     const double dl = (s == 0 || s == steps) ? 0.5 : 1.0;
     const double e = SolarSpectralIrradiance(lambda) * dl;
     const glm::dvec3 cmf = CieColourMatching(lambda);
+    const double scotopic = ScotopicEfficiency(lambda);
     for (std::size_t k = 0; k < n; ++k) {
       const double h = ChannelWeight(sorted, k, lambda);
       if (h == 0.0) continue;
       xyz_weights_[order[k]] += cmf * (e * h);
       radiance_weights_[order[k]] += e * h;
+      scotopic_weights_[order[k]] += kMaxScotopicEfficacy * scotopic * e * h;
     }
   }
 }
@@ -101,6 +104,12 @@ glm::dvec3 SpectralConversion::Xyz(std::span<const double> relative) const {
   glm::dvec3 xyz(0.0);
   for (std::size_t i = 0; i < xyz_weights_.size(); ++i) xyz += xyz_weights_[i] * relative[i];
   return xyz;
+}
+
+double SpectralConversion::ScotopicLuminance(std::span<const double> relative) const {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < scotopic_weights_.size(); ++i) sum += scotopic_weights_[i] * relative[i];
+  return sum;
 }
 
 double SpectralConversion::Luminance(std::span<const double> relative) const {

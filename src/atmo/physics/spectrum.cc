@@ -11,6 +11,7 @@
 #include "atmo/error.h"
 #include "physics/gases.h"
 #include "printable.h"
+#include "physics/data/scotopic_table.h"
 #include "physics/data/spectral_tables.h"
 
 namespace atmo {
@@ -116,6 +117,14 @@ glm::dvec3 CieColourMatching(double wavelength_nm) {
                             [&](int k) { return data::kCie1931[k][c]; });
   }
   return v;
+}
+
+double ScotopicEfficiency(double wavelength_nm) {
+  const double x = (wavelength_nm - data::kScotopicFirstNm) / data::kScotopicStepNm;
+  if (!(x >= 0.0) || x > data::kScotopicCount - 1) return 0.0;
+  const int i = std::min(static_cast<int>(x), data::kScotopicCount - 2);
+  const double f = x - i;
+  return (1.0 - f) * data::kScotopicEfficiency[i] + f * data::kScotopicEfficiency[i + 1];
 }
 
 double SolarSpectralIrradiance(double wavelength_nm) {
