@@ -41,6 +41,7 @@
 #include "atmo/cubemap.h"
 #include "atmo/ibl.h"
 #include "atmo/illuminance.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/stars.h"
 #include "atmo/sun_position.h"
@@ -466,7 +467,37 @@ struct RenderRequest {
   bool xyz = false;
   std::uint64_t spp = 0;  // Monte Carlo models; 0: their samples option
   bool night_sky = true;  // the night sky's own light (include/atmo/night_sky.h)
+  // A moon by hand (include/atmo/moon.h): NaN elevation for none; the azimuth defaults to opposite
+  // the sun, as on the command line.
+  double moon_elevation_deg = std::numeric_limits<double>::quiet_NaN();
+  double moon_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
+  double moon_phase_deg = std::numeric_limits<double>::quiet_NaN();
 };
+
+// The moon of a Python call and its own view of the model (RadianceTerms::moon), or none.
+struct PyMoon {
+  std::optional<Moon> moon;
+  std::unique_ptr<SkyView> sky;
+};
+
+PyMoon MakeMoon(const Model& model, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg,
+                double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg) {
+  PyMoon result;
+  if (std::isnan(moon_elevation_deg) && std::isnan(moon_phase_deg) && std::isnan(moon_azimuth_deg)) return result;
+  if (!std::isfinite(moon_elevation_deg) || !std::isfinite(moon_phase_deg)) {
+    throw Error("a moon needs a finite moon_elevation_deg and moon_phase_deg (moon_azimuth_deg: default opposite the sun)");
+  }
+  if (moon_elevation_deg < -90.0 || moon_elevation_deg > 90.0) {
+    throw Error("moon_elevation_deg must be in [-90, 90] (got " + std::to_string(moon_elevation_deg) + ")");
+  }
+  const double azimuth = std::isnan(moon_azimuth_deg) ? std::fmod(sun_azimuth_deg + 180.0, 360.0) : moon_azimuth_deg;
+  if (!std::isfinite(azimuth)) throw Error("moon_azimuth_deg must be finite");
+  const glm::dvec3 direction = SunDirection(moon_elevation_deg, azimuth);
+  result.moon.emplace(direction, moon_phase_deg, kMoonReferenceDistanceKm, model.parameters().wavelengths_nm,
+                      SunDirection(sun_elevation_deg, sun_azimuth_deg));
+  result.sky = model.View(altitude_m, direction);
+  return result;
+}
 
 // Debian's stellarium-data's stars when installed (include/atmo/stars.h), else none.
 const StarCatalogue* InstalledStars() {
@@ -509,6 +540,13 @@ py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
                                : request.xyz                   ? ImageColour::kXyz
                                                                : ImageColour::kLinearSrgb;
     const Model& model = self.model();
+    const PyMoon moon = MakeMoon(model, request.altitude_m, request.sun_elevation_deg, request.sun_azimuth_deg,
+                                 request.moon_elevation_deg, request.moon_azimuth_deg, request.moon_phase_deg);
+    if (moon.moon) {
+      if (IsMonteCarlo(model)) throw Error("the moon renders with a deterministic model for now, not reference");
+      terms.moon = &*moon.moon;
+      terms.moon_sky = moon.sky.get();
+    }
     if (cubemap) {
       if (IsMonteCarlo(model)) throw Error("camera cubemap needs a deterministic model, not " + std::string(model.name()));
       if (request.width < 1 || request.width > kMaxImageSide) {
@@ -834,7 +872,8 @@ PYBIND11_MODULE(_atmo, m) {
            py::arg("sun_azimuth_deg"))
       .def(
           "illuminance",
-          [](const PyModel& self, double altitude_m, double sun_elevation_deg, bool night_sky) {
+          [](const PyModel& self, double altitude_m, double sun_elevation_deg, bool night_sky, double moon_elevation_deg,
+             double moon_azimuth_deg, double moon_phase_deg) {
             Illuminance e;
             {
               py::gil_scoped_release release;
@@ -849,6 +888,12 @@ PYBIND11_MODULE(_atmo, m) {
               }
               IlluminanceSettings settings;
               if (night_sky) settings.night_sky = &night;
+              const PyMoon moon = MakeMoon(model, altitude_m, sun_elevation_deg, 0.0, moon_elevation_deg,
+                                           moon_azimuth_deg, moon_phase_deg);
+              if (moon.moon) {
+                settings.moon = &*moon.moon;
+                settings.moon_sky = moon.sky.get();
+              }
               e = ComputeIlluminance(*sky, model.parameters(), settings);
             }
             py::dict d;
@@ -860,9 +905,12 @@ PYBIND11_MODULE(_atmo, m) {
             d["diffuse_horizontal_w_m2"] = e.diffuse_horizontal_w_m2;
             d["night_sky_horizontal_lux"] = e.night_sky_horizontal_lux;
             d["night_sky_horizontal_w_m2"] = e.night_sky_horizontal_w_m2;
+            d["moon_direct_horizontal_lux"] = e.moon_direct_horizontal_lux;
+            d["moon_diffuse_horizontal_lux"] = e.moon_diffuse_horizontal_lux;
             return d;
           },
-          py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("night_sky"))
+          py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("night_sky"), py::arg("moon_elevation_deg"),
+          py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"))
       .def("sample", &Sample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
            py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
       .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
@@ -875,15 +923,17 @@ PYBIND11_MODULE(_atmo, m) {
           "render",
           [](const PyModel& self, const std::string& camera, int width, int height, double fov_deg, double yaw_deg,
              double pitch_deg, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg, bool sun_disc,
-             bool ground, const std::string& unit, bool xyz, std::uint64_t spp, bool night_sky) {
+             bool ground, const std::string& unit, bool xyz, std::uint64_t spp, bool night_sky,
+             double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg) {
             RenderRequest request{camera,   width,    height, fov_deg, yaw_deg, pitch_deg, altitude_m, sun_elevation_deg,
-                                  sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp,     night_sky};
+                                  sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp,     night_sky,
+                                  moon_elevation_deg, moon_azimuth_deg, moon_phase_deg};
             return RenderFrame(self, request);
           },
           py::arg("camera"), py::arg("width"), py::arg("height"), py::arg("fov_deg"), py::arg("yaw_deg"),
           py::arg("pitch_deg"), py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("sun_azimuth_deg"),
           py::arg("sun_disc"), py::arg("ground"), py::arg("unit"), py::arg("xyz"), py::arg("spp"),
-          py::arg("night_sky"));
+          py::arg("night_sky"), py::arg("moon_elevation_deg"), py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"));
 
   m.def("camera_directions", &CameraDirections, py::arg("camera"), py::arg("width"), py::arg("height"),
         py::arg("fov_deg"), py::arg("yaw_deg"), py::arg("pitch_deg"));

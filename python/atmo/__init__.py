@@ -60,6 +60,13 @@ CAMERAS = ("perspective", "fisheye", "equirect", "cubemap")
 UNITS = ("relative", "radiance", "luminance")
 
 
+
+def _moon_arguments(elevation, azimuth, phase):
+    """The moon's three angles for the C++ side: NaN where not given."""
+    nan = float("nan")
+    return (nan if elevation is None else float(elevation), nan if azimuth is None else float(azimuth),
+            nan if phase is None else float(phase))
+
 def _option_text(key: str, value) -> str:
     """A model option as the KEY=VALUE text of `--option`: booleans as on/off, floats exactly."""
     if isinstance(value, (bool, np.bool_)):
@@ -317,22 +324,29 @@ class Model:
         return list(self._model.export_tables(os.fspath(name), float(altitude_m), float(sun_elevation_deg),
                                               float(sun_azimuth_deg)))
 
-    def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None, night_sky: bool = True) -> dict:
+    def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None, night_sky: bool = True,
+                    moon_elevation_deg: Optional[float] = None, moon_azimuth_deg: Optional[float] = None,
+                    moon_phase_deg: Optional[float] = None) -> dict:
         """What `atmo illuminance` prints for one sun elevation (include/atmo/illuminance.h): the sun's
         and the sky's light on a horizontal plane, direct_normal_lux, direct_horizontal_lux,
         diffuse_horizontal_lux, global_horizontal_lux, and direct_normal_w_m2 and
         diffuse_horizontal_w_m2 over 360-830 nm; night_sky_horizontal_lux and _w_m2, the night
-        sky's own light (docs/night.md), part of the global unless night_sky=False."""
+        sky's own light (docs/night.md), part of the global unless night_sky=False; with a moon
+        (moon_elevation_deg and moon_phase_deg; moon_azimuth_deg defaults to opposite the sun, which
+        is south), moon_direct_horizontal_lux and moon_diffuse_horizontal_lux, also in the global."""
         if altitude_m is None:
             altitude_m = self.observer_altitude_m
-        return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg), bool(night_sky)))
+        return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg), bool(night_sky),
+                                            *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg)))
 
     def render(self, width: int = 1280, height: Optional[int] = None, camera: Optional[str] = None, *,
                fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
                sun_elevation_deg: float = 10.0, sun_azimuth_deg: float = 180.0,
                altitude_m: Optional[float] = None, sun_disc: bool = True, ground: bool = True,
                unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False,
-               target: Optional[str] = None, night_sky: bool = True):
+               target: Optional[str] = None, night_sky: bool = True,
+               moon_elevation_deg: Optional[float] = None, moon_azimuth_deg: Optional[float] = None,
+               moon_phase_deg: Optional[float] = None):
         """One frame as `atmo render` renders it (same defaults), as a float32 H x W x C array.
 
         camera: perspective (fov_deg, yaw_deg, pitch_deg), fisheye (all-sky; 0 outside the
@@ -346,6 +360,9 @@ class Model:
         docs/environment.md): camera defaults to equirect and yaw_deg to the program's centre.
         night_sky: add the night sky's own light, airglow and zodiacal light (docs/night.md), as
         `atmo render` does; False is its --no-night-glow.
+        moon_elevation_deg, moon_phase_deg (0 full, 180 new) and optionally moon_azimuth_deg
+        (default opposite the sun): a moon by hand, its disc and its light through the model, as
+        `atmo render --moon-elevation ...` (deterministic models).
         """
         convention = None
         if target is not None:
@@ -381,7 +398,7 @@ class Model:
         image, alpha, names, colour_space, envmap, standard_error = self._model.render(
             camera, int(width), int(height), float(fov_deg), float(yaw_deg), float(pitch_deg), float(altitude_m),
             float(sun_elevation_deg), float(sun_azimuth_deg), bool(sun_disc), bool(ground), unit, bool(xyz),
-            int(spp), bool(night_sky))
+            int(spp), bool(night_sky), *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg))
         if not full:
             return image
         metadata = {

@@ -182,6 +182,23 @@ def test_illuminance_is_the_clis(cli):
     assert model.illuminance(-30.0, night_sky=False)["night_sky_horizontal_lux"] == 0.0
 
 
+def test_moon_is_the_clis(cli):
+    """A moon by hand: the same illuminance as `atmo illuminance --moon-elevation ...`, and a render
+    that shows it; a moon without its phase is refused."""
+    from conftest import parse_csv
+    model = atmo.Model("hillaire", preset="earth")
+    e = model.illuminance(-30.0, moon_elevation_deg=60.0, moon_phase_deg=0.0)
+    row = parse_csv(cli("illuminance", "--sun-elevation", "-30", "--moon-elevation", "60", "--moon-phase", "0"))[0]
+    for key in ("moon_direct_horizontal_lux", "moon_diffuse_horizontal_lux", "global_horizontal_lux"):
+        assert e[key] == pytest.approx(row[key], rel=1e-5), key
+    assert 0.17 < e["moon_direct_horizontal_lux"] + e["moon_diffuse_horizontal_lux"] < 0.33
+    lit = model.render(32, camera="fisheye", sun_elevation_deg=-30.0, moon_elevation_deg=40.0, moon_phase_deg=20.0)
+    dark = model.render(32, camera="fisheye", sun_elevation_deg=-30.0)
+    assert float(lit.sum()) > 10.0 * float(dark.sum())
+    with pytest.raises(ValueError):
+        model.render(32, camera="fisheye", sun_elevation_deg=-30.0, moon_elevation_deg=40.0)
+
+
 def test_night_sky_is_in_renders_as_in_the_clis(cli, tmp_path):
     """render adds the night sky as `atmo render` does; night_sky=False is --no-night-glow."""
     model = atmo.Model("hillaire", preset="earth")
