@@ -1000,6 +1000,20 @@ PYBIND11_MODULE(_atmo, m) {
         return d;
       },
       py::arg("date"), py::arg("latitude_deg"), py::arg("longitude_deg"), py::arg("refraction"), py::arg("height_m"));
+  m.def(
+      "moon_position",
+      [](const std::string& date, double latitude_deg, double longitude_deg) {
+        const double julian_day = ParseIsoDateTime(date);
+        const MoonPosition p = ComputeMoonPosition(julian_day, latitude_deg, longitude_deg);
+        py::dict d;
+        d["elevation_deg"] = p.elevation_deg;
+        d["azimuth_deg"] = p.azimuth_deg;
+        d["phase_angle_deg"] = p.phase_angle_deg;
+        d["distance_km"] = p.distance_km;
+        d["julian_day_utc"] = julian_day;
+        return d;
+      },
+      py::arg("date"), py::arg("latitude_deg"), py::arg("longitude_deg"));
   m.def("set_threads", &SetThreads, py::arg("threads"));
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);

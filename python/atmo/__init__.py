@@ -27,6 +27,7 @@ from . import _atmo
 
 __all__ = [
     "Model",
+    "moon_position",
     "SampleResult",
     "Frame",
     "write_exr",
@@ -579,6 +580,15 @@ def sun_position(date: str, latitude_deg: float, longitude_deg: float, *, refrac
     distance_au, julian_day_utc. Feed elevation and azimuth to Model.render or Model.sample."""
     return dict(_atmo.sun_position(str(date), float(latitude_deg), float(longitude_deg), bool(refraction),
                                    float(height_m)))
+
+
+def moon_position(date: str, latitude_deg: float, longitude_deg: float) -> dict:
+    """The moon at an ISO 8601 instant for an observer at latitude_deg (north positive) and
+    longitude_deg (east positive), as `atmo render --date` places it (include/atmo/moon.h,
+    libnova's lunar ephemeris with the observer's parallax): elevation_deg (geometric),
+    azimuth_deg (compass), phase_angle_deg (0 full, 180 new), distance_km, julian_day_utc. Feed
+    them to Model.render(moon_elevation_deg=..., moon_azimuth_deg=..., moon_phase_deg=...)."""
+    return dict(_atmo.moon_position(str(date), float(latitude_deg), float(longitude_deg)))
 
 
 def set_threads(threads: int) -> None:

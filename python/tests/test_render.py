@@ -199,6 +199,18 @@ def test_moon_is_the_clis(cli):
         model.render(32, camera="fisheye", sun_elevation_deg=-30.0, moon_elevation_deg=40.0)
 
 
+def test_moon_position_is_the_one_render_date_uses(cli):
+    """moon_position gives the moon `atmo illuminance --date` prints (its elevation and phase)."""
+    from conftest import parse_csv
+    date = "2026-12-24T22:00+01:00"
+    moon = atmo.moon_position(date, 46.5, 7.9)
+    row = parse_csv(cli("illuminance", "--date", date, "--latitude", "46.5", "--longitude", "7.9"))[0]
+    assert moon["elevation_deg"] == pytest.approx(row["moon_elevation_deg"], abs=1e-4)
+    assert moon["phase_angle_deg"] == pytest.approx(row["moon_phase_deg"], abs=1e-4)
+    assert moon["phase_angle_deg"] < 20.0  # the evening after the full moon of 2026-12-24 01:28 UTC
+    assert 350000 < moon["distance_km"] < 410000
+
+
 def test_night_sky_is_in_renders_as_in_the_clis(cli, tmp_path):
     """render adds the night sky as `atmo render` does; night_sky=False is --no-night-glow."""
     model = atmo.Model("hillaire", preset="earth")
