@@ -62,8 +62,8 @@ class NightSky {
  public:
   // The night sky seen from `altitude_m` with the sun along `sun_direction` (unit); the ecliptic's
   // north pole `ecliptic_pole` (unit, at right angles to the sun; a zero vector: DefaultEclipticPole).
-  // Precomputes the transmittance and the airglow path per view zenith angle (about 4 ms for 15
-  // channels). Radiance is 0 when parameters.night_sky.enabled is false (the stars of SetStars
+  // Precomputes the transmittance and the airglow path per view zenith angle (1.4 ms for 3
+  // channels, 9.7 ms for 15 on 2 cores: BM_NightSkyTables). Radiance is 0 when parameters.night_sky.enabled is false (the stars of SetStars
   // remain), and the whole night sky, stars included, is inactive for a half-space. Throws
   // atmo::Error for a non-finite or negative altitude or a non-unit direction.
   NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
