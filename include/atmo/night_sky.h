@@ -70,9 +70,9 @@ class NightSky {
            const glm::dvec3& ecliptic_pole = glm::dvec3(0.0));
 
   // Adds the stars of `catalogue` (kept by reference: it must outlive this) placed by `frame`, and
-  // takes the ecliptic from the frame. The renderers then draw each star into the pixel its
-  // direction falls in with its irradiance (StarRelativeIrradiance) times the transmittance over
-  // the pixel's solid angle: its energy is right at any resolution.
+  // takes the ecliptic from the frame. The renderers then share each star's irradiance
+  // (StarRelativeIrradiance) times the transmittance bilinearly among the 2 x 2 pixels around its
+  // direction, each share over its pixel's solid angle: its energy is right at any resolution.
   void SetStars(const StarCatalogue& catalogue, const CelestialFrame& frame);
   const StarCatalogue* stars() const { return stars_; }
   const CelestialFrame& frame() const { return frame_; }

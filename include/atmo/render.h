@@ -77,7 +77,7 @@ void RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& t
 // RadianceTerms::night_sky, for images made elsewhere (the GL renderers after read-back). Throws
 // atmo::Error for a size or channel mismatch.
 void AddNightSky(const NightSky::Folded& night, const Camera& camera, Image& image);
-// Only the stars of such a pass (NightSky::SetStars): each into the pixel its direction falls in.
+// Only the stars of such a pass (NightSky::SetStars): each shared among the 2 x 2 pixels around it.
 void AddStars(const NightSky::Folded& night, const Camera& camera, Image& image);
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c

@@ -2,6 +2,7 @@
 // parallel with oneTBB.
 #include "atmo/render.h"
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -85,12 +86,18 @@ void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<con
 
 }  // namespace
 
-// The stars of a night sky through `camera`: each star into the pixel its direction falls in, its
-// irradiance times the transmittance over the pixel's solid angle, folded as `night` folds.
+// The stars of a night sky through `camera`: each star's irradiance (times the transmittance, folded
+// as `night` folds) shared bilinearly among the 2 x 2 pixels around its direction, each share over
+// that pixel's solid angle, so that a star keeps its energy at any resolution and moves smoothly
+// from pixel to pixel in a time-lapse. Shares that fall outside the image or the fisheye's circle
+// go to the other pixels; the equirect wraps around.
 void AddStars(const NightSky::Folded& night_folded, const Camera& camera_settings, Image& image) {
   const NightSky* night = night_folded.night();
   if (night == nullptr || night->stars() == nullptr) return;
   const shared::CameraParameters camera = ToSharedCamera(camera_settings);
+  const int width = camera_settings.width;
+  const int height = camera_settings.height;
+  const bool wraps = camera_settings.kind == CameraKind::kEquirect;
   const std::size_t n = night->channel_count();
   const std::size_t m = static_cast<std::size_t>(night_folded.outputs());
   const std::vector<float>& w = night_folded.weights();
@@ -102,24 +109,44 @@ void AddStars(const NightSky::Folded& night_folded, const Camera& camera_setting
     const glm::dvec3 d = night->frame().ToLocal(stars[i]);
     shared::vec2 frag;
     if (!shared::GetCameraFragCoordFromDirection(camera, d, frag)) continue;
-    const int x = static_cast<int>(std::floor(frag.x));
-    const int y = static_cast<int>(std::floor(frag.y));
-    if (x < 0 || y < 0 || x >= camera_settings.width || y >= camera_settings.height) continue;
-    // A fisheye pixel whose centre is outside the circle stays empty (a star on the rim is lost).
-    if (!image.alpha.empty() && image.alpha[static_cast<std::size_t>(y) * camera_settings.width + x] == 0.0f) continue;
-    night->Transmittance(d.z, transmittance);
-    const double solid_angle = shared::GetCameraPixelSolidAngle(camera, shared::ivec2(x, y));
-    if (!(solid_angle > 0.0)) continue;
-    float* pixel = &image.pixels[(static_cast<std::size_t>(y) * camera_settings.width + x) * m];
-    std::fill(star.begin(), star.end(), 0.0f);
-    const std::size_t outputs = m;
-    for (std::size_t c = 0; c < n; ++c) {
-      const double value = irradiance[i * n + c] * transmittance[c] / solid_angle;
-      if (value == 0.0) continue;
-      for (std::size_t k = 0; k < outputs; ++k) star[k] += static_cast<float>(w[c * m + k] * value);
+    // The four pixels whose centres surround the star, and their bilinear shares.
+    const double fx = frag.x - 0.5;
+    const double fy = frag.y - 0.5;
+    const int x0 = static_cast<int>(std::floor(fx));
+    const int y0 = static_cast<int>(std::floor(fy));
+    const double ax = fx - x0;
+    const double ay = fy - y0;
+    struct Share {
+      int x, y;
+      double weight;
+    };
+    std::array<Share, 4> shares = {Share{x0, y0, (1 - ax) * (1 - ay)}, Share{x0 + 1, y0, ax * (1 - ay)},
+                                   Share{x0, y0 + 1, (1 - ax) * ay}, Share{x0 + 1, y0 + 1, ax * ay}};
+    double kept = 0.0;
+    for (Share& share : shares) {
+      if (wraps) share.x = (share.x % width + width) % width;
+      const bool inside = share.x >= 0 && share.y >= 0 && share.x < width && share.y < height &&
+                          (image.alpha.empty() || image.alpha[static_cast<std::size_t>(share.y) * width + share.x] != 0.0f);
+      if (!inside) share.weight = 0.0;
+      kept += share.weight;
     }
-    if (outputs == 3) ClipToGamut(star.data());  // a red star low in the sky may leave linear sRGB
-    for (std::size_t k = 0; k < outputs; ++k) pixel[k] += star[k];
+    if (!(kept > 0.0)) continue;
+    night->Transmittance(d.z, transmittance);
+    std::fill(star.begin(), star.end(), 0.0f);
+    for (std::size_t c = 0; c < n; ++c) {
+      const double value = irradiance[i * n + c] * transmittance[c];
+      if (value == 0.0) continue;
+      for (std::size_t k = 0; k < m; ++k) star[k] += static_cast<float>(w[c * m + k] * value);
+    }
+    if (m == 3) ClipToGamut(star.data());  // a red star low in the sky may leave linear sRGB
+    for (const Share& share : shares) {
+      if (share.weight == 0.0) continue;
+      const double solid_angle = shared::GetCameraPixelSolidAngle(camera, shared::ivec2(share.x, share.y));
+      if (!(solid_angle > 0.0)) continue;
+      const float scale = static_cast<float>(share.weight / kept / solid_angle);
+      float* pixel = &image.pixels[(static_cast<std::size_t>(share.y) * width + share.x) * m];
+      for (std::size_t k = 0; k < m; ++k) pixel[k] += star[k] * scale;
+    }
   }
 }
 
