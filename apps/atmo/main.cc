@@ -350,7 +350,8 @@ int main(int argc, char** argv) {
   illuminance_app->add_flag("--no-stars", illuminance.no_stars,
                             "leave the stars (Debian's stellarium-data, when installed) out of night_sky_*");
   illuminance_app->add_flag("--no-night-glow", illuminance.no_night_glow,
-                            "leave the night sky's own light (airglow, zodiacal light) out of night_sky_* and the global");
+                            "leave the airglow and zodiacal light out of night_sky_* and the global (the stars stay: "
+                            "--no-stars)");
 
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;

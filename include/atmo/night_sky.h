@@ -137,7 +137,6 @@ class NightSky {
   std::size_t channel_count_ = 0;
   glm::dvec3 sun_direction_{0.0, 0.0, 1.0};
   glm::dvec3 ecliptic_pole_{1.0, 0.0, 0.0};
-  glm::dvec3 ecliptic_third_{0.0, 1.0, 0.0};  // pole x sun: towards increasing ecliptic longitude
   std::vector<double> airglow_zenith_;
   double zodiacal_relative_ = 0.0;  // per unit of Table 17: relative radiance (grey)
   // Per view zenith angle (kAngles samples, uniform in angle over [0, pi]) and channel.

@@ -68,6 +68,10 @@ double ParseDurationS(std::string_view text);
 // atmo::Error for a non-finite day.
 double DeltaTSeconds(double julian_day_utc);
 
+// The Greenwich mean sidereal time in degrees, [0, 360), at `julian_day_utc` taken as UT1 (Meeus
+// eq. 12.4). The star frame of include/atmo/stars.h uses it with mean places.
+double GreenwichMeanSiderealTimeDeg(double julian_day_utc);
+
 struct SunPositionOptions {
   // Adds the air's refraction to `elevation_deg` (see the header comment).
   bool refraction = false;

@@ -234,7 +234,6 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
     // At right angles to the sun by construction of the ecliptic; remove rounding.
     ecliptic_pole_ = glm::normalize(ecliptic_pole - glm::dot(ecliptic_pole, sun_direction) * sun_direction);
   }
-  ecliptic_third_ = glm::cross(ecliptic_pole_, sun_direction_);
 
   wavelengths_nm_ = parameters.wavelengths_nm;
   airglow_zenith_ = ProjectAirglow(parameters.wavelengths_nm);
@@ -307,7 +306,6 @@ void NightSky::SetStars(const StarCatalogue& catalogue, const CelestialFrame& fr
   if (!active_) return;
   stars_ = &catalogue;
   ecliptic_pole_ = glm::normalize(frame.EclipticPole() - glm::dot(frame.EclipticPole(), sun_direction_) * sun_direction_);
-  ecliptic_third_ = glm::cross(ecliptic_pole_, sun_direction_);
   const std::size_t n = channel_count_;
   star_irradiance_.assign(catalogue.stars().size() * n, 0.0);
   for (std::size_t i = 0; i < catalogue.stars().size(); ++i) {
@@ -333,10 +331,9 @@ void NightSky::Locate(double mu, int& index, double& fraction) const {
 }
 
 // Table 17's value along `view` (its unit), from the ecliptic coordinates relative to the sun.
+// The same lookup as the renderers' pass (Folded::Add), so that Radiance and images agree.
 double NightSky::ZodiacalTableValue(const glm::dvec3& view) const {
-  const double beta = std::asin(std::min(std::abs(glm::dot(view, ecliptic_pole_)), 1.0));
-  const double lon = std::abs(std::atan2(glm::dot(view, ecliptic_third_), glm::dot(view, sun_direction_)));
-  return Zodiacal().At(lon * (180.0 / kPi), beta * (180.0 / kPi));
+  return ZodiacalDots().At(std::abs(glm::dot(view, ecliptic_pole_)), glm::dot(view, sun_direction_));
 }
 
 double NightSky::ZodiacalBrightness500(const glm::dvec3& view) const {

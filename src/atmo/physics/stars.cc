@@ -17,6 +17,7 @@
 #include "atmo/error.h"
 #include "atmo/night_sky.h"
 #include "atmo/spectrum.h"
+#include "atmo/sun_position.h"
 
 namespace atmo {
 namespace {
@@ -213,9 +214,7 @@ CelestialFrame CelestialFrame::FromDate(double julian_day_utc, double latitude_d
   };
   const glm::dmat3 precession = active_z(z) * active_y(-theta) * active_z(zeta);
   // Local sidereal time: Greenwich mean (Meeus eq. 12.4) plus the longitude.
-  const double gmst_deg = 280.46061837 + 360.98564736629 * (julian_day_utc - 2451545.0) + 0.000387933 * t * t -
-                          t * t * t / 38710000.0;
-  const double lst = (gmst_deg + longitude_deg) * kDegToRad;
+  const double lst = (GreenwichMeanSiderealTimeDeg(julian_day_utc) + longitude_deg) * kDegToRad;
   const double phi = latitude_deg * kDegToRad;
   const double cl = std::cos(lst), sl = std::sin(lst), cp = std::cos(phi), sp = std::sin(phi);
   // Equatorial of date -> (east, north, up): H = LST - RA (include/atmo/stars.h).

@@ -169,11 +169,8 @@ ln_nutation NutationAt(double jde) {
 // ln_get_apparent_sidereal_time leaves out the cos(epsilon), 0.0003 degrees, and
 // ln_get_hrz_from_equ uses the mean sidereal time.)
 double ApparentSiderealTimeDeg(double julian_day_utc, const ln_nutation& nutation) {
-  const double t = CenturiesSinceJ2000(julian_day_utc);
-  const double mean_deg = 280.46061837 + 360.98564736629 * (julian_day_utc - 2451545.0) + 0.000387933 * t * t -
-                          t * t * t / 38710000.0;
   const double epsilon = kDegToRad * (nutation.ecliptic + nutation.obliquity);
-  return Wrap360(mean_deg + nutation.longitude * std::cos(epsilon));
+  return Wrap360(GreenwichMeanSiderealTimeDeg(julian_day_utc) + nutation.longitude * std::cos(epsilon));
 }
 
 // libnova keeps its last Earth position and nutation in globals (caches without a lock): one
@@ -183,7 +180,68 @@ std::mutex& LibnovaMutex() {
   return mutex;
 }
 
+// The checks of every ephemeris here: an instant in the years 0000..9999 and a place on the Earth.
+void CheckInstantAndPlace(double julian_day_utc, double latitude_deg, double longitude_deg) {
+  if (!std::isfinite(julian_day_utc) || julian_day_utc < kFirstJulianDay || julian_day_utc >= kEndJulianDay) {
+    throw Error("the sun's position needs an instant in the years 0000..9999, got Julian day " +
+                std::to_string(julian_day_utc));
+  }
+  if (!(latitude_deg >= -90.0 && latitude_deg <= 90.0)) {
+    throw Error("latitude " + std::to_string(latitude_deg) + " is outside [-90, 90] degrees");
+  }
+  if (!(longitude_deg >= -180.0 && longitude_deg < 360.0)) {
+    throw Error("longitude " + std::to_string(longitude_deg) + " is outside [-180, 360) degrees (east positive)");
+  }
+}
+
+// libnova's observer: east-positive longitudes in -180..180 (the caller's 180..360 are -180..0).
+ln_lnlat_posn Observer(double latitude_deg, double longitude_deg) {
+  ln_lnlat_posn observer{};
+  observer.lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
+  observer.lat = latitude_deg;
+  return observer;
+}
+
+// Topocentric place: the geocentric one shifted by the parallax of an observer on the ellipsoid
+// (Meeus ch. 40) for a body `distance_au` away.
+ln_equ_posn Topocentric(const ln_equ_posn& geocentric, double distance_au, const ln_lnlat_posn& observer,
+                        double height_m, double julian_day_utc) {
+  ln_equ_posn place = geocentric;
+  ln_lnlat_posn where = observer;  // libnova takes non-const pointers
+  ln_equ_posn parallax{};
+  ln_get_parallax(&place, distance_au, &where, height_m, julian_day_utc, &parallax);
+  return {geocentric.ra + parallax.ra, geocentric.dec + parallax.dec};
+}
+
+struct Horizontal {
+  double sin_elevation;
+  double elevation_deg;
+  double azimuth_deg;  // compass: from the north towards the east
+};
+
+// Horizontal coordinates of a place of date from the local hour angle H = apparent sidereal time +
+// longitude - ra (Meeus eqs. 13.5, 13.6); atan2 gives the azimuth from the south towards the west,
+// + 180.
+Horizontal ToHorizontal(const ln_equ_posn& place, const ln_lnlat_posn& observer, double julian_day_utc,
+                        const ln_nutation& nutation) {
+  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + observer.lng - place.ra);
+  const double phi = kDegToRad * observer.lat, delta = kDegToRad * place.dec;
+  Horizontal h;
+  h.sin_elevation = std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle);
+  const double azimuth_from_south =
+      std::atan2(std::sin(hour_angle), std::cos(hour_angle) * std::sin(phi) - std::tan(delta) * std::cos(phi));
+  h.elevation_deg = std::asin(std::clamp(h.sin_elevation, -1.0, 1.0)) / kDegToRad;
+  h.azimuth_deg = Wrap360(azimuth_from_south / kDegToRad + 180.0);
+  return h;
+}
+
 }  // namespace
+
+double GreenwichMeanSiderealTimeDeg(double julian_day_utc) {
+  const double t = CenturiesSinceJ2000(julian_day_utc);
+  return Wrap360(280.46061837 + 360.98564736629 * (julian_day_utc - 2451545.0) + 0.000387933 * t * t -
+                 t * t * t / 38710000.0);
+}
 
 double DeltaTSeconds(double julian_day_utc) {
   if (!std::isfinite(julian_day_utc)) throw Error("Delta T needs a finite Julian day");
@@ -331,16 +389,7 @@ double ParseDurationS(std::string_view text) {
 
 SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, double longitude_deg,
                                const SunPositionOptions& options) {
-  if (!std::isfinite(julian_day_utc) || julian_day_utc < kFirstJulianDay || julian_day_utc >= kEndJulianDay) {
-    throw Error("the sun's position needs an instant in the years 0000..9999, got Julian day " +
-                std::to_string(julian_day_utc));
-  }
-  if (!(latitude_deg >= -90.0 && latitude_deg <= 90.0)) {
-    throw Error("latitude " + std::to_string(latitude_deg) + " is outside [-90, 90] degrees");
-  }
-  if (!(longitude_deg >= -180.0 && longitude_deg < 360.0)) {
-    throw Error("longitude " + std::to_string(longitude_deg) + " is outside [-180, 360) degrees (east positive)");
-  }
+  CheckInstantAndPlace(julian_day_utc, latitude_deg, longitude_deg);
   if (!std::isfinite(options.pressure_mbar) || options.pressure_mbar < 0.0 || !std::isfinite(options.temperature_c) ||
       options.temperature_c <= -273.0 || !std::isfinite(options.observer_height_m)) {
     throw Error("the sun's position needs a finite pressure >= 0, temperature > -273 C and observer height");
@@ -372,31 +421,16 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
       std::asin(std::sin(beta) * std::cos(epsilon) + std::cos(beta) * std::sin(epsilon) * std::sin(lambda)) /
       kDegToRad;
 
-  // libnova's longitudes are east positive; the observer's 180..360 are -180..0.
-  ln_lnlat_posn observer{};
-  observer.lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
-  observer.lat = latitude_deg;
-  // Topocentric place: the shift of an observer on the ellipsoid off the Earth's centre (Meeus
-  // ch. 40; at most the solar parallax, 8.8").
-  ln_equ_posn parallax{};
-  ln_get_parallax(&geocentric, earth.R, &observer, options.observer_height_m, julian_day_utc, &parallax);
-  const double ra_deg = geocentric.ra + parallax.ra;
-  const double dec_deg = geocentric.dec + parallax.dec;
-
-  // Horizontal coordinates from the local hour angle H = apparent sidereal time + longitude - ra
-  // (Meeus eqs. 13.5, 13.6), the azimuth counted from the north towards the east: atan2 gives it
-  // from the south towards the west, + 180.
-  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + observer.lng - ra_deg);
-  const double phi = kDegToRad * latitude_deg, delta = kDegToRad * dec_deg;
-  const double sin_elevation =
-      std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle);
-  const double azimuth_from_south =
-      std::atan2(std::sin(hour_angle), std::cos(hour_angle) * std::sin(phi) - std::tan(delta) * std::cos(phi));
+  // Topocentric (the solar parallax is at most 8.8"), then horizontal.
+  const ln_lnlat_posn observer = Observer(latitude_deg, longitude_deg);
+  const Horizontal horizontal =
+      ToHorizontal(Topocentric(geocentric, earth.R, observer, options.observer_height_m, julian_day_utc), observer,
+                   julian_day_utc, nutation);
 
   SunPosition sun;
-  sun.geometric_elevation_deg = std::asin(std::clamp(sin_elevation, -1.0, 1.0)) / kDegToRad;
+  sun.geometric_elevation_deg = horizontal.elevation_deg;
   sun.elevation_deg = sun.geometric_elevation_deg;
-  sun.azimuth_deg = Wrap360(azimuth_from_south / kDegToRad + 180.0);
+  sun.azimuth_deg = horizontal.azimuth_deg;
   sun.right_ascension_deg = geocentric.ra;
   sun.declination_deg = geocentric.dec;
   sun.distance_au = earth.R;
@@ -413,21 +447,18 @@ SunPosition ComputeSunPosition(double julian_day_utc, double latitude_deg, doubl
 namespace atmo {
 
 glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, double longitude_deg) {
-  ComputeSunPosition(julian_day_utc, latitude_deg, longitude_deg);  // validates the input alike
+  CheckInstantAndPlace(julian_day_utc, latitude_deg, longitude_deg);
   const std::lock_guard<std::mutex> lock(LibnovaMutex());
   const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
   const ln_nutation nutation = NutationAt(jde);
   // The ecliptic's north pole is at right ascension 270 degrees and declination 90 - epsilon
-  // (true equator and equinox of date); horizontal as the sun's place above (Meeus eqs. 13.5, 13.6).
-  const double epsilon = kDegToRad * (nutation.ecliptic + nutation.obliquity);
-  const double delta = 0.5 * std::numbers::pi - epsilon;
-  const double lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
-  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + lng - 270.0);
-  const double phi = kDegToRad * latitude_deg;
-  const glm::dvec3 local(-std::cos(delta) * std::sin(hour_angle),
-                         std::cos(phi) * std::sin(delta) - std::sin(phi) * std::cos(delta) * std::cos(hour_angle),
-                         std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle));
-  return glm::normalize(local);
+  // (true equator and equinox of date), placed as the sun is.
+  const double epsilon_deg = nutation.ecliptic + nutation.obliquity;
+  const Horizontal h = ToHorizontal({270.0, 90.0 - epsilon_deg}, Observer(latitude_deg, longitude_deg),
+                                    julian_day_utc, nutation);
+  const double elevation = kDegToRad * h.elevation_deg, azimuth = kDegToRad * h.azimuth_deg;
+  return glm::dvec3(std::sin(azimuth) * std::cos(elevation), std::cos(azimuth) * std::cos(elevation),
+                    std::sin(elevation));
 }
 
 }  // namespace atmo
@@ -435,7 +466,7 @@ glm::dvec3 EclipticPoleDirection(double julian_day_utc, double latitude_deg, dou
 namespace atmo {
 
 MoonPosition ComputeMoonPosition(double julian_day_utc, double latitude_deg, double longitude_deg) {
-  ComputeSunPosition(julian_day_utc, latitude_deg, longitude_deg);  // validates the input alike
+  CheckInstantAndPlace(julian_day_utc, latitude_deg, longitude_deg);
   const std::lock_guard<std::mutex> lock(LibnovaMutex());
   const double jde = julian_day_utc + DeltaTSeconds(julian_day_utc) / kSecondsPerDay;
   // Geocentric apparent place (ELP 2000-82, Meeus ch. 47; libnova's series take Terrestrial Time).
@@ -444,26 +475,15 @@ MoonPosition ComputeMoonPosition(double julian_day_utc, double latitude_deg, dou
   MoonPosition moon;
   const double geocentric_km = ln_get_lunar_earth_dist(jde);
   moon.phase_angle_deg = ln_get_lunar_phase(jde);
-  // Topocentric: the observer's parallax, up to a degree for the moon (Meeus ch. 40).
-  ln_lnlat_posn observer{};
-  observer.lng = longitude_deg >= 180.0 ? longitude_deg - 360.0 : longitude_deg;
-  observer.lat = latitude_deg;
-  ln_equ_posn parallax{};
-  ln_get_parallax(&geocentric, geocentric_km / 149597870.7, &observer, 0.0, julian_day_utc, &parallax);
-  const double ra_deg = geocentric.ra + parallax.ra;
-  const double dec_deg = geocentric.dec + parallax.dec;
-  const ln_nutation nutation = NutationAt(jde);
-  const double hour_angle = kDegToRad * (ApparentSiderealTimeDeg(julian_day_utc, nutation) + observer.lng - ra_deg);
-  const double phi = kDegToRad * latitude_deg, delta = kDegToRad * dec_deg;
-  const double sin_elevation =
-      std::sin(phi) * std::sin(delta) + std::cos(phi) * std::cos(delta) * std::cos(hour_angle);
-  const double azimuth_from_south =
-      std::atan2(std::sin(hour_angle), std::cos(hour_angle) * std::sin(phi) - std::tan(delta) * std::cos(phi));
-  moon.elevation_deg = std::asin(std::clamp(sin_elevation, -1.0, 1.0)) / kDegToRad;
-  moon.azimuth_deg = Wrap360(azimuth_from_south / kDegToRad + 180.0);
+  // Topocentric (the observer's parallax is up to a degree for the moon), then horizontal.
+  const ln_lnlat_posn observer = Observer(latitude_deg, longitude_deg);
+  const Horizontal h = ToHorizontal(Topocentric(geocentric, geocentric_km / 149597870.7, observer, 0.0, julian_day_utc),
+                                    observer, julian_day_utc, NutationAt(jde));
+  moon.elevation_deg = h.elevation_deg;
+  moon.azimuth_deg = h.azimuth_deg;
   // From the observer: the geocentric distance less the observer's offset towards the moon
   // (Earth radius times the sine of the elevation, to first order).
-  moon.distance_km = geocentric_km - 6371.0 * std::max(-1.0, std::min(1.0, sin_elevation));
+  moon.distance_km = geocentric_km - 6371.0 * std::clamp(h.sin_elevation, -1.0, 1.0);
   return moon;
 }
 
