@@ -35,6 +35,10 @@ namespace atmo::cli {
 struct CommonOptions {
   std::string model = "hillaire";
   std::string preset = "earth";
+  // Whether --model and --preset were given (the daylighting commands default to source4d on
+  // us-standard).
+  bool model_given = false;
+  bool preset_given = false;
   std::string config;  // a JSON parameters file; when set, `preset` is not used
   std::string backend = "cpu";
   int threads = 0;  // 0: oneTBB's default
@@ -292,5 +296,35 @@ struct IlluminanceCommand {
   bool no_stars = false;             // leave the stars out of the night sky's column
 };
 int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& command);
+
+// `atmo irradiance`: the sun's and sky's light on planes (atmo::ComputeIrradiance), one CSV row per
+// sun and plane (or per sun, plane and wavelength with --per-wavelength).
+struct IrradianceCommand {
+  std::vector<double> sun_elevations_deg = {30.0};
+  double sun_azimuth_deg = 180.0;
+  std::optional<double> altitude_m;  // default: parameters.observer_altitude_m
+  SunOptions sun;                    // --date: one row per plane for the sun of that instant and place
+  // TILT:AZIMUTH in degrees, or "sun" (a plane facing the sun). Default: horizontal and facing the
+  // sun (GHI, DHI and DNI).
+  std::vector<std::string> planes = {"0:180", "sun"};
+  double circumsolar_deg = 2.5;
+  bool spectral = false;  // W m^-2 nm^-1 per wavelength instead of lux and W m^-2
+  std::string out_path;   // empty: standard output
+};
+int RunIrradiance(const CommonOptions& common, const IrradianceCommand& command);
+// `atmo calibrate`: the clear sky (aerosol optical depth and albedo) that reproduces a measured
+// direct-normal and diffuse-horizontal illuminance (atmo::CalibrateClearSky), as a config file.
+struct CalibrateCommand {
+  std::optional<double> sun_elevation_deg;
+  double sun_azimuth_deg = 180.0;
+  SunOptions sun;  // --date: the sun (and its distance) of that instant and place
+  std::optional<double> altitude_m;
+  double direct_normal_lux = 0.0;
+  double diffuse_horizontal_lux = 0.0;
+  double circumsolar_deg = 2.5;
+  double tolerance_percent = 0.5;
+  std::string out_path;  // the calibrated parameters, JSON (atmo render --config)
+};
+int RunCalibrate(const CommonOptions& common, const CalibrateCommand& command);
 
 }  // namespace atmo::cli

@@ -10,6 +10,8 @@
 //   atmo precompute --model elek --out NAME          (writes NAME.exr, NAME.raw, NAME.json, ...)
 //   atmo precompute --model hillaire --out NAME      (writes NAME.json, NAME_<table>.exr, .raw)
 //   atmo illuminance [--sun-elevation E ...] [--altitude A]   (lux on a horizontal plane, CSV)
+//   atmo irradiance [--sun-elevation E ...] [--plane TILT:AZIMUTH|sun ...] [--spectral] [--out F.csv]
+//   atmo calibrate (--sun-elevation E | --date ...) --direct-normal-lux X --diffuse-horizontal-lux Y --out sky.json
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
 // of that instant and place; render also --until ISO --step DURATION [--mp4 F]: a time-lapse.
@@ -353,6 +355,69 @@ int main(int argc, char** argv) {
                             "leave the airglow and zodiacal light out of night_sky_* and the global (the stars stay: "
                             "--no-stars)");
 
+  atmo::cli::IrradianceCommand irradiance;
+  CLI::App* irradiance_app = app.add_subcommand(
+      "irradiance", "the sun's and sky's light on planes: direct, circumsolar, sky diffuse, ground-reflected (CSV)");
+  AddCommonOptions(irradiance_app, common);
+  irradiance_app
+      ->add_option("--sun-elevation", irradiance.sun_elevations_deg,
+                   "sun elevation(s) in degrees, e.g. --sun-elevation 10 30 60")
+      ->check(kFinite)
+      ->check(RangeOf(-90.0, 90.0))
+      ->capture_default_str();
+  AddNumber(irradiance_app, "--sun-azimuth", irradiance.sun_azimuth_deg, "sun compass azimuth in degrees (0 north, 90 east)")
+      ->capture_default_str();
+  AddOptionalNumber(irradiance_app, "--altitude", irradiance.altitude_m,
+                    "observer altitude in metres [default: the preset's]")
+      ->check(RangeOf(-atmo::kMaxAltitude_m, atmo::kMaxAltitude_m));
+  irradiance_app
+      ->add_option("--plane", irradiance.planes,
+                   "planes as TILT:AZIMUTH in degrees (tilt 0 faces up, 90 is vertical; azimuth the way the "
+                   "plane faces, 0 north) or sun (facing the sun)")
+      ->capture_default_str();
+  AddNumber(irradiance_app, "--circumsolar", irradiance.circumsolar_deg,
+            "half-angle in degrees of the circumsolar region around the sun (a pyrheliometer's 2.5)")
+      ->check(RangeOf(0.0, 10.0))
+      ->capture_default_str();
+  irradiance_app->add_flag("--per-wavelength", irradiance.spectral,
+                           "one row per wavelength in W m^-2 nm^-1 instead of lux and W m^-2 over 360-830 nm");
+  irradiance_app->add_option("--out", irradiance.out_path, "write the CSV to this file instead of standard output");
+  CLI::Option* irradiance_date = AddSunOptions(irradiance_app, irradiance.sun);
+  irradiance_date->excludes(irradiance_app->get_option("--sun-elevation"))
+      ->excludes(irradiance_app->get_option("--sun-azimuth"));
+
+  atmo::cli::CalibrateCommand calibrate;
+  CLI::App* calibrate_app = app.add_subcommand(
+      "calibrate", "the clear sky (aerosol optical depth and albedo) of a measured direct and diffuse illuminance");
+  AddCommonOptions(calibrate_app, common);
+  AddOptionalNumber(calibrate_app, "--sun-elevation", calibrate.sun_elevation_deg, "sun elevation in degrees")
+      ->check(RangeOf(1.0, 90.0));
+  AddNumber(calibrate_app, "--sun-azimuth", calibrate.sun_azimuth_deg, "sun compass azimuth in degrees")
+      ->capture_default_str();
+  AddOptionalNumber(calibrate_app, "--altitude", calibrate.altitude_m,
+                    "the station's altitude in metres [default: the preset's]");
+  AddNumber(calibrate_app, "--direct-normal-lux", calibrate.direct_normal_lux,
+            "measured direct normal illuminance (a pyrheliometer's: the disc and 2.5 degrees around it)")
+      ->required()
+      ->check(RangeOf(0.0, 2e5));
+  AddNumber(calibrate_app, "--diffuse-horizontal-lux", calibrate.diffuse_horizontal_lux,
+            "measured diffuse horizontal illuminance (a shaded pyranometer's)")
+      ->required()
+      ->check(RangeOf(0.0, 2e5));
+  AddNumber(calibrate_app, "--circumsolar", calibrate.circumsolar_deg,
+            "half-angle in degrees of the pyrheliometer's view, whose aureole counts as direct")
+      ->check(RangeOf(0.0, 10.0))
+      ->capture_default_str();
+  AddNumber(calibrate_app, "--tolerance", calibrate.tolerance_percent,
+            "relative agreement asked of both illuminances, in percent")
+      ->check(RangeOf(0.01, 10.0))
+      ->capture_default_str();
+  calibrate_app->add_option("--out", calibrate.out_path, "the calibrated parameters, JSON (atmo render --config)")
+      ->required();
+  CLI::Option* calibrate_date = AddSunOptions(calibrate_app, calibrate.sun);
+  calibrate_date->excludes(calibrate_app->get_option("--sun-elevation"))
+      ->excludes(calibrate_app->get_option("--sun-azimuth"));
+
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;
   for (CLI::App* table_app : {render_app, sample_app, bench_app}) {
@@ -377,6 +442,10 @@ int main(int argc, char** argv) {
                        "  atmo precompute --model hillaire --altitude 100 --sun-elevation 20 --out sky   (sky.json, "
                        "sky_<table>.exr, .raw)" + lists},
       {illuminance_app, "Example:\n  atmo illuminance --preset earth-spectral --sun-elevation 10 30 60" + lists},
+      {irradiance_app, "Example (model source4d on us-standard unless given):\n  atmo irradiance --sun-elevation 40 "
+                       "--plane 0:180 --plane 35:180 --plane 90:90 --plane sun" + lists},
+      {calibrate_app, "Example (model source4d on us-standard unless given):\n  atmo calibrate --sun-elevation 45 "
+                      "--direct-normal-lux 80000 --diffuse-horizontal-lux 14000 --out sky.json" + lists},
   };
   for (const auto& [sub, footer] : footers) {
     sub->footer(footer);
@@ -422,6 +491,12 @@ int main(int argc, char** argv) {
     }
   }
   if (render_app->parsed()) atmo::cli::FinishRenderFlags(render_app, render, render_flags);
+  for (CLI::App* sub : app.get_subcommands()) {
+    const CLI::Option* model_flag = sub->get_option_no_throw("--model");
+    const CLI::Option* preset_flag = sub->get_option_no_throw("--preset");
+    common.model_given = model_flag != nullptr && model_flag->count() > 0;
+    common.preset_given = preset_flag != nullptr && preset_flag->count() > 0;
+  }
 
   try {
     std::optional<oneapi::tbb::global_control> thread_limit;
@@ -439,6 +514,8 @@ int main(int argc, char** argv) {
     if (bench_app->parsed()) return atmo::cli::RunBench(common, bench);
     if (precompute_app->parsed()) return atmo::cli::RunPrecompute(common, precompute);
     if (illuminance_app->parsed()) return atmo::cli::RunIlluminance(common, illuminance);
+    if (irradiance_app->parsed()) return atmo::cli::RunIrradiance(common, irradiance);
+    if (calibrate_app->parsed()) return atmo::cli::RunCalibrate(common, calibrate);
     return 2;
   } catch (const atmo::Error& error) {
     PrintError(error.what());
