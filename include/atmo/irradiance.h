@@ -34,6 +34,7 @@
 
 #include "atmo/model.h"
 #include "atmo/parameters.h"
+#include "atmo/sky_patches.h"
 
 namespace atmo {
 
@@ -75,6 +76,12 @@ struct IrradianceSettings {
   int circumsolar_subdivisions = 16;
   // Multiplies every component: 1 / d^2 for an Earth-sun distance d in au (SunPosition::distance_au).
   double sun_scale = 1.0;
+  // Sky patches (include/atmo/sky_patches.h): when given, the sky is sampled on each patch split
+  // into patch_samples x patch_samples cells (the polar cap into patch_samples rings of 6 x
+  // patch_samples) instead of the zenith-azimuth grid, and IrradianceResult::patch_radiance holds
+  // each patch's mean radiance. Not owned.
+  const SkyPatches* patches = nullptr;
+  int patch_samples = 3;  // in [1, 16]
 };
 
 struct IrradianceResult {
@@ -83,6 +90,9 @@ struct IrradianceResult {
   std::vector<double> direct_normal;
   // One entry per requested plane, in order.
   std::vector<IrradianceComponents> planes;
+  // With IrradianceSettings::patches: the mean radiance of each patch (the sun disc excluded, the
+  // aureole included), channel_count() values per patch, times sun_scale.
+  std::vector<double> patch_radiance;
 };
 
 // Throws atmo::Error for step counts outside [2, 4096], settings outside their ranges, a tilt
