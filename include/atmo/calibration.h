@@ -85,11 +85,40 @@ struct CalibrationResult {
 CalibrationResult CalibrateClearSky(const AtmosphereParameters& base, double altitude_m, const glm::dvec3& sun,
                                     const DaylightMeasurement& measured, const CalibrationSettings& settings = {});
 
-// The aerosol of `base` replaced by `type` at optical depth `aod_550`, its single-scattering
-// albedo shifted so that it is `single_scattering_albedo_550` at 550 nm (NaN: the type's own).
-// Throws atmo::Error for invalid values.
+// The aerosol of `base` replaced by `type` at optical depth `aod_550`: the type's OPAC column at
+// its typical optical depth (ApplyAerosol) with every Mie coefficient scaled by aod_550 / typical,
+// so that the profile's shape stays and the optical depth of any path is linear in aod_550; its
+// single-scattering albedo shifted so that it is `single_scattering_albedo_550` at 550 nm (NaN:
+// the type's own). Throws atmo::Error for invalid values.
 AtmosphereParameters WithAerosol(const AtmosphereParameters& base, const std::string& type, double aod_550,
                                  double single_scattering_albedo_550);
+// The sun's transmitted light at a station as a function of the aerosol optical depth (WithAerosol):
+// the slant optical depths of the air and gases and of the aerosol at the type's typical amount,
+// each by a 1000-step quadrature, then exact for any optical depth.
+class DirectLight {
+ public:
+  // sun_scale: 1 / d^2 (au). Throws atmo::Error as WithAerosol does.
+  DirectLight(const AtmosphereParameters& base, const std::string& type, double altitude_m, const glm::dvec3& sun,
+              double sun_scale = 1.0);
+  // Per channel, per unit solar irradiance, times sun_scale.
+  std::vector<double> DirectNormal(double aod_550) const;
+  double Lux(double aod_550) const;
+  // The optical depth in [0, kMaxAerosolOpticalDepth] whose direct light is `lux` (the bound
+  // reached when none is).
+  double OpticalDepthFor(double lux) const;
+
+ private:
+  std::vector<double> air_;      // transmittance without aerosol
+  std::vector<double> aerosol_;  // the aerosol's slant optical depth per unit aod_550
+  std::vector<double> weights_;  // lux per unit relative irradiance, per channel
+  double sun_scale_ = 1.0;
+};
+
+// The options the daylighting computations give a model: source4d marches every direction
+// (sky_view=off) unless `options` choose, because its sky-view table costs about 0.6 s per sun on
+// two cores while the few thousand directions of an irradiance integral cost a tenth of that.
+ModelOptions DaylightModelOptions(const std::string& model, ModelOptions options);
+
 // The single-scattering albedo of the parameters' Mie medium at 550 nm (interpolated linearly in
 // wavelength between the channels around it; the nearest channel outside their range).
 double MieSingleScatteringAlbedo550(const AtmosphereParameters& parameters);

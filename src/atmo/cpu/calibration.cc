@@ -11,6 +11,7 @@
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/irradiance.h"
+#include "atmo/sky_patches.h"
 #include "physics/shared_parameters.h"
 #include "printable.h"
 
@@ -82,6 +83,11 @@ std::string_view ToString(CalibrationStatus status) {
   return "unknown";
 }
 
+ModelOptions DaylightModelOptions(const std::string& model, ModelOptions options) {
+  if (model == "source4d" && options.find("sky_view") == options.end()) options["sky_view"] = "off";
+  return options;
+}
+
 double MieSingleScatteringAlbedo550(const AtmosphereParameters& p) {
   std::vector<double> albedo(p.channel_count(), 1.0);
   for (std::size_t c = 0; c < albedo.size(); ++c) {
@@ -93,12 +99,21 @@ double MieSingleScatteringAlbedo550(const AtmosphereParameters& p) {
 
 AtmosphereParameters WithAerosol(const AtmosphereParameters& base, const std::string& type, double aod_550,
                                  double single_scattering_albedo_550) {
+  if (!(std::isfinite(aod_550) && aod_550 >= 0.0 && aod_550 <= kMaxAerosolOpticalDepth)) {
+    throw Error("aerosol optical depth " + FormatNumber(aod_550) + " at 550 nm is outside [0, 10]");
+  }
   AtmosphereParameters p = base;
   AerosolSettings aerosol;
   aerosol.type = type;
-  aerosol.aod_550 = aod_550;
+  const double typical = AerosolTypicalOpticalDepth(type);
+  aerosol.aod_550 = typical;
   ApplyAerosol(p, aerosol);
-  if (std::isnan(single_scattering_albedo_550)) return p;
+  const double k = aod_550 / typical;
+  for (std::size_t c = 0; c < p.channel_count(); ++c) {
+    p.mie.scattering_per_m[c] *= k;
+    p.mie.absorption_per_m[c] *= k;
+  }
+  if (std::isnan(single_scattering_albedo_550) || aod_550 == 0.0) return p;
   if (!(single_scattering_albedo_550 >= 0.0 && single_scattering_albedo_550 <= 1.0)) {
     throw Error("the single-scattering albedo must be in [0, 1], got " + FormatNumber(single_scattering_albedo_550));
   }
@@ -111,6 +126,56 @@ AtmosphereParameters WithAerosol(const AtmosphereParameters& base, const std::st
     p.mie.absorption_per_m[c] = extinction - p.mie.scattering_per_m[c];
   }
   return p;
+}
+
+DirectLight::DirectLight(const AtmosphereParameters& base, const std::string& type, double altitude_m,
+                         const glm::dvec3& sun, double sun_scale)
+    : sun_scale_(sun_scale) {
+  const double typical = AerosolTypicalOpticalDepth(type);
+  const AtmosphereParameters with = WithAerosol(base, type, typical, std::numeric_limits<double>::quiet_NaN());
+  AtmosphereParameters without = with;
+  std::fill(without.mie.scattering_per_m.begin(), without.mie.scattering_per_m.end(), 0.0);
+  std::fill(without.mie.absorption_per_m.begin(), without.mie.absorption_per_m.end(), 0.0);
+  const std::vector<double> t_with = SunTransmittance(with, altitude_m, sun);
+  air_ = SunTransmittance(without, altitude_m, sun);
+  aerosol_.resize(air_.size());
+  for (std::size_t c = 0; c < air_.size(); ++c) {
+    aerosol_[c] = air_[c] > 0.0 && t_with[c] > 0.0 ? std::log(air_[c] / t_with[c]) / typical
+                                                   : std::numeric_limits<double>::infinity();
+  }
+  const SpectralConversion convert(base.wavelengths_nm);
+  weights_.resize(air_.size());
+  for (std::size_t c = 0; c < air_.size(); ++c) {
+    std::vector<double> unit(air_.size(), 0.0);
+    unit[c] = 1.0;
+    weights_[c] = convert.Luminance(unit);
+  }
+}
+
+std::vector<double> DirectLight::DirectNormal(double aod_550) const {
+  std::vector<double> out(air_.size());
+  for (std::size_t c = 0; c < out.size(); ++c) {
+    out[c] = air_[c] > 0.0 ? sun_scale_ * air_[c] * std::exp(-aod_550 * aerosol_[c]) : 0.0;
+  }
+  return out;
+}
+
+double DirectLight::Lux(double aod_550) const {
+  const std::vector<double> t = DirectNormal(aod_550);
+  double sum = 0.0;
+  for (std::size_t c = 0; c < t.size(); ++c) sum += weights_[c] * t[c];
+  return sum;
+}
+
+double DirectLight::OpticalDepthFor(double lux) const {
+  double lo = 0.0, hi = kMaxAerosolOpticalDepth;
+  if (lux >= Lux(lo)) return lo;
+  if (lux <= Lux(hi)) return hi;
+  for (int i = 0; i < 64 && hi - lo > 1e-9; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (Lux(mid) > lux ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 CalibrationResult CalibrateClearSky(const AtmosphereParameters& base, double altitude_m, const glm::dvec3& sun,
@@ -144,14 +209,17 @@ CalibrationResult CalibrateClearSky(const AtmosphereParameters& base, double alt
   const double m_direct = measured.direct_normal_lux;
   const double m_diffuse = measured.diffuse_horizontal_lux;
   const std::string& type = settings.aerosol_type;
-  const auto quadrature_direct = [&](double aod) {
-    return settings.sun_scale *
-           convert.Luminance(SunTransmittance(WithAerosol(base, type, aod, std::numeric_limits<double>::quiet_NaN()),
-                                              altitude_m, s));
-  };
+  const DirectLight direct(base, type, altitude_m, s, settings.sun_scale);
+  const auto quadrature_direct = [&](double aod) { return direct.Lux(aod); };
 
   CalibrationResult result;
+  // The sky sampled by Tregenza patches, 3 x 3 each (within 0.5 % of the fine grid,
+  // tests/irradiance_test.cc), each direction marched.
+  const SkyPatches patches = SkyPatches::Reinhart(1);
   IrradianceSettings irradiance;
+  irradiance.patches = &patches;
+  irradiance.patch_samples = 3;
+  irradiance.circumsolar_subdivisions = 8;
   irradiance.circumsolar_half_angle_deg = settings.circumsolar_half_angle_deg;
   irradiance.sun_scale = settings.sun_scale;
   const Plane planes[] = {Plane::Horizontal(), Plane::FacingSun()};
@@ -159,7 +227,7 @@ CalibrationResult CalibrateClearSky(const AtmosphereParameters& base, double alt
   // One model per (aod, albedo): a full precomputation.
   const auto evaluate = [&](double albedo) {
     const AtmosphereParameters p = WithAerosol(base, type, aod, albedo);
-    const std::unique_ptr<Model> model = CreateModel(settings.model, p, settings.options);
+    const std::unique_ptr<Model> model = CreateModel(settings.model, p, DaylightModelOptions(settings.model, settings.options));
     ++result.model_builds;
     const std::unique_ptr<SkyView> view = model->View(altitude_m, s);
     const IrradianceResult e = ComputeIrradiance(*view, p, planes, irradiance);
@@ -204,12 +272,7 @@ CalibrationResult CalibrateClearSky(const AtmosphereParameters& base, double alt
                     "the direct normal " + Lux(m_direct) + " is less than an aerosol optical depth of 10 transmits: "
                     "not a clear sky (clouds or fog)");
     }
-    double lo = 0.0, hi = kMaxAerosolOpticalDepth;
-    for (int i = 0; i < 60 && hi - lo > 1e-7; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (quadrature_direct(mid) > target ? lo : hi) = mid;
-    }
-    aod = 0.5 * (lo + hi);
+    aod = direct.OpticalDepthFor(target);
 
     // The albedo whose diffuse light is the measured one: regula falsi (Illinois) on a bracket.
     const auto close = [&](const Evaluation& e) { return std::abs(e.diffuse_lux - m_diffuse) <= tol * m_diffuse; };
