@@ -326,5 +326,21 @@ struct CalibrateCommand {
   std::string out_path;  // the calibrated parameters, JSON (atmo render --config)
 };
 int RunCalibrate(const CommonOptions& common, const CalibrateCommand& command);
+// `atmo annual`: a weather file's hours as calibrated skies (atmo::AnnualSkies, atmo::RunAnnual):
+// parts in --out-dir, merged into sky.mtx, hours.csv and irradiance.csv once every hour is done.
+struct AnnualCommand {
+  std::string epw_path;
+  std::string out_dir;
+  std::vector<std::string> planes;  // TILT:AZIMUTH or sun, besides the horizontal and the sun-facing
+  int subdivision = 1;              // Reinhart MF
+  int patch_samples = 2;
+  double circumsolar_deg = 2.5;
+  std::string hours;  // A:B, file hours [A, B); empty: all
+  std::string shard;  // I/N; empty: 0/1
+  bool no_sun_in_matrix = false;
+  std::optional<double> latitude_deg;   // must agree with the file's
+  std::optional<double> longitude_deg;
+};
+int RunAnnual(const CommonOptions& common, const AnnualCommand& command);
 
 }  // namespace atmo::cli

@@ -1,16 +1,20 @@
 // `atmo irradiance` (the light on planes, include/atmo/irradiance.h) and `atmo calibrate` (the clear
 // sky of a measured hour, include/atmo/calibration.h): the daylighting commands (docs/daylighting.md).
+#include <chrono>
 #include <cstdio>
+#include <tuple>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "atmo/annual.h"
 #include "atmo/calibration.h"
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/irradiance.h"
 #include "atmo/render.h"
+#include "atmo/weather.h"
 #include "commands.h"
 
 namespace atmo::cli {
@@ -170,6 +174,90 @@ int RunCalibrate(const CommonOptions& given, const CalibrateCommand& command) {
   WriteText(command.out_path, ToJson(result.parameters));
   std::printf("%s; %d models of %s; wrote %s\n", result.message.c_str(), result.model_builds, common.model.c_str(),
               command.out_path.c_str());
+  return 0;
+}
+
+namespace {
+
+// "A:B" with 0 <= A < B (B may be past the file's end).
+std::pair<std::size_t, std::size_t> ParseHours(const std::string& text) {
+  const std::size_t colon = text.find(':');
+  try {
+    if (colon == std::string::npos || text.find_first_not_of("0123456789:") != std::string::npos) throw std::invalid_argument("");
+    const std::size_t a = std::stoul(text.substr(0, colon));
+    const std::size_t b = std::stoul(text.substr(colon + 1));
+    if (b <= a) throw std::invalid_argument("");
+    return {a, b};
+  } catch (const std::logic_error&) {
+    throw Error("--hours must be A:B with 0 <= A < B (the file's hours from 0), got '" + text + "'");
+  }
+}
+
+// "I/N" with 0 <= I < N.
+std::pair<int, int> ParseShard(const std::string& text) {
+  const std::size_t slash = text.find('/');
+  try {
+    if (slash == std::string::npos || text.find_first_not_of("0123456789/") != std::string::npos) throw std::invalid_argument("");
+    const int i = std::stoi(text.substr(0, slash));
+    const int n = std::stoi(text.substr(slash + 1));
+    if (n < 1 || i >= n || n > 100000) throw std::invalid_argument("");
+    return {i, n};
+  } catch (const std::logic_error&) {
+    throw Error("--shard must be I/N with 0 <= I < N <= 100000, got '" + text + "'");
+  }
+}
+
+}  // namespace
+
+int RunAnnual(const CommonOptions& given, const AnnualCommand& command) {
+  const CommonOptions common = DaylightDefaults(given, given.model_given, given.preset_given);
+  CheckBackend(common);
+  const AerosolRequest& aerosol = common.aerosol;
+  if (aerosol.aod_550 || aerosol.angstrom_exponent || aerosol.visibility_km || aerosol.linke_turbidity) {
+    throw Error("atmo annual fits each hour's aerosol amount itself: give only --aerosol TYPE");
+  }
+  std::vector<Plane> planes;
+  for (const std::string& text : command.planes) planes.push_back(ParsePlane(text));
+  AnnualRun run;
+  run.out_dir = command.out_dir;
+  if (!command.hours.empty()) std::tie(run.first_hour, run.end_hour) = ParseHours(command.hours);
+  if (!command.shard.empty()) std::tie(run.shard, run.shards) = ParseShard(command.shard);
+  CommonOptions without_aerosol = common;
+  without_aerosol.aerosol = {};
+  const AtmosphereParameters parameters = LoadParameters(without_aerosol);
+  WeatherFile weather = ReadEpw(command.epw_path);
+  const WeatherLocation& place = weather.location;
+  if (command.latitude_deg && std::abs(*command.latitude_deg - place.latitude_deg) > 0.1) {
+    throw Error(command.epw_path + ": its latitude " + Format("%.2f", place.latitude_deg) + " disagrees with --latitude " +
+                Format("%.2f", *command.latitude_deg));
+  }
+  if (command.longitude_deg && std::abs(*command.longitude_deg - place.longitude_deg) > 0.1) {
+    throw Error(command.epw_path + ": its longitude " + Format("%.2f", place.longitude_deg) + " disagrees with --longitude " +
+                Format("%.2f", *command.longitude_deg));
+  }
+  AnnualSettings settings;
+  settings.model = common.model;
+  settings.options = ParseModelOptions(common.options);
+  if (aerosol.type) settings.aerosol_type = *aerosol.type;
+  settings.planes = planes;
+  settings.sky_subdivision = command.subdivision;
+  settings.patch_samples = command.patch_samples;
+  settings.circumsolar_half_angle_deg = command.circumsolar_deg;
+  settings.sun_in_matrix = !command.no_sun_in_matrix;
+  AnnualSkies skies(parameters, std::move(weather), settings);
+  const auto start = std::chrono::steady_clock::now();
+  const AnnualRunReport report = atmo::RunAnnual(skies, run, [](const std::string& message) {
+    std::fprintf(stderr, "atmo: annual: %s\n", message.c_str());
+  });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("annual: %zu hours computed (%zu of the selection already done) with %d models of %s in %.1f s; ",
+              report.computed, report.already_done, report.models_built, common.model.c_str(), seconds);
+  if (report.merged) {
+    std::printf("wrote %s/sky.mtx, hours.csv and irradiance.csv\n", command.out_dir.c_str());
+  } else {
+    std::printf("%zu of the file's %zu hours done: run the other shards (or rerun) to finish\n", report.file_done,
+                skies.weather().hours.size());
+  }
   return 0;
 }
 

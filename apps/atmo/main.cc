@@ -11,6 +11,7 @@
 //   atmo precompute --model hillaire --out NAME      (writes NAME.json, NAME_<table>.exr, .raw)
 //   atmo illuminance [--sun-elevation E ...] [--altitude A]   (lux on a horizontal plane, CSV)
 //   atmo irradiance [--sun-elevation E ...] [--plane TILT:AZIMUTH|sun ...] [--spectral] [--out F.csv]
+//   atmo annual --epw F.epw --out-dir DIR [--plane TILT:AZIMUTH ...] [--hours A:B] [--shard I/N]
 //   atmo calibrate (--sun-elevation E | --date ...) --direct-normal-lux X --diffuse-horizontal-lux Y --out sky.json
 // render, sample and bench also take --table NAME: load the elek table NAME instead of computing it.
 // render, sample and bench also take --date ISO --latitude DEG --longitude DEG [--refraction]: the sun
@@ -418,6 +419,34 @@ int main(int argc, char** argv) {
   calibrate_date->excludes(calibrate_app->get_option("--sun-elevation"))
       ->excludes(calibrate_app->get_option("--sun-azimuth"));
 
+  atmo::cli::AnnualCommand annual;
+  CLI::App* annual_app = app.add_subcommand(
+      "annual", "a weather file's hours as calibrated skies: Radiance sky matrix and irradiance per plane");
+  AddCommonOptions(annual_app, common);
+  annual_app->add_option("--epw", annual.epw_path, "the EnergyPlus weather file (EPW)")->required();
+  annual_app->add_option("--out-dir", annual.out_dir, "the run's folder: parts, run.json and, once complete, sky.mtx, "
+                                                      "hours.csv, irradiance.csv")->required();
+  annual_app->add_option("--plane", annual.planes,
+                         "planes for irradiance.csv as TILT:AZIMUTH in degrees or sun, besides the horizontal and the "
+                         "sun-facing plane");
+  annual_app->add_option("--subdivision", annual.subdivision, "Reinhart's MF: 1 (145 patches), 2 (577), 4 (2305)")
+      ->check(CLI::IsMember({1, 2, 4}))
+      ->capture_default_str();
+  annual_app->add_option("--patch-samples", annual.patch_samples, "sky samples per patch side")
+      ->check(kInteger)
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  AddNumber(annual_app, "--circumsolar", annual.circumsolar_deg,
+            "half-angle in degrees of the pyrheliometer's view, whose aureole counts as direct")
+      ->check(RangeOf(0.0, 10.0))
+      ->capture_default_str();
+  annual_app->add_option("--hours", annual.hours, "only the file's hours A:B (from 0, B excluded)");
+  annual_app->add_option("--shard", annual.shard, "only the whole days whose number modulo N is I (I/N), for job arrays");
+  annual_app->add_flag("--no-sun-in-matrix", annual.no_sun_in_matrix,
+                       "leave the sun's direct light out of the matrix's patches (the sky alone)");
+  AddOptionalNumber(annual_app, "--latitude", annual.latitude_deg, "check that the file is for this latitude (degrees)");
+  AddOptionalNumber(annual_app, "--longitude", annual.longitude_deg, "check that the file is for this longitude (degrees east)");
+
   // --table NAME: the elek model's option table=NAME (load an exported table instead of computing).
   std::string table;
   for (CLI::App* table_app : {render_app, sample_app, bench_app}) {
@@ -444,6 +473,9 @@ int main(int argc, char** argv) {
       {illuminance_app, "Example:\n  atmo illuminance --preset earth-spectral --sun-elevation 10 30 60" + lists},
       {irradiance_app, "Example (model source4d on us-standard unless given):\n  atmo irradiance --sun-elevation 40 "
                        "--plane 0:180 --plane 35:180 --plane 90:90 --plane sun" + lists},
+      {annual_app, "Example (model source4d on us-standard unless given):\n  atmo annual --epw site.epw --out-dir "
+                   "year --plane 30:180\n  atmo annual --epw site.epw --out-dir year --shard 3/16   (one job of an array)" +
+                       lists},
       {calibrate_app, "Example (model source4d on us-standard unless given):\n  atmo calibrate --sun-elevation 45 "
                       "--direct-normal-lux 80000 --diffuse-horizontal-lux 14000 --out sky.json" + lists},
   };
@@ -516,6 +548,7 @@ int main(int argc, char** argv) {
     if (illuminance_app->parsed()) return atmo::cli::RunIlluminance(common, illuminance);
     if (irradiance_app->parsed()) return atmo::cli::RunIrradiance(common, irradiance);
     if (calibrate_app->parsed()) return atmo::cli::RunCalibrate(common, calibrate);
+    if (annual_app->parsed()) return atmo::cli::RunAnnual(common, annual);
     return 2;
   } catch (const atmo::Error& error) {
     PrintError(error.what());

@@ -79,6 +79,14 @@ class SpectralConversion {
 glm::dvec3 XyzToLinearSrgb(const glm::dvec3& xyz);
 glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb);
 
+// Radiance's (Ward's Radiance lighting system) RGB: its primaries (x, y) = (0.640, 0.330),
+// (0.290, 0.600), (0.150, 0.060) with an equal-energy white, in its "watts" of 179 lm each, so
+// that its luminance 179 (0.265 R + 0.670 G + 0.065 B) is the colour's Y. `xyz_cd_m2`: CIE XYZ with
+// Y in cd/m^2 (or lux). The inverse converts back.
+inline constexpr double kRadianceWhiteEfficacy = 179.0;
+glm::dvec3 XyzToRadianceRgb(const glm::dvec3& xyz_cd_m2);
+glm::dvec3 RadianceRgbToXyz(const glm::dvec3& rgb);
+
 // The colour of a converted image.
 enum class ImageColour {
   kLinearSrgb,  // R, G, B: linear Rec.709 / sRGB (D65), Y in cd/m^2

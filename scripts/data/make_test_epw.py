@@ -12,8 +12,10 @@ data source field as TMY3 gives them, first letter only).
 
 The fields are mapped as EnergyPlus's weather converter maps TMY3 (EnergyPlus Auxiliary Programs,
 "Weather Converter Program"): time 01:00..24:00 is the hour ending then, in local standard time;
-pressure mbar -> Pa, visibility m -> km, precipitable water cm -> mm; what TMY3 lacks is EPW's
-missing code.
+pressure mbar -> Pa, visibility m -> km, precipitable water cm -> mm, and the illuminances x 100
+(TMY3 keeps them in hundreds of lux despite its "(lx)" headers: 826 at a direct normal irradiance of
+820 W m^-2); the zenith luminance, whose unit the file does not make clear, and what TMY3 lacks are
+EPW's missing codes.
 
 Usage: make_test_epw.py 723170TYA.CSV > tests/data/greensboro_tmy3.epw
 """
@@ -51,8 +53,8 @@ def main(path):
                   get(r, "Dry-bulb (C)"), get(r, "Dew-point (C)"), int(get(r, "RHum (%)")),
                   int(get(r, "Pressure (mbar)") * 100), int(get(r, "ETR (W/m^2)")), int(get(r, "ETRN (W/m^2)")), 9999,
                   int(get(r, "GHI (W/m^2)")), int(get(r, "DNI (W/m^2)")), int(get(r, "DHI (W/m^2)")),
-                  int(get(r, "GH illum (lx)")), int(get(r, "DN illum (lx)")), int(get(r, "DH illum (lx)")),
-                  int(get(r, "Zenith lum (cd/m^2)")), int(get(r, "Wdir (degrees)")), get(r, "Wspd (m/s)"),
+                  int(get(r, "GH illum (lx)") * 100), int(get(r, "DN illum (lx)") * 100),
+                  int(get(r, "DH illum (lx)") * 100), 9999, int(get(r, "Wdir (degrees)")), get(r, "Wspd (m/s)"),
                   int(get(r, "TotCld (tenths)")), int(get(r, "OpqCld (tenths)")), get(r, "Hvis (m)", 0.001),
                   int(get(r, "CeilHgt (m)")), 9, 999999999, int(round(get(r, "Pwat (cm)", 10.0))),
                   f"{get(r, 'AOD (unitless)'):.4f}", 999, 99, f"{get(r, 'Alb (unitless)'):.3f}",

@@ -131,6 +131,31 @@ double SpectralConversion::SpectralRadiance(std::size_t channel, double relative
 }
 
 glm::dvec3 XyzToLinearSrgb(const glm::dvec3& xyz) { return kXyzToSrgb * xyz; }
+
+namespace {
+
+// The columns are the XYZ of R = 1, G = 1 and B = 1, scaled so that R = G = B = 1 is the
+// equal-energy white X = Y = Z = 1 (then times the white efficacy).
+glm::dmat3 RadianceRgbToXyzMatrix() {
+  const double xy[3][2] = {{0.640, 0.330}, {0.290, 0.600}, {0.150, 0.060}};
+  glm::dmat3 primaries;
+  for (int i = 0; i < 3; ++i) primaries[i] = glm::dvec3(xy[i][0] / xy[i][1], 1.0, (1.0 - xy[i][0] - xy[i][1]) / xy[i][1]);
+  const glm::dvec3 scale = glm::inverse(primaries) * glm::dvec3(1.0);
+  for (int i = 0; i < 3; ++i) primaries[i] *= scale[i] * kRadianceWhiteEfficacy;
+  return primaries;
+}
+
+}  // namespace
+
+glm::dvec3 RadianceRgbToXyz(const glm::dvec3& rgb) {
+  static const glm::dmat3 m = RadianceRgbToXyzMatrix();
+  return m * rgb;
+}
+
+glm::dvec3 XyzToRadianceRgb(const glm::dvec3& xyz_cd_m2) {
+  static const glm::dmat3 m = glm::inverse(RadianceRgbToXyzMatrix());
+  return m * xyz_cd_m2;
+}
 glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb) { return glm::inverse(kXyzToSrgb) * rgb; }
 
 std::vector<glm::vec3> ColourWeights(const SpectralConversion& convert, ImageColour colour) {
