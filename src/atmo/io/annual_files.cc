@@ -111,7 +111,13 @@ std::string PartLines(const AnnualSkies& skies, const SpectralConversion& conver
     out += "M," + std::to_string(h.hour);
     for (std::size_t r = 0; r < h.patch_radiance.size() / n; ++r) {
       const std::span<const double> radiance(&h.patch_radiance[r * n], n);
-      const glm::dvec3 rgb = XyzToRadianceRgb(kMaxLuminousEfficacy * convert.Xyz(radiance));
+      const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.Xyz(radiance);
+      glm::dvec3 rgb = XyzToRadianceRgb(xyz);
+      // A colour outside Radiance's gamut (a negative component) is moved towards the grey of its
+      // luminance until it is inside, its luminance kept.
+      const double lowest = std::min({rgb.x, rgb.y, rgb.z});
+      const double grey = xyz.y / kRadianceWhiteEfficacy;
+      if (lowest < 0.0) rgb = grey > 0.0 ? glm::max(grey + (grey / (grey - lowest)) * (rgb - grey), 0.0) : glm::dvec3(0.0);
       for (int k = 0; k < 3; ++k) out.append(1, ',').append(G(rgb[k]));
     }
     out += "\n";
