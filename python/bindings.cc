@@ -823,6 +823,10 @@ void SetThreads(int threads) {
 }  // namespace
 }  // namespace atmo::python
 
+namespace atmo::python {
+void AddDaylightBindings(py::module_& m);  // daylight_bindings.cc
+}  // namespace atmo::python
+
 PYBIND11_MODULE(_atmo, m) {
   using namespace atmo;
   using namespace atmo::python;
@@ -1015,6 +1019,7 @@ PYBIND11_MODULE(_atmo, m) {
       },
       py::arg("date"), py::arg("latitude_deg"), py::arg("longitude_deg"));
   m.def("set_threads", &SetThreads, py::arg("threads"));
+  AddDaylightBindings(m);
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);
   m.def("aerosol_types", &AerosolTypeNames);

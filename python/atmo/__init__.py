@@ -52,6 +52,11 @@ __all__ = [
     "aerosol_types",
     "set_max_memory",
     "max_memory",
+    "irradiance",
+    "calibrate",
+    "read_epw",
+    "annual",
+    "annual_on_dask",
     "CAMERAS",
     "UNITS",
 ]
@@ -637,6 +642,121 @@ def max_memory() -> int:
 def preset(name: str) -> dict:
     """A preset's parameters as the JSON of docs/parameters.md (edit it and pass it as config=)."""
     return json.loads(_atmo.preset_json(name))
+
+
+def _parameters_json(preset: Optional[str], config, aerosol: Optional[str] = None) -> str:
+    """The JSON of docs/parameters.md for a preset name, a config file or a dict (one of them)."""
+    if preset is not None and config is not None:
+        raise ValueError("give preset or config, not both")
+    if isinstance(config, Mapping):
+        return json.dumps(config)
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            return f.read()
+    return _atmo.preset_json(preset or "us-standard")
+
+
+def _planes(planes) -> list:
+    """Planes as (tilt, azimuth) pairs or "sun", for the C++ side as (tilt, azimuth, tracks_sun)."""
+    out = []
+    for plane in planes:
+        if isinstance(plane, str):
+            if plane != "sun":
+                raise ValueError(f"a plane is (tilt_deg, azimuth_deg) or 'sun' (got {plane!r})")
+            out.append((0.0, 0.0, True))
+        else:
+            tilt, azimuth = plane
+            out.append((float(tilt), float(azimuth), False))
+    return out
+
+
+def _options(options) -> dict:
+    return {str(k): _option_text(str(k), v) for k, v in (options or {}).items()}
+
+
+def irradiance(sun_elevation_deg: float, sun_azimuth_deg: float = 180.0, *, planes=((0.0, 180.0), "sun"),
+               model: str = "source4d", preset: Optional[str] = None, config=None, options=None,
+               altitude_m: float = 0.0, circumsolar_deg: float = 2.5, sun_scale: float = 1.0) -> dict:
+    """The sun's and sky's light on planes, as `atmo irradiance` (include/atmo/irradiance.h): for
+    each plane ((tilt_deg, azimuth_deg) or "sun"), direct, circumsolar, sky_diffuse,
+    ground_reflected and global, each as _lux, _w_m2 (360-830 nm) and _spectral (W m^-2 nm^-1 per
+    wavelength). Model source4d on us-standard unless given; sun_scale 1/d^2 for a dated sun."""
+    return dict(_atmo.irradiance(model, _parameters_json(preset, config), _options(options), float(altitude_m),
+                                 float(sun_elevation_deg), float(sun_azimuth_deg), _planes(planes),
+                                 float(circumsolar_deg), float(sun_scale)))
+
+
+def calibrate(direct_normal_lux: float, diffuse_horizontal_lux: float, sun_elevation_deg: float,
+              sun_azimuth_deg: float = 180.0, *, model: str = "source4d", preset: Optional[str] = None, config=None,
+              options=None, aerosol: str = "continental-average", altitude_m: float = 0.0,
+              circumsolar_deg: float = 2.5, tolerance: float = 0.005, sun_scale: float = 1.0) -> dict:
+    """The clear sky that reproduces a measured direct-normal (pyrheliometer) and diffuse-horizontal
+    illuminance, as `atmo calibrate` (include/atmo/calibration.h): status ("clear", or why no clear
+    sky gives them), aod_550, omega_550, the model's direct_normal_lux and diffuse_horizontal_lux,
+    message, and parameters_json (a config for Model(config=json.loads(...)))."""
+    return dict(_atmo.calibrate(model, _parameters_json(preset, config), _options(options), aerosol,
+                                float(altitude_m), float(sun_elevation_deg), float(sun_azimuth_deg),
+                                float(direct_normal_lux), float(diffuse_horizontal_lux), float(circumsolar_deg),
+                                float(tolerance), float(sun_scale)))
+
+
+def read_epw(path: Union[str, os.PathLike]) -> dict:
+    """An EnergyPlus weather file (include/atmo/weather.h): {"location": {...}, "hours": {field:
+    NumPy array}}, with year, month, day, hour (1-24, the hour ending then), julian_day_utc (the
+    middle of the hour), the irradiances (W m^-2), illuminances (lux), pressure_pa and albedo;
+    missing values are NaN."""
+    return dict(_atmo.read_epw(os.fspath(path)))
+
+
+def annual(epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *, model: str = "source4d",
+           preset: Optional[str] = None, config=None, options=None, aerosol: str = "continental-average",
+           planes=(), subdivision: int = 1, patch_samples: int = 2, circumsolar_deg: float = 2.5,
+           sun_in_matrix: bool = True, hours: Optional[tuple] = None, shard: tuple = (0, 1)) -> dict:
+    """One run (or shard) of `atmo annual` (include/atmo/annual.h): the selected hours of the
+    weather file as calibrated skies, written as parts into out_dir, skipped when already there;
+    out_dir/sky.mtx, hours.csv and irradiance.csv once every hour of the file is done. hours: (A, B),
+    the file's hours A..B-1; shard: (I, N), the whole days whose number modulo N is I. Returns
+    {selected, already_done, computed, file_done, models_built, merged}. Deterministic: any split
+    into shards writes the bytes of one serial run."""
+    first, end = (0, 2**63) if hours is None else (int(hours[0]), int(hours[1]))
+    return dict(_atmo.annual(os.fspath(epw), os.fspath(out_dir), model, _parameters_json(preset, config),
+                             _options(options), aerosol, _planes(planes), int(subdivision), int(patch_samples),
+                             float(circumsolar_deg), bool(sun_in_matrix), first, end, int(shard[0]), int(shard[1])))
+
+
+def annual_on_dask(client, epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *,
+                   shards: Optional[int] = None, retries: int = 3, progress=None, **kwargs) -> dict:
+    """A year of `annual` on a Dask cluster (Debian's python3-distributed): `shards` tasks (default
+    four per worker thread), each atmo.annual(..., shard=(i, shards)) on some worker, retried up to
+    `retries` times if its worker dies (a retried shard skips the hours its parts already hold),
+    then the outputs merged here. progress(done, total), when given, is called as shards finish.
+    Every worker must see out_dir (a shared file system) and import atmo. Returns {"shards": the
+    reports, "merged": whether out_dir now holds the outputs}."""
+    from distributed import as_completed  # noqa: PLC0415 (optional dependency)
+
+    if shards is None:
+        shards = max(1, 4 * sum(client.nthreads().values()))
+    futures = [client.submit(annual, os.fspath(epw), os.fspath(out_dir), shard=(i, shards), retries=retries,
+                             pure=False, key=f"atmo-annual-{i}-of-{shards}", **kwargs)
+               for i in range(shards)]
+    reports = [None] * shards
+    index = {f.key: i for i, f in enumerate(futures)}
+    for done, future in enumerate(as_completed(futures), start=1):
+        reports[index[future.key]] = future.result()
+        if progress is not None:
+            progress(done, shards)
+    merge_keys = {k: kwargs[k] for k in ("model", "preset", "config", "options", "aerosol", "planes", "subdivision",
+                                         "patch_samples", "circumsolar_deg", "sun_in_matrix") if k in kwargs}
+    merged = _annual_merge(epw, out_dir, **merge_keys)
+    return {"shards": reports, "merged": merged}
+
+
+def _annual_merge(epw, out_dir, *, model: str = "source4d", preset: Optional[str] = None, config=None, options=None,
+                  aerosol: str = "continental-average", planes=(), subdivision: int = 1, patch_samples: int = 2,
+                  circumsolar_deg: float = 2.5, sun_in_matrix: bool = True) -> bool:
+    return bool(_atmo.annual_merge(os.fspath(epw), os.fspath(out_dir), model, _parameters_json(preset, config),
+                                   _options(options), aerosol, _planes(planes), int(subdivision), int(patch_samples),
+                                   float(circumsolar_deg), bool(sun_in_matrix)))
 
 
 def __dir__() -> list:
