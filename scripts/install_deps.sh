@@ -9,8 +9,8 @@
 # With --tests it also installs what only the tests run: blender, which renders
 # `atmo render --target blender` maps in tests/engine_target_test.cc (a large package, so the
 # README's first command, which builds and runs only the CLI, leaves it out), python3-distributed
-# (Dask), on which tests/python run annual skies on a local cluster, and imagemagick, whose reader
-# reads back the Radiance HDR sky maps in tests/annual_test.cc. stellarium-data is the
+# (Dask), on which tests/python run annual skies on a local cluster, and openimageio-tools, whose
+# oiiotool reads back the Radiance HDR sky maps in tests/annual_test.cc. stellarium-data is the
 # star catalogue that atmo reads at run time for its night skies (docs/night.md; GPL-2+, not
 # shipped); with --no-install-recommends it does not pull Stellarium itself.
 set -euo pipefail
@@ -33,7 +33,7 @@ PACKAGES=(
   stellarium-data
 )
 if [ "${1:-}" = "--tests" ]; then
-  PACKAGES+=(blender python3-distributed imagemagick)
+  PACKAGES+=(blender python3-distributed openimageio-tools)
 fi
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   PACKAGES+=(nodejs npm)

@@ -335,5 +335,61 @@ TEST_F(Folder, SkyMatrixIsRadiancesFormat) {
   EXPECT_EQ(values, static_cast<std::size_t>(rows) * columns * components);
 }
 
+// An hour's sky map: integrated as an angular fisheye (each pixel's solid angle pi sin(pi r) / r
+// times its area, r its distance from the centre), its luminance x cos(zenith) is the horizontal
+// sky light within 2 %; read back by OpenImageIO's oiiotool (Debian's openimageio-tools, a reader
+// atmo did not write), the files hold the map within RGBE's precision (1 %), and each hour has its
+// Radiance scene with the sun as a source.
+TEST_F(Folder, SkyMapsHoldTheSkyAndRadianceReadsThem) {
+  AnnualSettings settings = FastSettings();
+  settings.sky_map_size = 96;
+  AnnualSkies year(Preset("us-standard"), ReadEpw(Write("day.epw", EpwExcerpt(4320, 24))), settings);
+  const std::vector<std::size_t> hours = {9, 12, 19};
+  const std::vector<HourSky> skies = year.Compute(hours);
+  const SpectralConversion convert(year.base().wavelengths_nm);
+  for (const HourSky& sky : skies) {
+    ASSERT_EQ(sky.sky_map.width, 96);
+    double sum = 0.0;
+    const int size = 96;
+    for (int y = 0; y < size; ++y) {
+      for (int x = 0; x < size; ++x) {
+        glm::dvec3 d;
+        if (!SkyMapDirection(x, y, size, d)) continue;
+        const double r = std::hypot((x + 0.5) / size - 0.5, 0.5 - (y + 0.5) / size);
+        const double omega = std::numbers::pi * std::sin(std::numbers::pi * r) / r / (size * size);
+        const glm::dvec3 rgb(sky.sky_map.at(x, y, 0), sky.sky_map.at(x, y, 1), sky.sky_map.at(x, y, 2));
+        sum += RadianceRgbToXyz(rgb).y * omega * d.z;
+      }
+    }
+    const double expected = convert.Luminance(sky.planes[0].circumsolar) + convert.Luminance(sky.planes[0].sky_diffuse);
+    EXPECT_NEAR(sum, expected, 0.02 * expected) << sky.hour;
+  }
+  ASSERT_FALSE(RunAnnual(year, AnnualRun{dir_ / "out", 12, 13, 0, 1}).merged);
+  const fs::path map = dir_ / "out" / "maps" / "sky_0012.hdr";
+  ASSERT_TRUE(fs::exists(map));
+  const std::string scene = ReadFile(dir_ / "out" / "maps" / "sky_0012.rad");
+  EXPECT_NE(scene.find("solar source sun"), std::string::npos);
+  EXPECT_NE(scene.find("sky_0012.hdr atmo_sky.cal sky_u sky_v"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "maps" / "atmo_sky.cal"));
+  if (std::system("command -v oiiotool >/dev/null 2>&1") != 0) GTEST_SKIP() << "oiiotool (openimageio-tools) not installed";
+  const fs::path dump = dir_ / "dump.txt";
+  ASSERT_EQ(std::system(("oiiotool --dumpdata '" + map.string() + "' > '" + dump.string() + "'").c_str()), 0);
+  std::istringstream in(ReadFile(dump));
+  std::string line;
+  int pixels = 0;
+  const HourSky& noon = skies[1];
+  while (std::getline(in, line)) {
+    int x, y;
+    float r, g, b;
+    if (std::sscanf(line.c_str(), " Pixel (%d, %d): %f %f %f", &x, &y, &r, &g, &b) != 5) continue;
+    ++pixels;
+    const float expected[3] = {noon.sky_map.at(x, y, 0), noon.sky_map.at(x, y, 1), noon.sky_map.at(x, y, 2)};
+    const float got[3] = {r, g, b};
+    const float largest = std::max({expected[0], expected[1], expected[2]});
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], expected[c], 0.01f * largest + 1e-6f) << x << " " << y;
+  }
+  EXPECT_EQ(pixels, 96 * 96);
+}
+
 }  // namespace
 }  // namespace atmo

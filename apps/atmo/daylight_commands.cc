@@ -244,6 +244,7 @@ int RunAnnual(const CommonOptions& given, const AnnualCommand& command) {
   settings.patch_samples = command.patch_samples;
   settings.circumsolar_half_angle_deg = command.circumsolar_deg;
   settings.sun_in_matrix = !command.no_sun_in_matrix;
+  settings.sky_map_size = command.sky_maps;
   AnnualSkies skies(parameters, std::move(weather), settings);
   const auto start = std::chrono::steady_clock::now();
   const AnnualRunReport report = atmo::RunAnnual(skies, run, [](const std::string& message) {

@@ -442,6 +442,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   annual_app->add_option("--hours", annual.hours, "only the file's hours A:B (from 0, B excluded)");
   annual_app->add_option("--shard", annual.shard, "only the whole days whose number modulo N is I (I/N), for job arrays");
+  annual_app->add_option("--sky-maps", annual.sky_maps,
+                         "also write each hour's sky as maps/sky_HHHH.hdr (an angular fisheye this many pixels a side) "
+                         "and its Radiance scene maps/sky_HHHH.rad")
+      ->check(kInteger)
+      ->check(CLI::Range(16, 4096));
   annual_app->add_flag("--no-sun-in-matrix", annual.no_sun_in_matrix,
                        "leave the sun's direct light out of the matrix's patches (the sky alone)");
   AddOptionalNumber(annual_app, "--latitude", annual.latitude_deg, "check that the file is for this latitude (degrees)");

@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "atmo/image.h"
 #include "atmo/irradiance.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -61,6 +62,8 @@ struct AnnualSettings {
   double min_single_scattering_albedo = 0.5;  // below: status dim
   double min_sun_elevation_deg = 1.0;
   bool sun_in_matrix = true;  // add the sun's direct light to the patch that holds it (as gendaymtx does)
+  // > 0: each hour with light also gets HourSky::sky_map, this many pixels a side (at most 4096).
+  int sky_map_size = 0;
 };
 
 enum class HourStatus { kNight, kMissing, kLowSun, kClear, kCloudy, kOvercast, kDim };
@@ -87,7 +90,18 @@ struct HourSky {
   // Per channel: the ground (Lambertian, lit by the global horizontal), then each sky patch's mean
   // radiance, the sun included when sun_in_matrix; channel_count() values each. Empty at night.
   std::vector<double> patch_radiance;
+  // The overcast part's zenith radiance, per unit solar irradiance at every channel (0 without one).
+  double overcast_zenith = 0.0;
+  // With AnnualSettings::sky_map_size: the sky above the horizon as an angular fisheye (the zenith
+  // at the centre, the horizon on the inscribed circle, north up and east right as seen from
+  // above; 0 outside), in Radiance RGB radiance (include/atmo/colour.h), the sun disc left out
+  // (the scene description makes it a source), its aureole kept.
+  Image sky_map;
 };
+
+// The direction of a sky map's pixel (x, y) of `size` (rows from the top), and whether it lies in
+// the circle.
+bool SkyMapDirection(int x, int y, int size, glm::dvec3& direction);
 
 class AnnualSkies {
  public:
@@ -153,6 +167,12 @@ struct AnnualRunReport {
 AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
                           const std::function<void(const std::string& message)>& progress = {});
 
+// With sky maps (AnnualSettings::sky_map_size), each hour with light also gets
+// out_dir/maps/sky_HHHH.hdr (its map, HHHH the file's hour from 0) and sky_HHHH.rad (the scene:
+// the sun as a `light` source of 0.533 degrees, the map on a `glow` sky through
+// out_dir/maps/atmo_sky.cal, the ground a uniform `glow` of albedo x global / pi), written before
+// the part that marks the hour done.
+//
 // Writes out_dir/sky.mtx (Radiance's sky matrix: the ground then the patches, one column per hour
 // of the file, Radiance RGB), hours.csv (each hour's sun, status and calibration) and
 // irradiance.csv (each daylight hour's components per plane) from the parts, atomically, when

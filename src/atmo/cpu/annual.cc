@@ -16,6 +16,7 @@
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/render.h"
+#include "atmo/spectrum.h"
 #include "atmo/sun_position.h"
 #include "printable.h"
 
@@ -52,7 +53,38 @@ void Accumulate(IrradianceComponents& into, const IrradianceComponents& e, doubl
   AddScaled(into.ground_reflected, e.ground_reflected, w);
 }
 
+// The map's pixels' directions (inside the circle) and their indices.
+struct MapPixels {
+  std::vector<glm::dvec3> directions;
+  std::vector<std::size_t> pixels;
+};
+
+MapPixels SkyMapPixels(int size) {
+  MapPixels out;
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      glm::dvec3 d;
+      if (SkyMapDirection(x, y, size, d)) {
+        out.directions.push_back(d);
+        out.pixels.push_back(static_cast<std::size_t>(y) * size + x);
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
+
+bool SkyMapDirection(int x, int y, int size, glm::dvec3& direction) {
+  const double dx = (x + 0.5) / size - 0.5;
+  const double dy = 0.5 - (y + 0.5) / size;
+  const double r = std::hypot(dx, dy);
+  if (r > 0.5) return false;
+  const double theta = r * std::numbers::pi;
+  const double phi = std::atan2(dx, dy);
+  direction = glm::dvec3(std::sin(theta) * std::sin(phi), std::sin(theta) * std::cos(phi), std::cos(theta));
+  return true;
+}
 
 std::string_view ToString(HourStatus status) {
   switch (status) {
@@ -85,6 +117,7 @@ AnnualSkies::AnnualSkies(AtmosphereParameters base, WeatherFile weather, AnnualS
     throw Error("the smallest albedo must be in [0, the largest node)");
   }
   if (settings_.patch_samples < 1 || settings_.patch_samples > 16) throw Error("the samples per patch side must be in [1, 16]");
+  if (settings_.sky_map_size < 0 || settings_.sky_map_size > 4096) throw Error("the sky map size must be in [0, 4096]");
   if (!(settings_.min_sun_elevation_deg >= 0.0 && settings_.min_sun_elevation_deg <= 10.0)) {
     throw Error("the lowest calibrated sun elevation must be in [0, 10] degrees");
   }
@@ -145,6 +178,26 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
     }
   };
 
+  const MapPixels map = SkyMapPixels(settings_.sky_map_size);
+  // An hour's map from its clear part's relative radiance per map direction (or none) and its
+  // overcast part.
+  const auto make_map = [&](HourSky& sky, const std::vector<double>* clear_part) {
+    const int size = settings_.sky_map_size;
+    if (size == 0) return;
+    sky.sky_map = Image(size, size, 3);
+    std::vector<double> l(n);
+    for (std::size_t k = 0; k < map.pixels.size(); ++k) {
+      const double overcast = sky.overcast_zenith * (1.0 + 2.0 * map.directions[k].z) / 3.0;
+      for (std::size_t c = 0; c < n; ++c) l[c] = overcast + (clear_part ? (*clear_part)[k * n + c] : 0.0);
+      const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.Xyz(l);
+      glm::dvec3 rgb = XyzToRadianceRgb(xyz);
+      const double lowest = std::min({rgb.x, rgb.y, rgb.z});
+      const double grey = xyz.y / kRadianceWhiteEfficacy;
+      if (lowest < 0.0) rgb = grey > 0.0 ? glm::max(grey + (grey / (grey - lowest)) * (rgb - grey), 0.0) : glm::dvec3(0.0);
+      for (int c = 0; c < 3; ++c) sky.sky_map.pixels[map.pixels[k] * 3 + c] = static_cast<float>(rgb[c]);
+    }
+  };
+
   // The overcast part of an hour, per unit zenith radiance (sun_scale applied by the caller).
   const auto overcast_unit = [&](const glm::dvec3& sun) {
     const OvercastSky sky(sun, n);
@@ -160,6 +213,7 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
     if (sky.overcast_lux > 0.0) {
       const IrradianceResult unit = overcast_unit(sun);
       const double z = sky.overcast_lux / lux(unit.planes[0].sky_diffuse);
+      sky.overcast_zenith = z;
       for (std::size_t p = 0; p < planes.size(); ++p) Accumulate(parts[p], unit.planes[p], z);
       AddScaled(patch, unit.patch_radiance, z);
     }
@@ -234,6 +288,7 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
                                                                            std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
                                                                            std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)}),
              {}, {});
+      make_map(sky, nullptr);
       finished();
       continue;
     }
@@ -341,6 +396,19 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
       std::vector<double> direct_normal = p.direct->DirectNormal(aod);
       for (double& v : direct_normal) v *= clear;
       finish(sky, p.sun, std::move(parts), std::move(patch), direct_normal);
+      if (settings_.sky_map_size > 0) {
+        std::vector<double> clear_part(map.directions.size() * n, 0.0);
+        std::vector<float> radiance(map.directions.size() * n);
+        for (int i = 0; i < 2; ++i) {
+          for (int j = 0; j < 2; ++j) {
+            if (weights[i][j] == 0.0) continue;
+            models[i][j]->View(altitude_m, p.sun)->RadianceBatch(map.directions, RadianceTerms{false, false}, radiance);
+            const double w = clear * weights[i][j] * sky.sun_scale;
+            for (std::size_t k = 0; k < clear_part.size(); ++k) clear_part[k] += w * radiance[k];
+          }
+        }
+        make_map(sky, &clear_part);
+      }
       finished();
     });
     std::vector<std::size_t> slots;

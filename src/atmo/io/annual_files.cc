@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
@@ -14,6 +15,7 @@
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/render.h"
 #include "atmo/spectrum.h"
 #include "printable.h"
 
@@ -65,6 +67,7 @@ std::string Fingerprint(const AnnualSkies& skies) {
   j["min_single_scattering_albedo"] = s.min_single_scattering_albedo;
   j["min_sun_elevation_deg"] = s.min_sun_elevation_deg;
   j["sun_in_matrix"] = s.sun_in_matrix;
+  j["sky_map_size"] = s.sky_map_size;
   return j.dump(2) + "\n";
 }
 
@@ -122,6 +125,55 @@ std::string PartLines(const AnnualSkies& skies, const SpectralConversion& conver
     }
     out += "\n";
   }
+  return out;
+}
+
+// Radiance's function file for the maps: (u, v) in the picture of a direction (Dx, Dy, Dz).
+constexpr const char* kSkyCal =
+    "{ atmo_sky.cal: where a direction falls in the sky maps of atmo annual (docs/daylighting.md):\n"
+    "  angular fisheye pictures, the zenith at the centre, the horizon on the inscribed circle,\n"
+    "  north up and east right as seen from above. }\n"
+    "sky_r = acos(Dz) / PI;\n"
+    "sky_h = sqrt(Dx * Dx + Dy * Dy);\n"
+    "sky_u = .5 + if(sky_h - 1e-9, sky_r * Dx / sky_h, 0);\n"
+    "sky_v = .5 + if(sky_h - 1e-9, sky_r * Dy / sky_h, 0);\n";
+
+std::string HourName(std::size_t hour) {
+  char name[32];
+  std::snprintf(name, sizeof name, "sky_%04zu", hour);
+  return name;
+}
+
+// The scene of one hour, as gendaylit writes a sky: the sun a 0.533-degree `light` source, the sky
+// a `glow` through the map, the ground a uniform `glow`.
+std::string HourScene(const AnnualSkies& skies, const SpectralConversion& convert, const HourSky& h) {
+  const std::size_t n = skies.channel_count();
+  const WeatherHour& w = skies.weather().hours[h.hour];
+  const auto rgb_of = [&](std::span<const double> relative) {
+    glm::dvec3 rgb = XyzToRadianceRgb(kMaxLuminousEfficacy * convert.Xyz(relative));
+    return glm::max(rgb, 0.0);
+  };
+  std::string out = "# atmo annual: " + Printable(skies.weather().path.filename().string()) + ", hour " +
+                    std::to_string(h.hour) + " (" + std::to_string(w.year) + "-" + std::to_string(w.month) + "-" +
+                    std::to_string(w.day) + ", the hour ending " + std::to_string(w.hour) +
+                    ":00 local standard time), status " + std::string(ToString(h.status)) + "\n# sun elevation " +
+                    G(h.sun_elevation_deg) + ", azimuth " + G(h.sun_azimuth_deg) + " (compass); aod_550 " +
+                    G(h.aod_550) + ", omega_550 " + G(h.single_scattering_albedo_550) + "\n# +X east, +Y north, +Z up\n";
+  const std::vector<double>& direct = h.planes.size() > 1 ? h.planes[1].direct : std::vector<double>{};
+  const bool sun = !direct.empty() && h.sun_elevation_deg > 0.0;
+  if (sun) {
+    const double radius = glm::radians(0.533 / 2.0);
+    const double omega = 2.0 * std::numbers::pi * (1.0 - std::cos(radius));
+    const glm::dvec3 rgb = rgb_of(direct) / omega;
+    const glm::dvec3 d = SunDirection(h.sun_elevation_deg, h.sun_azimuth_deg);
+    out += "\nvoid light solar\n0\n0\n3 " + G(rgb.x) + " " + G(rgb.y) + " " + G(rgb.z) + "\n\nsolar source sun\n0\n0\n4 " +
+           G(d.x) + " " + G(d.y) + " " + G(d.z) + " 0.533\n";
+  }
+  const glm::dvec3 ground = rgb_of(std::span<const double>(h.patch_radiance.data(), n));
+  out += "\nvoid colorpict sky_map\n7 red green blue " + HourName(h.hour) +
+         ".hdr atmo_sky.cal sky_u sky_v\n0\n0\n\nsky_map glow sky_glow\n0\n0\n4 1 1 1 0\n\nsky_glow source sky\n0\n0\n"
+         "4 0 0 1 180\n\nvoid glow ground_glow\n0\n0\n4 " +
+         G(ground.x) + " " + G(ground.y) + " " + G(ground.z) + " 0\n\nground_glow source ground\n0\n0\n4 0 0 -1 180\n";
   return out;
 }
 
@@ -235,6 +287,12 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
     }
   }
   const SpectralConversion convert(skies.base().wavelengths_nm);
+  const bool maps = skies.settings().sky_map_size > 0;
+  if (maps) {
+    fs::create_directories(run.out_dir / "maps", error);
+    if (error) throw Error("cannot make the folder " + Printable((run.out_dir / "maps").string()) + ": " + error.message());
+    WriteText(run.out_dir / "maps" / "atmo_sky.cal", kSkyCal);
+  }
   const int built_before = skies.models_built();
   std::size_t written = 0;
   skies.Compute(
@@ -248,6 +306,10 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
         std::string text;
         std::size_t first = group.front().hour, last = group.front().hour;
         for (const HourSky& h : group) {
+          if (maps && h.sky_map.width > 0) {
+            WriteRadianceHdr(run.out_dir / "maps" / (HourName(h.hour) + ".hdr"), h.sky_map);
+            WriteText(run.out_dir / "maps" / (HourName(h.hour) + ".rad"), HourScene(skies, convert, h));
+          }
           text += PartLines(skies, convert, h);
           first = std::min(first, h.hour);
           last = std::max(last, h.hour);
