@@ -728,17 +728,22 @@ def annual(epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *, mo
 
 
 def annual_on_dask(client, epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *,
-                   shards: Optional[int] = None, retries: int = 3, progress=None, **kwargs) -> dict:
+                   shards: Optional[int] = None, retries: int = 3, progress=None,
+                   threads_per_worker: Optional[int] = None, **kwargs) -> dict:
     """A year of `annual` on a Dask cluster (Debian's python3-distributed): `shards` tasks (default
-    four per worker thread), each atmo.annual(..., shard=(i, shards)) on some worker, retried up to
+    one per worker thread: each shard builds the table nodes its hours need, so fewer shards cost
+    less), each atmo.annual(..., shard=(i, shards)) on some worker, retried up to
     `retries` times if its worker dies (a retried shard skips the hours its parts already hold),
     then the outputs merged here. progress(done, total), when given, is called as shards finish.
     Every worker must see out_dir (a shared file system) and import atmo. Returns {"shards": the
-    reports, "merged": whether out_dir now holds the outputs}."""
+    reports, "merged": whether out_dir now holds the outputs}. threads_per_worker: atmo's threads in
+    each worker (atmo.set_threads), so that workers sharing a machine do not oversubscribe it."""
     from distributed import as_completed  # noqa: PLC0415 (optional dependency)
 
+    if threads_per_worker is not None:
+        client.run(set_threads, int(threads_per_worker))
     if shards is None:
-        shards = max(1, 4 * sum(client.nthreads().values()))
+        shards = max(1, sum(client.nthreads().values()))
     futures = [client.submit(annual, os.fspath(epw), os.fspath(out_dir), shard=(i, shards), retries=retries,
                              pure=False, key=f"atmo-annual-{i}-of-{shards}", **kwargs)
                for i in range(shards)]
