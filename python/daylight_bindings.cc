@@ -135,6 +135,13 @@ void AddDaylightBindings(py::module_& m) {
       py::arg("diffuse_horizontal_lux"), py::arg("circumsolar_deg"), py::arg("tolerance"), py::arg("sun_scale"));
 
   m.def(
+      "with_aerosol",
+      [](const std::string& parameters_json, const std::string& type, double aod_550, double omega_550) {
+        return ToJson(WithAerosol(FromJson(parameters_json), type, aod_550, omega_550));
+      },
+      py::arg("parameters_json"), py::arg("aerosol_type"), py::arg("aod_550"), py::arg("omega_550"));
+
+  m.def(
       "read_epw",
       [](const std::string& path) {
         const WeatherFile w = ReadEpw(path);

@@ -5,9 +5,18 @@
                                            us-standard, Tregenza + ground, a 30-degree south plane):
                                            wall time, models built, and how well the calibrated hours
                                            reproduce the file's direct and diffuse illuminance
-  scripts/annual_bench.py dask   DAYS      DAYS days of it on a Dask LocalCluster of 1 worker, then of
-                                           2 (one thread each): the speed-up
+  scripts/annual_bench.py dask   DAYS      DAYS summer days of it in 2 shards on a Dask LocalCluster
+                                           of 1 worker, then of 2 (one thread each, atmo's threads 1):
+                                           the speed-up, and whether both wrote the same bytes
   scripts/annual_bench.py stats  OUT_DIR   the statistics of an existing run's hours.csv
+  scripts/annual_bench.py blend  OUT_DIR   for 24 clear hours of that run: (a) its sky light on the
+                                           horizontal and the 30-degree plane against the model built
+                                           for the hour's aod_550 and omega_550 (atmo.with_aerosol):
+                                           how far the blend of table nodes is from the model at those
+                                           values; (b) for 8 of them, its global irradiance against an
+                                           exact calibration of the same hour (atmo.calibrate, then
+                                           atmo.irradiance): what a user of the run gets against
+                                           calibrating each hour with its own models
 
 Run from the repository root after a build (PYTHONPATH=build/python, /usr/bin/python3 for Debian's
 numpy and distributed). Prints the machine (CPU, cores) and its load with the figures.
@@ -95,7 +104,7 @@ def dask(days):
                                           dashboard_address=None, silence_logs=50) as cluster, \
                     distributed.Client(cluster) as client:
                 start = time.time()
-                result = annual_on_dask(client, epw, out, shards=2 * days, threads_per_worker=1, planes=[(30.0, 180.0)])
+                result = annual_on_dask(client, epw, out, shards=2, threads_per_worker=1, planes=[(30.0, 180.0)])
                 times[workers] = time.time() - start
                 assert result["merged"]
             print(f"{days} days on {workers} worker(s): {times[workers]:.1f} s")
@@ -103,7 +112,58 @@ def dask(days):
         print(f"speed-up 2 workers / 1: {times[1] / times[2]:.2f}x; sky.mtx identical: {same}")
 
 
+def blend(out_dir):
+    sys.path.insert(0, os.path.join(ROOT, "build", "python"))
+    import datetime
+    import json
+
+    import atmo
+
+    print(machine())
+    hours = [r for r in csv.DictReader(open(os.path.join(out_dir, "hours.csv"))) if r["status"] == "clear"]
+    hours = hours[:: max(1, len(hours) // 24)][:24]
+    planes = {}
+    for r in csv.DictReader(open(os.path.join(out_dir, "irradiance.csv"))):
+        planes[(r["hour"], r["plane"])] = r
+    errors = {"horizontal": [], "30:180": []}
+    for r in hours:
+        when = datetime.datetime(1970, 1, 1) + datetime.timedelta(days=float(r["julian_day_utc"]) - 2440587.5)
+        sun = atmo.sun_position(when.isoformat() + "Z", 36.10, -79.95)
+        config = atmo.with_aerosol(float(r["aod_550"]), float(r["omega_550"]), preset="us-standard")
+        exact = atmo.irradiance(float(r["sun_elevation_deg"]), float(r["sun_azimuth_deg"]), planes=[(0, 180), (30, 180)],
+                                config=config, altitude_m=273.0, sun_scale=1.0 / sun["distance_au"] ** 2)
+        for name, e in zip(("horizontal", "30:180"), exact["planes"]):
+            annual = planes[(r["hour"], name)]
+            ours = float(annual["circumsolar_lux"]) + float(annual["sky_diffuse_lux"])
+            theirs = e["circumsolar_lux"] + e["sky_diffuse_lux"]
+            errors[name].append(ours / theirs - 1)
+            if os.environ.get("ATMO_BLEND_DETAIL"):
+                print(r["hour"], r["sun_elevation_deg"][:5], r["aod_550"][:5], r["omega_550"][:5], name, f"{100 * (ours / theirs - 1):+.2f} %")
+    for name, v in errors.items():
+        a = sorted(abs(x) for x in v)
+        print(f"(a) {name:10s} sky light (circumsolar + diffuse), annual / model at its aod and omega - 1 over {len(v)} "
+              f"clear hours: median |e| {100 * a[len(a) // 2]:.2f} %, max {100 * a[-1]:.2f} %, mean e {100 * sum(v) / len(v):+.2f} %")
+    calibrated = {"horizontal": [], "30:180": []}
+    omega_shift = []
+    for r in hours[::3][:8]:
+        when = datetime.datetime(1970, 1, 1) + datetime.timedelta(days=float(r["julian_day_utc"]) - 2440587.5)
+        scale = 1.0 / atmo.sun_position(when.isoformat() + "Z", 36.10, -79.95)["distance_au"] ** 2
+        el, az = float(r["sun_elevation_deg"]), float(r["sun_azimuth_deg"])
+        c = atmo.calibrate(float(r["measured_direct_normal_lux"]), float(r["measured_diffuse_horizontal_lux"]), el, az,
+                           altitude_m=273.0, sun_scale=scale)
+        omega_shift.append(float(r["omega_550"]) - c["omega_550"])
+        exact = atmo.irradiance(el, az, planes=[(0, 180), (30, 180)], config=json.loads(c["parameters_json"]),
+                                altitude_m=273.0, sun_scale=scale)
+        for name, e in zip(("horizontal", "30:180"), exact["planes"]):
+            calibrated[name].append(float(planes[(r["hour"], name)]["global_lux"]) / e["global_lux"] - 1)
+    for name, v in calibrated.items():
+        a = sorted(abs(x) for x in v)
+        print(f"(b) {name:10s} global, annual / exact calibration - 1 over {len(v)} clear hours: "
+              f"median |e| {100 * a[len(a) // 2]:.2f} %, max {100 * a[-1]:.2f} %")
+    print(f"(b) omega_550 of the run minus the exact calibration's: {min(omega_shift):+.3f} to {max(omega_shift):+.3f}")
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] not in ("year", "dask", "stats"):
+    if len(sys.argv) != 3 or sys.argv[1] not in ("year", "dask", "stats", "blend"):
         sys.exit(__doc__)
-    {"year": year, "dask": lambda a: dask(int(a)), "stats": stats}[sys.argv[1]](sys.argv[2])
+    {"year": year, "dask": lambda a: dask(int(a)), "stats": stats, "blend": blend}[sys.argv[1]](sys.argv[2])

@@ -212,7 +212,7 @@ TEST_F(Folder, BlendOfNodesIsCloseToTheExactSky) {
     IrradianceSettings s;
     s.patches = &patches;
     s.patch_samples = settings.patch_samples;
-    s.circumsolar_subdivisions = 8;
+    s.circumsolar_subdivisions = 6;
     s.sun_scale = sky.sun_scale;
     std::vector<Plane> planes = {Plane::Horizontal(), Plane::FacingSun()};
     planes.insert(planes.end(), settings.planes.begin(), settings.planes.end());

@@ -49,6 +49,8 @@ constexpr Skipped kSkipped[] = {
     {"atmo render --model reference", "44 million paths: about a minute on two cores"},
     {"atmo render --option sky_view=off", "a per-pixel ray march of a 1280x720 frame: about 20 s on two cores"},
     {"atmo render --date 2026-06-21T04:00+02:00 --until", "a 109-frame time-lapse: about a minute"},
+    {"atmo annual --epw site.epw", "a year of the reader's weather file, about 15 min (tests/annual_test.cc and "
+                                   "tests/cli_daylight_test.cc run atmo annual on days of the repository's TMY3 file)"},
     {"cmake --install build", "installs this build outside the test folder (the package_install test "
                               "installs into build/package_test/prefix)"},
     {"cmake -S myproject", "a project of the reader's (package_cmake_consumer_build builds tests/consumer)"},

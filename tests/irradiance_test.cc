@@ -252,7 +252,7 @@ TEST_F(IrradianceOfModel, PatchQuadratureAgreesWithTheFineGrid) {
     IrradianceSettings coarse;
     coarse.patches = &patches;
     coarse.patch_samples = samples;
-    coarse.circumsolar_subdivisions = 8;
+    coarse.circumsolar_subdivisions = 6;
     for (double elevation : {8.0, 40.0, 70.0}) {
       const auto sky = model_->View(0.0, SunDirection(elevation, 170.0));
       const IrradianceResult fine = ComputeIrradiance(*sky, model_->parameters(), planes);

@@ -121,7 +121,9 @@ class AnnualSkies {
   // The skies of the given hours (indices into weather().hours), in the order given. `progress`,
   // when set, is called after each hour with the number done; `batch`, when set, with each group
   // of finished hours as soon as it is finished (the hours that need no model first, then those of
-  // each optical-depth bracket, at most 256 at a time), so that a caller can keep them.
+  // each optical-depth bracket, at most 256 at a time), so that a caller can keep them; the skies
+  // returned then hold only their scalars (no planes, patches or map), so that a year's memory
+  // stays that of a few hundred hours.
   std::vector<HourSky> Compute(std::span<const std::size_t> hours,
                                const std::function<void(std::size_t done)>& progress = {},
                                const std::function<void(std::span<const HourSky>)>& batch = {});

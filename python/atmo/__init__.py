@@ -55,6 +55,7 @@ __all__ = [
     "irradiance",
     "calibrate",
     "read_epw",
+    "with_aerosol",
     "annual",
     "annual_on_dask",
     "CAMERAS",
@@ -698,6 +699,16 @@ def calibrate(direct_normal_lux: float, diffuse_horizontal_lux: float, sun_eleva
                                 float(altitude_m), float(sun_elevation_deg), float(sun_azimuth_deg),
                                 float(direct_normal_lux), float(diffuse_horizontal_lux), float(circumsolar_deg),
                                 float(tolerance), float(sun_scale)))
+
+
+def with_aerosol(aod_550: float, omega_550: Optional[float] = None, *, aerosol: str = "continental-average",
+                 preset: Optional[str] = None, config=None) -> dict:
+    """The parameters (a config dict, docs/parameters.md) with the aerosol `calibrate` and `annual`
+    fit (include/atmo/calibration.h, WithAerosol): the type's column scaled to aod_550, its
+    single-scattering albedo shifted to omega_550 at 550 nm (None: the type's own). With an hour's
+    aod_550 and omega_550 from hours.csv, Model(config=...) is that hour's clear sky."""
+    omega = float("nan") if omega_550 is None else float(omega_550)
+    return json.loads(_atmo.with_aerosol(_parameters_json(preset, config), aerosol, float(aod_550), omega))
 
 
 def read_epw(path: Union[str, os.PathLike]) -> dict:
