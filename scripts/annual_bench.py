@@ -107,7 +107,9 @@ def dask(days):
                 result = annual_on_dask(client, epw, out, shards=2, threads_per_worker=1, planes=[(30.0, 180.0)])
                 times[workers] = time.time() - start
                 assert result["merged"]
-            print(f"{days} days on {workers} worker(s): {times[workers]:.1f} s")
+            models = [r["models_built"] for r in result["shards"]]
+            hours = [r["computed"] for r in result["shards"]]
+            print(f"{days} days on {workers} worker(s): {times[workers]:.1f} s (per shard: models {models}, hours {hours})")
         same = open(os.path.join(tmp, "out1", "sky.mtx"), "rb").read() == open(os.path.join(tmp, "out2", "sky.mtx"), "rb").read()
         print(f"speed-up 2 workers / 1: {times[1] / times[2]:.2f}x; sky.mtx identical: {same}")
 

@@ -86,6 +86,9 @@ glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb);
 inline constexpr double kRadianceWhiteEfficacy = 179.0;
 glm::dvec3 XyzToRadianceRgb(const glm::dvec3& xyz_cd_m2);
 glm::dvec3 RadianceRgbToXyz(const glm::dvec3& rgb);
+// XyzToRadianceRgb, a colour outside the gamut (a negative component) moved towards the grey of
+// its luminance until it is inside, its luminance kept; 0 for a luminance <= 0.
+glm::dvec3 XyzToRadianceRgbInGamut(const glm::dvec3& xyz_cd_m2);
 
 // The colour of a converted image.
 enum class ImageColour {

@@ -189,11 +189,7 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
     for (std::size_t k = 0; k < map.pixels.size(); ++k) {
       const double overcast = sky.overcast_zenith * (1.0 + 2.0 * map.directions[k].z) / 3.0;
       for (std::size_t c = 0; c < n; ++c) l[c] = overcast + (clear_part ? (*clear_part)[k * n + c] : 0.0);
-      const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.Xyz(l);
-      glm::dvec3 rgb = XyzToRadianceRgb(xyz);
-      const double lowest = std::min({rgb.x, rgb.y, rgb.z});
-      const double grey = xyz.y / kRadianceWhiteEfficacy;
-      if (lowest < 0.0) rgb = grey > 0.0 ? glm::max(grey + (grey / (grey - lowest)) * (rgb - grey), 0.0) : glm::dvec3(0.0);
+      const glm::dvec3 rgb = XyzToRadianceRgbInGamut(kMaxLuminousEfficacy * convert.Xyz(l));
       for (int c = 0; c < 3; ++c) sky.sky_map.pixels[map.pixels[k] * 3 + c] = static_cast<float>(rgb[c]);
     }
   };

@@ -114,13 +114,7 @@ std::string PartLines(const AnnualSkies& skies, const SpectralConversion& conver
     out += "M," + std::to_string(h.hour);
     for (std::size_t r = 0; r < h.patch_radiance.size() / n; ++r) {
       const std::span<const double> radiance(&h.patch_radiance[r * n], n);
-      const glm::dvec3 xyz = kMaxLuminousEfficacy * convert.Xyz(radiance);
-      glm::dvec3 rgb = XyzToRadianceRgb(xyz);
-      // A colour outside Radiance's gamut (a negative component) is moved towards the grey of its
-      // luminance until it is inside, its luminance kept.
-      const double lowest = std::min({rgb.x, rgb.y, rgb.z});
-      const double grey = xyz.y / kRadianceWhiteEfficacy;
-      if (lowest < 0.0) rgb = grey > 0.0 ? glm::max(grey + (grey / (grey - lowest)) * (rgb - grey), 0.0) : glm::dvec3(0.0);
+      const glm::dvec3 rgb = XyzToRadianceRgbInGamut(kMaxLuminousEfficacy * convert.Xyz(radiance));
       for (int k = 0; k < 3; ++k) out.append(1, ',').append(G(rgb[k]));
     }
     out += "\n";
@@ -150,8 +144,7 @@ std::string HourScene(const AnnualSkies& skies, const SpectralConversion& conver
   const std::size_t n = skies.channel_count();
   const WeatherHour& w = skies.weather().hours[h.hour];
   const auto rgb_of = [&](std::span<const double> relative) {
-    glm::dvec3 rgb = XyzToRadianceRgb(kMaxLuminousEfficacy * convert.Xyz(relative));
-    return glm::max(rgb, 0.0);
+    return XyzToRadianceRgbInGamut(kMaxLuminousEfficacy * convert.Xyz(relative));
   };
   std::string out = "# atmo annual: " + Printable(skies.weather().path.filename().string()) + ", hour " +
                     std::to_string(h.hour) + " (" + std::to_string(w.year) + "-" + std::to_string(w.month) + "-" +

@@ -156,6 +156,15 @@ glm::dvec3 XyzToRadianceRgb(const glm::dvec3& xyz_cd_m2) {
   static const glm::dmat3 m = glm::inverse(RadianceRgbToXyzMatrix());
   return m * xyz_cd_m2;
 }
+
+glm::dvec3 XyzToRadianceRgbInGamut(const glm::dvec3& xyz_cd_m2) {
+  const glm::dvec3 rgb = XyzToRadianceRgb(xyz_cd_m2);
+  const double lowest = std::min({rgb.x, rgb.y, rgb.z});
+  if (lowest >= 0.0) return rgb;
+  const double grey = xyz_cd_m2.y / kRadianceWhiteEfficacy;  // R = G = B = grey has this luminance
+  if (!(grey > 0.0)) return glm::dvec3(0.0);
+  return glm::max(grey + (grey / (grey - lowest)) * (rgb - grey), 0.0);
+}
 glm::dvec3 LinearSrgbToXyz(const glm::dvec3& rgb) { return glm::inverse(kXyzToSrgb) * rgb; }
 
 std::vector<glm::vec3> ColourWeights(const SpectralConversion& convert, ImageColour colour) {
