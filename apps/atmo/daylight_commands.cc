@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <tuple>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -50,12 +49,7 @@ void WriteText(const std::string& path, const std::string& text) {
     }
     return;
   }
-  WriteFileAtomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    out.close();
-    if (!out) throw Error("write failed");
-  });
+  WriteTextFileAtomically(path, text);
 }
 
 // Daylighting works on the accurate model and a real atmosphere unless the user chose.

@@ -194,6 +194,8 @@ void WriteRadianceHdr(const std::filesystem::path& path, const Image& image);
 // cannot be kept). The temporary file is fsync'ed before the rename and the folder after it.
 void WriteFileAtomically(const std::filesystem::path& path,
                          const std::function<void(const std::filesystem::path&)>& write);
+// WriteFileAtomically of a whole text.
+void WriteTextFileAtomically(const std::filesystem::path& path, const std::string& text);
 
 // Several files published as one set: Stage writes each into a complete temporary file beside
 // its target, with every check of WriteFileAtomically; Commit renames them in the order they were

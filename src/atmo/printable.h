@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace atmo {
 
@@ -29,6 +30,19 @@ inline std::string Printable(std::string_view text) {
 // A number as a user would write it in a message: integers without exponent or fraction (6360000,
 // -1), other values in the shortest form that reads back exactly (0.004675, 1e-300), and nan /
 // inf / -inf.
+// The comma-separated fields of a line (an empty line is one empty field); views into `line`.
+inline std::vector<std::string_view> SplitCommas(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    out.push_back(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
 inline std::string FormatNumber(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0.0 ? "inf" : "-inf";

@@ -346,8 +346,12 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
       IrradianceSettings s = irradiance;
       s.sun_scale = sky.sun_scale;
       IrradianceResult node[2][2];
+      std::unique_ptr<SkyView> views[2][2];
       for (int i = 0; i < 2; ++i) {
-        for (int j = 0; j < 2; ++j) node[i][j] = ComputeIrradiance(*models[i][j]->View(altitude_m, p.sun), base_, planes, s);
+        for (int j = 0; j < 2; ++j) {
+          views[i][j] = models[i][j]->View(altitude_m, p.sun);
+          node[i][j] = ComputeIrradiance(*views[i][j], base_, planes, s);
+        }
       }
       const double a0 = aods[b], a1 = aods[b + 1];
       const double w0 = albedos[0], w1 = albedos[1];
@@ -417,7 +421,7 @@ std::vector<HourSky> AnnualSkies::Compute(std::span<const std::size_t> hours,
         for (int i = 0; i < 2; ++i) {
           for (int j = 0; j < 2; ++j) {
             if (weights[i][j] == 0.0) continue;
-            models[i][j]->View(altitude_m, p.sun)->RadianceBatch(map.directions, RadianceTerms{false, false}, radiance);
+            views[i][j]->RadianceBatch(map.directions, RadianceTerms{false, false}, radiance);
             const double w = clear * weights[i][j] * sky.sun_scale;
             for (std::size_t k = 0; k < clear_part.size(); ++k) clear_part[k] += w * radiance[k];
           }

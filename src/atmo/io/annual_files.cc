@@ -71,15 +71,6 @@ std::string Fingerprint(const AnnualSkies& skies) {
   return j.dump(2) + "\n";
 }
 
-void WriteText(const fs::path& path, const std::string& text) {
-  WriteFileAtomically(path, [&](const fs::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    out.close();
-    if (!out) throw Error("write failed");
-  });
-}
-
 std::string ReadText(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read " + Printable(path.string()));
@@ -177,15 +168,8 @@ struct PartHour {
 };
 
 std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    out.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return out;
+  const std::vector<std::string_view> fields = SplitCommas(line);
+  return {fields.begin(), fields.end()};
 }
 
 // Every hour found in the parts of `out_dir`.
@@ -263,7 +247,7 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
                   "give another --out-dir or remove it");
     }
   } else {
-    WriteText(record, fingerprint);
+    WriteTextFileAtomically(record, fingerprint);
   }
 
   AnnualRunReport report;
@@ -284,7 +268,7 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
   if (maps) {
     fs::create_directories(run.out_dir / "maps", error);
     if (error) throw Error("cannot make the folder " + Printable((run.out_dir / "maps").string()) + ": " + error.message());
-    WriteText(run.out_dir / "maps" / "atmo_sky.cal", kSkyCal);
+    WriteTextFileAtomically(run.out_dir / "maps" / "atmo_sky.cal", kSkyCal);
   }
   const int built_before = skies.models_built();
   std::size_t written = 0;
@@ -301,7 +285,7 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
         for (const HourSky& h : group) {
           if (maps && h.sky_map.width > 0) {
             WriteRadianceHdr(run.out_dir / "maps" / (HourName(h.hour) + ".hdr"), h.sky_map);
-            WriteText(run.out_dir / "maps" / (HourName(h.hour) + ".rad"), HourScene(skies, convert, h));
+            WriteTextFileAtomically(run.out_dir / "maps" / (HourName(h.hour) + ".rad"), HourScene(skies, convert, h));
           }
           text += PartLines(skies, convert, h);
           first = std::min(first, h.hour);
@@ -310,7 +294,7 @@ AnnualRunReport RunAnnual(AnnualSkies& skies, const AnnualRun& run,
         const fs::path part = run.out_dir / "parts" /
                               ("part-" + std::to_string(first) + "-" + std::to_string(last) + "-" +
                                std::to_string(group.size()) + ".txt");
-        WriteText(part, text);
+        WriteTextFileAtomically(part, text);
         written += group.size();
       });
   report.computed = written;
@@ -367,8 +351,8 @@ bool MergeAnnual(const AnnualSkies& skies, const fs::path& out_dir) {
                              std::to_string(skies.settings().sky_subdivision) +
                              " patches; Radiance RGB radiance, W sr^-1 m^-2)\nNROWS=" + std::to_string(rows) +
                              "\nNCOLS=" + std::to_string(hours.size()) + "\nNCOMP=3\nFORMAT=ascii\n\n";
-  WriteText(out_dir / "hours.csv", hours_csv);
-  WriteText(out_dir / "irradiance.csv", irradiance_csv);
+  WriteTextFileAtomically(out_dir / "hours.csv", hours_csv);
+  WriteTextFileAtomically(out_dir / "irradiance.csv", irradiance_csv);
   WriteFileAtomically(out_dir / "sky.mtx", [&](const fs::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     out << header;

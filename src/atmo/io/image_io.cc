@@ -599,6 +599,15 @@ void AtomicFileSet::Commit() {
   }
 }
 
+void WriteTextFileAtomically(const fs::path& path, const std::string& text) {
+  WriteFileAtomically(path, [&](const fs::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    out.close();
+    if (!out) throw Error("write failed");
+  });
+}
+
 void WriteFileAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   AtomicFileSet set;
   set.Stage(path, write);
