@@ -22,6 +22,7 @@ namespace atmo::gl {
 namespace {
 
 using testing::MeanRelative;
+using testing::GlBound;
 using testing::SamplerSlack;
 
 // us-standard at three wavelengths (one batch), and a perspective frame at sunset towards the sun.
@@ -58,7 +59,8 @@ TEST(GlDensityTable, HillaireElekAndSource4dMatchTheCpuOnUsStandard) {
                                 Render(cpu, render));
   std::printf("us-standard GL vs CPU mean rel: hillaire %.3g, elek %.3g, source4d (GPU tables) %.3g\n", h, e, s);
   EXPECT_LT(h, SamplerSlack(context) * 2.4e-3);
-  EXPECT_LT(e, SamplerSlack(context) * 1.2e-4);
+  // H200: elek 4.2e-3 (its frame's lookups blend 8 texels with 8-bit weights; gl_elek_test.cc).
+  EXPECT_LT(e, GlBound(context, 1.2e-4, 1e-2));
   EXPECT_LT(s, SamplerSlack(context) * 6e-4);
   // The table is what the GPU read: with the Mie medium's layers instead (the same coefficients on
   // an exponential profile), the frames differ by far more than the bounds.
@@ -67,7 +69,7 @@ TEST(GlDensityTable, HillaireElekAndSource4dMatchTheCpuOnUsStandard) {
   const double other = MeanRelative(RenderHillaire(context, layers, hillaire, render),
                                     Render(*CreateModel("hillaire", p, hillaire), render));
   std::printf("with the aerosol on an exponential profile instead: %.3g\n", other);
-  EXPECT_GT(other, 10.0 * SamplerSlack(context) * 2.4e-3);
+  EXPECT_GT(other, 10.0 * std::max({h, e, s}));
 }
 
 }  // namespace

@@ -29,6 +29,7 @@ namespace atmo::gl {
 namespace {
 
 using testing::GetSharedContext;
+using testing::GlBound;
 using testing::SamplerSlack;
 
 
@@ -117,8 +118,8 @@ void ExpectTablesMatch(const Context& context, const AtmosphereParameters& param
     std::printf("%s batch %zu transmittance: rel_mae %.2g, p99 %.2g, max %.2g\n", parameters.name.c_str(), batch,
                 t.rel_mae, t.p99, t.max);
     // Float in km against double in m: altitudes off by up to ~0.5 m (gl_hillaire_test.cc); the
-    // hillaire transmittance test bounds the same kernel at 5e-4.
-    EXPECT_LT(t.max, 5e-4);
+    // hillaire transmittance test bounds the same kernel at 5e-4 (H200: max 6.9e-4).
+    EXPECT_LT(t.max, GlBound(context, 5e-4, 1.5e-3));
 
     const auto compare = [&](const char* what, std::size_t k, const cpu::ElekScattering& gl_table,
                              const cpu::ElekScattering& cpu_table) {
@@ -202,12 +203,12 @@ void ExpectImagesMatch(const Context& context, const AtmosphereParameters& param
   // averages the terminator's steps out: measured rel_mae <= 6e-6, p99 <= 4.3e-5. The frame
   // alone (the same tables): float cosines and texture coordinates (a cube root of mu near the
   // horizon, where v changes fastest) off by ~1e-7 relative, measured rel_mae <= 5.2e-7,
-  // p99 <= 3.2e-6. The bounds leave a factor of ~4.
-  const double slack = SamplerSlack(context);
-  EXPECT_LT(d.rel_mae, slack * 3e-5);
-  EXPECT_LT(d.p99, slack * 2e-4);
-  EXPECT_LT(f.rel_mae, slack * 2e-6);
-  EXPECT_LT(f.p99, slack * 1.5e-5);
+  // p99 <= 3.2e-6. The bounds leave a factor of ~4. On an H200 the frame's 8-bit sampler weights
+  // dominate both: measured rel_mae <= 4.4e-4, p99 <= 1.5e-3 (frame alone and GL vs CPU alike).
+  EXPECT_LT(d.rel_mae, GlBound(context, 3e-5, 1e-3));
+  EXPECT_LT(d.p99, GlBound(context, 2e-4, 3e-3));
+  EXPECT_LT(f.rel_mae, GlBound(context, 2e-6, 1e-3));
+  EXPECT_LT(f.p99, GlBound(context, 1.5e-5, 3e-3));
 }
 
 TEST(GlElek, PerspectiveImageMatchesCpu) {

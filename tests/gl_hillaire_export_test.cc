@@ -31,6 +31,7 @@ namespace {
 
 using Json = nlohmann::json;
 using ::atmo::testing::ReadFile;
+using ::atmo::gl::testing::GlBound;
 using ::atmo::gl::testing::SamplerSlack;
 
 // The one file an engine includes.
@@ -367,11 +368,16 @@ void main() {
   // 1.1e-7 (the float mappings' rounding, ~1e-7 of a texel, times the tables' gradients); the
   // round trips 1.1e-5 (transmittance: float's r^2 - R^2 near the ground), 6e-8, 5.7e-5 (sky view:
   // acos of a float cosine near the zenith), 0.
+  // On an H200 the sampler's 8-bit weights (up to 1/512 of two neighbouring texels' difference)
+  // dominate where a table falls steeply: measured transmittance 1.1e-4, multiple scattering
+  // 0.106 relative at the 1e-3 floor (deep night, where neighbouring texels differ by orders of
+  // magnitude), aerial radiance 1.1e-2, aerial transmittance 1.5e-3; the GPU bounds are twice
+  // those. The mappings themselves are held by the round trips below on every device.
   const double slack = SamplerSlack(context);
   EXPECT_LT(t_abs, 1e-5 * slack);
-  EXPECT_LT(ms_rel, 5e-5 * slack);
-  EXPECT_LT(ap_rel, 2e-5 * slack);
-  EXPECT_LT(ap_t_abs, 1e-6 * slack);
+  EXPECT_LT(ms_rel, GlBound(context, 5e-5, 0.22));
+  EXPECT_LT(ap_rel, GlBound(context, 2e-5, 2.3e-2));
+  EXPECT_LT(ap_t_abs, GlBound(context, 1e-6, 3e-3));
   for (double e : round_trip) EXPECT_LT(e, 1e-4);
 }
 

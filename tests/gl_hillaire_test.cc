@@ -37,6 +37,7 @@ using shared::ivec2;
 using shared::Texture2D;
 
 using testing::GetSharedContext;
+using testing::GlBound;
 using testing::SamplerSlack;
 
 // Runs `pass` (writing the GpuTexture it is given) into a fresh table of `size` and reads it
@@ -136,9 +137,10 @@ TEST(GlHillaire, TransmittanceTableMatchesCpu) {
   // cosines in r^2 ~ 4e7 km^2) is off by up to ~0.5 m, i.e. up to 4e-4 of the Mie scale height
   // (1.2 km) in relative density; these errors partly cancel along a ray, and exp/sqrt on
   // llvmpipe add only ~1e-7 relative. Measured on llvmpipe (Mesa 22.3.6): max abs 1.5e-5, max rel
-  // 2.6e-4 where T > 1e-3; the bounds leave a factor of 2.
-  EXPECT_LT(d.max_abs, 3e-5);
-  EXPECT_LT(d.max_rel, 5e-4);
+  // 2.6e-4 where T > 1e-3; the bounds leave a factor of 2. On an H200 (coarser exp and sqrt):
+  // max abs 4.0e-5, max rel 7.8e-4.
+  EXPECT_LT(d.max_abs, GlBound(context, 3e-5, 8e-5));
+  EXPECT_LT(d.max_rel, GlBound(context, 5e-4, 1.6e-3));
 }
 
 TEST(GlHillaire, MultipleScatteringTableMatchesCpu) {
@@ -550,8 +552,8 @@ TEST(GlHillaireSpectral, TablesMatchCpuInEveryBatch) {
     // ~5x that at 440 nm, so dT = T d(tau) is larger. Measured on llvmpipe, over the three
     // batches: transmittance max abs 2.7e-5, max rel 2.5e-4; multiple scattering max rel 6.5e-5;
     // ground irradiance 1.9e-5; sky + ground view 3.9e-4.
-    EXPECT_LT(t.max_abs, 6e-5) << b;
-    EXPECT_LT(t.max_rel, 5e-4) << b;
+    EXPECT_LT(t.max_abs, GlBound(context, 6e-5, 1.3e-4)) << b;  // H200: 6.2e-5 (batch 2)
+    EXPECT_LT(t.max_rel, GlBound(context, 5e-4, 1.2e-3)) << b;  // H200: 5.4e-4
     EXPECT_LT(m.max_rel, SamplerSlack(context) * 1e-3) << b;
     EXPECT_LT(g.max_rel, SamplerSlack(context) * 2e-3) << b;
     EXPECT_LT(v.max_rel, SamplerSlack(context) * 1e-3) << b;

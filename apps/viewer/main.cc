@@ -5,7 +5,7 @@
 //               --camera --width --height --fov --yaw --pitch --altitude --sun-elevation
 //               --sun-azimuth --date ... --ev --exposure --tonemap ...]
 //               [--frames N [--screenshot F.png|F.exr|NAME]] [--script F] [--save-config F.json]
-//               [--recompute-every-frame] [--source4d-tables gpu|cpu|auto] [--hidden]
+//               [--recompute-every-frame] [--source4d-tables gpu|cpu|auto] [--hidden] [--offscreen]
 //
 // This file only parses the command line (the flags of `atmo render` through apps/atmo/cli_flags.h)
 // and calls RunViewer. Errors: one line `atmo-viewer: error: ...` on stderr; exit 2 for a command
@@ -53,7 +53,8 @@ int main(int argc, char** argv) {
   app.add_option("--window-screenshot", options.window_screenshot,
                  "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
   app.add_option("--build-budget", options.build_budget_ms,
-                 "milliseconds of elek's and source4d's table steps per frame while they build (default 25)")
+                 "milliseconds of elek's and source4d's table steps per frame while they build: GPU time on a GPU, "
+                 "the wall clock on a software GL (default 25)")
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--source4d-tables", options.source4d_tables,
                  "where source4d's tables are built: gpu, cpu (a worker thread) or auto (cpu on a software GL "
@@ -74,6 +75,8 @@ int main(int argc, char** argv) {
   app.add_option("--false-colour", options.false_colour,
                  "luminance: log10 of the luminance in false colour instead of the tone-mapped image");
   app.add_flag("--hidden", options.hidden, "an invisible window (scripted runs; a display is still needed)");
+  app.add_flag("--offscreen", options.offscreen,
+               "no window: draw into a framebuffer on a headless context (needs --frames; no display needed)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

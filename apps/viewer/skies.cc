@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -25,6 +27,7 @@
 #include "gl/hillaire_gl.h"
 #include "gl/simple_gl.h"
 #include "gl/source4d_gl.h"
+#include "gl/timer_queries.h"
 #include "models/reference_model.h"
 #include "models/simple_model.h"
 #include "physics/shared_parameters.h"
@@ -72,22 +75,100 @@ Image ReadFrames(const std::vector<gl::GpuTexture>& frames, std::size_t channels
   return image;
 }
 
+// How many steps of a stepped table build fit in a frame's budget. On a software GL (llvmpipe
+// runs a dispatch inside the call) the wall clock measures each step as it runs. On a GPU the
+// dispatches return at once, so the wall clock would queue the whole build into one frame: there
+// each step is timed by GPU timer queries (gl/timer_queries.h) read without waiting when they are
+// ready, a frame or more later, and kept as a running mean per kind of step (the builder's
+// next_step_kind: a gather step and a convolve step differ by 50x). A frame issues steps while
+// their means fit in the budget, at least one, and at most one of a kind not timed yet (the first
+// step of a new pass costs what it costs; the next frame knows).
+class StepBudget {
+ public:
+  explicit StepBudget(const gl::Context& context) : software_(context.software_renderer()) {}
+
+  // Runs `step()` while `more()`, for about `budget_ms` of this frame; `kind()` names the next step.
+  template <typename Step, typename More, typename Kind>
+  void Run(double budget_ms, const Step& step, const More& more, const Kind& kind) {
+    if (software_) {
+      const auto start = Clock::now();
+      while (more()) {
+        step();
+        if (MillisecondsSince(start) >= budget_ms) break;
+      }
+      return;
+    }
+    ReadReady();
+    const std::shared_ptr<gl::TimerQueries> queries = gl::CurrentTimerQueries();
+    double planned_ms = 0.0;
+    bool probed = false;
+    for (int i = 0; i < kMaxSteps && more(); ++i) {
+      std::string next = kind();
+      const auto known = mean_ms_.find(next);
+      if (known == mean_ms_.end()) {
+        if (probed) break;
+        probed = true;
+      } else {
+        if (i > 0 && planned_ms + known->second > budget_ms) break;
+        planned_ms += known->second;
+      }
+      if (queries == nullptr) {
+        step();
+        continue;
+      }
+      const std::shared_ptr<gl::GpuTimeRecord> record = queries->Begin();
+      step();
+      queries->End(*record);
+      pending_.push_back({std::move(next), [queries, record](bool wait) { return queries->Read(*record, wait); }});
+    }
+  }
+
+ private:
+  static constexpr int kMaxSteps = 1024;
+  void ReadReady() {
+    while (!pending_.empty()) {
+      const std::optional<double> ms = pending_.front().read(false);
+      if (!ms) break;
+      // A running mean over ~4 steps of the kind (the last step of a pass may be partial).
+      const auto [entry, added] = mean_ms_.emplace(pending_.front().kind, *ms);
+      if (!added) entry->second = 0.75 * entry->second + 0.25 * *ms;
+      pending_.pop_front();
+    }
+  }
+
+  struct Pending {
+    std::string kind;
+    PassTimings::DeferredMs read;
+  };
+  bool software_;
+  std::deque<Pending> pending_;
+  std::map<std::string, double> mean_ms_;  // GPU ms per step, by kind
+};
+
 // The stepped table build of elek and source4d: per batch a builder (made by make_builder(b)
-// when the batch before is done) stepped until `budget_ms` went on it, its tables appended to
-// `tables`. True once every batch's tables are built.
+// when the batch before is done) stepped for `budget_ms` of this frame (StepBudget), its tables
+// appended to `tables`. True once every batch's tables are built.
 template <typename Builder, typename Tables, typename MakeBuilder>
 bool StepBuilders(std::unique_ptr<Builder>& builder, std::vector<Tables>& tables, std::size_t batches,
-                  double budget_ms, PassTimings* timings, const MakeBuilder& make_builder) {
-  const auto start = Clock::now();
-  while (tables.size() < batches) {
+                  double budget_ms, PassTimings* timings, StepBudget& budget, const MakeBuilder& make_builder) {
+  const auto ensure = [&] {
     if (builder == nullptr) builder = make_builder(tables.size());
-    builder->Step(timings);
-    if (builder->done()) {
-      tables.push_back(builder->Take());
-      builder.reset();
-    }
-    if (MillisecondsSince(start) >= budget_ms) break;
-  }
+  };
+  budget.Run(
+      budget_ms,
+      [&] {
+        ensure();
+        builder->Step(timings);
+        if (builder->done()) {
+          tables.push_back(builder->Take());
+          builder.reset();
+        }
+      },
+      [&] { return tables.size() < batches; },
+      [&] {
+        ensure();
+        return builder->next_step_kind();
+      });
   return tables.size() == batches;
 }
 
@@ -173,7 +254,7 @@ class ElekSky final : public Sky {
   }
   std::size_t batch_count() const override { return km_.size(); }
   bool Build(double budget_ms, PassTimings* timings) override {
-    return StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, [this](std::size_t b) {
+    return StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, budget_, [this](std::size_t b) {
       return std::make_unique<gl::ElekTablesBuilder>(context_, km_[b], settings_, kElekRowsPerStep);
     });
   }
@@ -209,6 +290,7 @@ class ElekSky final : public Sky {
 
  private:
   const gl::Context& context_;
+  StepBudget budget_{context_};  // the steps of Build per frame
   AtmosphereParameters parameters_;
   ElekSettings settings_;
   ElekModel model_;  // checks the parameters; its batches' km atmospheres
@@ -403,7 +485,7 @@ class Source4dSky final : public Sky {
       return true;
     }
     const std::size_t built = tables_.size();
-    const bool done = StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, [this](std::size_t b) {
+    const bool done = StepBuilders(builder_, tables_, km_.size(), budget_ms, timings, budget_, [this](std::size_t b) {
       return std::make_unique<gl::Source4dTablesBuilder>(context_, km_[b], model_.settings().tables,
                                                          kSource4dGroupsPerStep);
     });
@@ -493,6 +575,7 @@ class Source4dSky final : public Sky {
   }
 
   const gl::Context& context_;
+  StepBudget budget_{context_};  // the steps of Build per frame (GPU tables)
   AtmosphereParameters parameters_;
   Source4dModel model_;  // checks the parameters and the settings; no tables of its own
   std::vector<shared::AtmosphereParameters> km_;

@@ -65,8 +65,9 @@ class Sky {
  public:
   virtual ~Sky() = default;
   virtual std::size_t batch_count() const = 0;
-  // The table work of this frame, for about `budget_ms` (at least one step); true once every
-  // table is built and the sky can be drawn.
+  // The table work of this frame, for about `budget_ms` (at least one step; GPU time on a GPU,
+  // the wall clock on a software GL: StepBudget in skies.cc); true once every table is built and
+  // the sky can be drawn.
   virtual bool Build(double budget_ms, PassTimings* timings) = 0;
   virtual double progress() const { return 1.0; }  // of Build, 0 .. 1
   // Whether Build's work runs on a thread of its own (source4d's CPU tables): the frames meanwhile

@@ -7,12 +7,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 // epoxy's gl.h first: GLFW must not include the system GL header.
 #define GLFW_INCLUDE_NONE
@@ -28,8 +30,10 @@
 #include "atmo/spectrum.h"
 #include "cpu/camera.h"
 #include "gl/context.h"
+#include "gl/exposure_gl.h"
 #include "gl/hillaire_gl.h"
 #include "gl/program.h"
+#include "gl/resources.h"
 #include "gl/shader_sources.h"
 #include "models/reference_model.h"
 #include "skies.h"
@@ -441,10 +445,10 @@ double StepAltitude(double altitude_m, double step) {
 
 // The back buffer as 8-bit display values (read bottom-up, written top row first), as a PNG of
 // those values unchanged (DisplayTransfer::kIdentity, no curve, no dither).
-void WriteWindow(const std::string& path, int width, int height) {
+void WriteWindow(const std::string& path, int width, int height, bool offscreen) {
   std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
+  glReadBuffer(offscreen ? GL_COLOR_ATTACHMENT0 : GL_BACK);
   glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
   Image image(width, height, 3);
   for (int y = 0; y < height; ++y) {
@@ -505,9 +509,57 @@ ModelOptions Source4dOptions(const Source4dModelSettings& settings) {
   return options;
 }
 
-// The GPU passes are timed in every 4th frame (1, 5, 9, ...): the timers' glFinish per pass cost
-// 3 % of the benchmark's frame on llvmpipe (docs/performance.md).
+// The GPU passes are timed in every 4th frame (1, 5, 9, ...): on llvmpipe the timers' glFinish
+// per pass cost 3 % of the benchmark's frame (docs/performance.md). On a GPU the timer queries
+// are read when the next timed frame starts (PassTimings::Collect without waiting), so timing
+// never stalls the pipeline there.
 constexpr int kTimedEvery = 4;
+
+// The window of --offscreen: a headless context draws into an RGBA8 framebuffer of the window's
+// size, and Present() stands in for the swap. A swap chain keeps a frame loop at most a few
+// frames ahead of the GPU; here a fence per frame does: Present waits for the frame two before
+// (kFramesInFlight), so that frame times measure the GPU's throughput, not the submission's.
+class OffscreenTarget {
+ public:
+  OffscreenTarget(int width, int height) : width_(width), height_(height) {
+    glCreateRenderbuffers(1, &colour_);
+    glNamedRenderbufferStorage(colour_, GL_RGBA8, width, height);
+    glCreateFramebuffers(1, &framebuffer_);
+    glNamedFramebufferRenderbuffer(framebuffer_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_);
+    if (glCheckNamedFramebufferStatus(framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+      throw Error("atmo-viewer --offscreen: the " + std::to_string(width) + "x" + std::to_string(height) +
+                  " framebuffer is incomplete");
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  }
+  ~OffscreenTarget() {
+    for (GLsync fence : fences_) glDeleteSync(fence);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteFramebuffers(1, &framebuffer_);
+    glDeleteRenderbuffers(1, &colour_);
+  }
+  OffscreenTarget(const OffscreenTarget&) = delete;
+  OffscreenTarget& operator=(const OffscreenTarget&) = delete;
+  int width() const { return width_; }
+  int height() const { return height_; }
+  void Present() {
+    fences_.push_back(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));
+    while (fences_.size() > kFramesInFlight) {
+      glClientWaitSync(fences_.front(), GL_SYNC_FLUSH_COMMANDS_BIT, GLuint64{60'000'000'000});
+      glDeleteSync(fences_.front());
+      fences_.pop_front();
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);  // ImGui's renderer restores it too
+  }
+
+ private:
+  static constexpr std::size_t kFramesInFlight = 2;
+  int width_;
+  int height_;
+  GLuint colour_ = 0;
+  GLuint framebuffer_ = 0;
+  std::deque<GLsync> fences_;
+};
 
 class Viewer {
  public:
@@ -516,6 +568,10 @@ class Viewer {
   int Run();
 
  private:
+  // Moves the last timed frame's collected times to the panel and the run's summary and clears
+  // timings_ for the next timed frame (waiting for the GPU only when `wait` or when they are
+  // still not ready).
+  void ReadTimings(bool wait);
   // A new sky of `model` for `parameters` and the settings (tables not computed yet); throws
   // atmo::Error.
   std::unique_ptr<Sky> MakeSky(const std::string& model, const AtmosphereParameters& parameters) const;
@@ -613,12 +669,17 @@ class Viewer {
   char config_path_[512] = "viewer_config.json";
   char screenshot_name_[512] = "viewer";
   int preset_index_ = -1;
-  PassTimings timings_;      // this frame's passes (GPU time; display and swap on the host)
-  PassTimings run_timings_;  // every timed frame's but the first, for the summary of a --frames run
+  PassTimings timings_;        // the last timed frame's passes (GPU time; swap on the host)
+  int timings_frame_ = -1;     // the frame timings_ holds (-1: none)
+  PassTimings shown_timings_;  // the last timed frame's that is read, for the panel
+  PassTimings run_timings_;    // every timed frame's but the first, for the summary of a --frames run
   PassTimings* pass_timings_ = nullptr;  // &timings_ in a timed frame, else null (no GPU waits)
   double frame_ms_ = 0.0;
   double metered_ev100_ = 0.0;
   bool metered_ = false;  // metered_ev100_ is of the shown sky
+  std::unique_ptr<gl::ExposureMeter> meter_;  // auto-exposure on the GPU
+  std::unique_ptr<OffscreenTarget> offscreen_;  // --offscreen: the window's stand-in (else null)
+  Metering metering_ = Metering::kAdaptive;   // of the last metering queued
   int settings_generation_ = 0;          // counts the panel's hillaire option changes
   int pending_settings_generation_ = 0;  // of pending_
   std::string requested_model_;          // state_.model when UpdateSky last ran
@@ -746,25 +807,32 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     if (presets[i] == base_.name) preset_index_ = static_cast<int>(i);
   }
 
-  gl::WindowOptions window;
-  window.width = options_.render.width;
-  window.height = options_.render.height;
-  window.title = "atmo-viewer";
-  window.visible = !options_.hidden;
-  context_ = std::make_unique<gl::Context>(window);
+  if (options_.offscreen) {
+    context_ = std::make_unique<gl::Context>();
+    offscreen_ = std::make_unique<OffscreenTarget>(options_.render.width, options_.render.height);
+  } else {
+    gl::WindowOptions window;
+    window.width = options_.render.width;
+    window.height = options_.render.height;
+    window.title = "atmo-viewer";
+    window.visible = !options_.hidden;
+    context_ = std::make_unique<gl::Context>(window);
+  }
   // auto: the CPU on a software rasteriser, where GL passes run on the same cores ~8x slower.
   source4d_cpu_tables_ = tables == "cpu" || (tables == "auto" && context_->software_renderer());
   shown_source4d_cpu_tables_ = source4d_cpu_tables_;
-  GLFWwindow* glfw_window = static_cast<GLFWwindow*>(context_->window());
-  // Scripted runs measure frames, not the display's refresh: no vsync.
-  glfwSwapInterval(options_.frames > 0 ? 0 : 1);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini beside the user's files
   ImGui::StyleColorsDark();
-  ImGui_ImplGlfw_InitForOpenGL(glfw_window, true);
+  if (offscreen_ == nullptr) {
+    // Scripted runs measure frames, not the display's refresh: no vsync.
+    glfwSwapInterval(options_.frames > 0 ? 0 : 1);
+    ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(context_->window()), true);
+  }
   ImGui_ImplOpenGL3_Init("#version 450");
   display_ = std::make_unique<DisplayPass>();
+  meter_ = std::make_unique<gl::ExposureMeter>();
 }
 
 Viewer::~Viewer() {
@@ -775,8 +843,10 @@ Viewer::~Viewer() {
   sky_.reset();
   JoinSource4dCpuBuilds();  // of skies destroyed while their tables were built (cancelled)
   display_.reset();
+  meter_.reset();
+  offscreen_.reset();
   ImGui_ImplOpenGL3_Shutdown();
-  ImGui_ImplGlfw_Shutdown();
+  if (context_->window() != nullptr) ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();
 }
 
@@ -1082,6 +1152,7 @@ void Viewer::FollowDate() {
 
 void Viewer::HandleInput(double dt_s) {
   GLFWwindow* window = static_cast<GLFWwindow*>(context_->window());
+  if (window == nullptr) return;  // --offscreen: no input
   const ImGuiIO& io = ImGui::GetIO();
   double x = 0.0;
   double y = 0.0;
@@ -1172,7 +1243,9 @@ void Viewer::DrawPanels() {
     if (sky_ != nullptr && !sky_->Status().empty()) ImGui::TextWrapped("%s", sky_->Status().c_str());
   }
   if (ImGui::CollapsingHeader("GPU passes (ms)")) {
-    for (const PassTiming& pass : timings_.entries()) ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
+    for (const PassTiming& pass : shown_timings_.entries()) {
+      ImGui::Text("%-26s %8.2f", pass.name.c_str(), pass.last_ms);
+    }
   }
   if (ImGui::CollapsingHeader("Camera and sun", ImGuiTreeNodeFlags_DefaultOpen)) {
     int kind = static_cast<int>(state_.camera);
@@ -1390,6 +1463,20 @@ void Viewer::DrawPanels() {
   ImGui::End();
 }
 
+void Viewer::ReadTimings(bool wait) {
+  // The last timed frame's GPU times (kTimedEvery frames ago: ready unless the GPU is that far
+  // behind, when they are waited for).
+  if (!timings_.Collect(wait)) timings_.Collect(true);
+  if (timings_frame_ >= 0) {
+    shown_timings_ = timings_;
+    if (timings_frame_ > 0) {
+      for (const PassTiming& pass : timings_.entries()) run_timings_.Add(pass.name, pass.last_ms);
+    }
+  }
+  timings_.Clear();
+  timings_frame_ = -1;
+}
+
 int Viewer::Run() {
   GLFWwindow* window = static_cast<GLFWwindow*>(context_->window());
   double frame_ms_sum = 0.0;
@@ -1401,13 +1488,18 @@ int Viewer::Run() {
   // With --frames N the run ends at frame N - 1, or later when the shown sky is not final yet
   // (elek's tables still building, reference short of --spp).
   for (frame_ = 0;; ++frame_) {
-    if (glfwWindowShouldClose(window)) break;
+    if (window != nullptr && glfwWindowShouldClose(window)) break;
     // While a thread builds the next sky and nothing on screen changes, the loop waits for input
     // (up to 0.1 s) instead of drawing the same window again at once: on a software GL a window of
     // 1280x720 costs ~50 ms of both cores (display, panels, swap), which the build needs more.
     constexpr double kBuildWaitS = 0.1;
-    if (waiting_for_build_) glfwWaitEventsTimeout(kBuildWaitS);
-    else glfwPollEvents();
+    if (window == nullptr) {
+      if (waiting_for_build_) std::this_thread::sleep_for(std::chrono::duration<double>(kBuildWaitS));
+    } else if (waiting_for_build_) {
+      glfwWaitEventsTimeout(kBuildWaitS);
+    } else {
+      glfwPollEvents();
+    }
     waiting_for_build_ = false;
     const auto now = std::chrono::steady_clock::now();
     const double dt_s = std::chrono::duration<double>(now - last).count();
@@ -1415,7 +1507,13 @@ int Viewer::Run() {
     const std::vector<std::string> shots = ApplyScript(script_, frame_, state_);
 
     ImGui_ImplOpenGL3_NewFrame();
-    ImGui_ImplGlfw_NewFrame();
+    if (window != nullptr) {
+      ImGui_ImplGlfw_NewFrame();
+    } else {
+      ImGuiIO& io = ImGui::GetIO();
+      io.DisplaySize = ImVec2(static_cast<float>(offscreen_->width()), static_cast<float>(offscreen_->height()));
+      io.DeltaTime = dt_s > 0.0 ? static_cast<float>(dt_s) : 1.0f / 60.0f;
+    }
     ImGui::NewFrame();
     HandleInput(dt_s);
     if (!options_.no_panels) {
@@ -1431,7 +1529,7 @@ int Viewer::Run() {
     // llvmpipe); the panel shows the last timed frame's.
     const bool timed = frame_ % kTimedEvery == 1 % kTimedEvery;
     pass_timings_ = timed ? &timings_ : nullptr;
-    if (timed) timings_.Clear();
+    if (timed) ReadTimings(/*wait=*/false);
     UpdateSky();
     UpdateCompareSky();
     const bool view_changed = view_dirty_ || state_.altitude_m != built_.altitude_m ||
@@ -1465,7 +1563,12 @@ int Viewer::Run() {
     built_ = state_;
     int width = 0;
     int height = 0;
-    glfwGetFramebufferSize(window, &width, &height);
+    if (window != nullptr) {
+      glfwGetFramebufferSize(window, &width, &height);
+    } else {
+      width = offscreen_->width();
+      height = offscreen_->height();
+    }
     // A screenshot asked for before any sky can be written (elek's first tables, reference's
     // first pass) waits for the first frame that has one.
     waiting_shots_.insert(waiting_shots_.end(), shots.begin(), shots.end());
@@ -1494,8 +1597,11 @@ int Viewer::Run() {
       RadianceTerms terms;
       terms.sun_disc = state_.sun_disc;
       terms.ground = state_.ground;
-      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100 of the
-      // linear sRGB image), every 16 frames: a read-back is too slow for every frame in software.
+      // Auto-exposure meters the frame as `atmo render` meters its PNG (AutoExposureEv100's
+      // statistic of the linear sRGB image), on the GPU with 8 bytes read back a frame or two
+      // later (gl::ExposureMeter), every 16 frames and whenever the sky changed (which waits for
+      // its reading, as does the last frame of a --frames run, so that a new sky is never shown
+      // at the last one's exposure).
       const bool meter = state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame();
       // Hillaire alone in RGB, tone-mapped, not metered in this frame: its frame pass runs in the
       // display's fragment shader (DrawFused), no frame texture.
@@ -1527,51 +1633,50 @@ int Viewer::Run() {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
       }
       if (meter) {
-        const Image frame = sky_->ReadFrame();
-        metered_ = true;
-        const Image srgb =
-            plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3
-                ? frame
-                : ConvertImage(frame, SpectralConversion(current_.wavelengths_nm), ImageColour::kLinearSrgb);
+        std::vector<const gl::GpuTexture*> frames;
+        for (std::size_t b = 0; b < sky_->batch_count(); ++b) frames.push_back(&sky_->frame_texture(b));
+        meter_->Meter(frames, weights_, camera.kind == CameraKind::kFisheye);
         // Relative units have no level to adapt to: the camera meter places them (as atmo render).
         const bool relative = plan_.unit == RadianceUnit::kRelative && current_.channel_count() == 3;
-        const Metering metering = relative ? Metering::kCamera : ParseMetering(options_.render.metering);
-        metered_ev100_ = AutoExposureEv100(srgb, metering);
+        metering_ = relative ? Metering::kCamera : ParseMetering(options_.render.metering);
+      }
+      if (state_.auto_exposure) {
+        const bool wait = meter && (!metered_ || last_frame);
+        if (const std::optional<gl::ExposureMeter::Reading> reading = meter_->Latest(wait)) {
+          metered_ev100_ = reading->pixels > 0 ? MeteredEv100(reading->log2_average, metering_) : 0.0;
+        }
+        if (meter) metered_ = true;
       }
       mapping_.exposure = ExposureFromEv100(state_.auto_exposure ? metered_ev100_ : state_.ev100);
       if (fused != nullptr) {
-        std::optional<ScopedPassTimer> timer;
-        if (timed) timer.emplace(timings_, "frame_and_display");
+        gl::GpuPassTimer timer(pass_timings_);
         display_->DrawFused(*fused, ToSharedCamera(ViewCamera(state_, width, height)), terms, weights_, mapping_,
                             width, height);
-        if (timed) glFinish();
+        timer.Stop("frame_and_display");
       } else {
-        std::optional<ScopedPassTimer> timer;
-        if (timed) timer.emplace(timings_, "display");
+        gl::GpuPassTimer timer(pass_timings_);
         DisplayPass::View view;
         view.mode = compare_sky_ != nullptr ? compare_view_ : 0;
         view.false_colour = false_colour_;
         view.split_column = static_cast<int>(std::lround(split_ * width));
         view.split_line = !options_.no_panels;
         display_->Draw(*sky_, compare_sky_.get(), view, weights_, mapping_, width, height);
-        if (timed) glFinish();
+        timer.Stop("display");
       }
-      std::optional<ScopedPassTimer> timer;
-      if (timed) timer.emplace(timings_, "panels");
+      gl::GpuPassTimer timer(pass_timings_);
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      if (timed) glFinish();
+      timer.Stop("panels");
     }
     if (last_frame && !options_.window_screenshot.empty()) {
-      WriteWindow(options_.window_screenshot, width, height);
+      WriteWindow(options_.window_screenshot, width, height, offscreen_ != nullptr);
     }
     {
       std::optional<ScopedPassTimer> timer;
       if (timed) timer.emplace(timings_, "swap");
-      context_->SwapBuffers();
+      if (offscreen_ != nullptr) offscreen_->Present();
+      else context_->SwapBuffers();
     }
-    if (frame_ > 0 && timed) {
-      for (const PassTiming& pass : timings_.entries()) run_timings_.Add(pass.name, pass.last_ms);
-    }
+    if (timed) timings_frame_ = frame_;
     // The frame time: from one swap to the next (the first frame compiles the shaders: left out).
     if (frame_ > 0) {
       frame_ms_sum += 1e3 * dt_s;
@@ -1587,6 +1692,7 @@ int Viewer::Run() {
       break;
     }
   }
+  ReadTimings(/*wait=*/true);
   if (!options_.save_config.empty()) {
     WriteConfig(options_.save_config, current_);
     std::printf("atmo-viewer: wrote %s\n", options_.save_config.c_str());
@@ -1625,6 +1731,10 @@ int RunViewer(const ViewerOptions& options) {
   if (options.frames == 0 && (!options.render.exr_path.empty() || !options.render.png_path.empty())) {
     throw Error("--screenshot (or --exr, --png, -o) needs --frames N: it writes the last frame");
   }
+  if (options.offscreen && options.frames == 0) {
+    throw Error("--offscreen needs --frames N: without a window nothing would end the run");
+  }
+  if (options.offscreen && options.hidden) throw Error("--offscreen has no window to hide (drop --hidden)");
   Viewer viewer(options);
   return viewer.Run();
 }

@@ -25,6 +25,7 @@ struct ViewerOptions {
                                        // and PNG paths are the screenshot of the last frame (empty: none)
   int frames = 0;                      // stop after this many frames (0: when the window is closed)
   double build_budget_ms = 25.0;       // per frame, of elek's and source4d's table steps while they build
+                                       // (GPU time on a GPU, wall clock on a software GL)
   // Where source4d's tables are built: gpu (GL passes, a few steps per frame), cpu (the CPU
   // backend on a worker thread) or auto (cpu on a software GL, gl::IsSoftwareRenderer; else gpu).
   std::string source4d_tables = "auto";
@@ -32,6 +33,9 @@ struct ViewerOptions {
   std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
   bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)
   bool hidden = false;                 // an invisible window (headless runs; Xvfb still needed)
+  // No window: a headless EGL context drawing into a framebuffer of the window's size, at most two
+  // frames ahead of the GPU (benchmarks and screenshots without a display; needs frames > 0).
+  bool offscreen = false;
   bool no_panels = false;              // the sky alone, no ImGui panels
   // The last --frames frame as the window shows it (8-bit sRGB PNG read from the back buffer:
   // the display shader's tone mapping, and the panels unless no_panels); empty: none.

@@ -128,6 +128,9 @@ double Ev100FromExposure(double exposure);
 //   at 1 / 9.6 of L_max whatever its level (every sky a mid grey). For relative units too.
 enum class Metering { kAdaptive, kCamera };
 double AutoExposureEv100(const Image& image, Metering metering = Metering::kAdaptive);
+// The EV100 of AutoExposureEv100 from its statistic, the winsorised mean of log2 L (L in cd/m^2
+// for kAdaptive): for meters that compute the statistic elsewhere (the GPU's, gl/exposure_gl.h).
+double MeteredEv100(double log2_average_luminance, Metering metering = Metering::kAdaptive);
 // The key (the exposed value of the average luminance, 0.18 being Reinhard's "normal" key) for an
 // average luminance L in cd/m^2: 1.03 - 2 / (2 + log10(L + 1)) (Krawczyk, Myszkowski and Seidel
 // 2005, "Perceptual effects in real-time tone mapping", SCCG 2005, eq. 11), clamped below at 0.01.

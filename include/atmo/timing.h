@@ -5,7 +5,9 @@
 #pragma once
 
 #include <chrono>
+#include <deque>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,13 +24,38 @@ struct PassTiming {
 class PassTimings {
  public:
   void Add(std::string_view name, double ms);
-  const std::vector<PassTiming>& entries() const { return entries_; }
+  // A pass whose time is known later (a GPU timer query, src/atmo/gl/timer_queries.h):
+  // `read(wait)` gives its milliseconds, or nothing while it is not ready and `wait` is false.
+  // Its entry keeps its place in entries() from now on; its time is added when collected.
+  using DeferredMs = std::function<std::optional<double>(bool wait)>;
+  void AddDeferred(std::string_view name, DeferredMs read);
+  // Adds the deferred times that are ready, in the order they were added, stopping at the first
+  // that is not (with `wait`: all of them, waiting for the GPU). True when none is left. The
+  // viewer collects without waiting a frame later; entries() and LastMs() collect with waiting.
+  bool Collect(bool wait) const;
+  bool has_pending() const { return !pending_.empty(); }
+  const std::vector<PassTiming>& entries() const {
+    Collect(true);
+    return entries_;
+  }
   // Last duration of the named pass in milliseconds, or -1 if it never ran.
   double LastMs(std::string_view name) const;
-  void Clear() { entries_.clear(); }
+  // Forgets every entry, and the deferred times not collected yet.
+  void Clear() {
+    entries_.clear();
+    pending_.clear();
+  }
 
  private:
-  std::vector<PassTiming> entries_;
+  PassTiming& Entry(std::string_view name) const;
+  static void Record(PassTiming& entry, double ms);
+
+  struct Pending {
+    std::string name;
+    DeferredMs read;
+  };
+  mutable std::vector<PassTiming> entries_;
+  mutable std::deque<Pending> pending_;
 };
 
 class ScopedPassTimer {

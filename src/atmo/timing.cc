@@ -5,21 +5,46 @@
 
 namespace atmo {
 
-void PassTimings::Add(std::string_view name, double ms) {
+PassTiming& PassTimings::Entry(std::string_view name) const {
   for (PassTiming& entry : entries_) {
-    if (entry.name == name) {
-      entry.total_ms += ms;
-      entry.last_ms = ms;
-      ++entry.calls;
-      return;
-    }
+    if (entry.name == name) return entry;
   }
-  entries_.push_back(PassTiming{std::string(name), ms, 1, ms});
+  entries_.push_back(PassTiming{std::string(name), 0.0, 0, 0.0});
+  return entries_.back();
+}
+
+void PassTimings::Record(PassTiming& entry, double ms) {
+  entry.total_ms += ms;
+  entry.last_ms = ms;
+  ++entry.calls;
+}
+
+void PassTimings::Add(std::string_view name, double ms) { Record(Entry(name), ms); }
+
+void PassTimings::AddDeferred(std::string_view name, DeferredMs read) {
+  Entry(name);  // its place in the order of first use
+  pending_.push_back(Pending{std::string(name), std::move(read)});
+}
+
+bool PassTimings::Collect(bool wait) const {
+  while (!pending_.empty()) {
+    Pending& next = pending_.front();
+    const std::optional<double> ms = next.read(wait);
+    if (!ms) {
+      if (!wait) return false;
+      // Unreadable even when waited for (its GL context is not current here): dropped.
+    } else {
+      Record(Entry(next.name), *ms);
+    }
+    pending_.pop_front();
+  }
+  return true;
 }
 
 double PassTimings::LastMs(std::string_view name) const {
+  Collect(true);
   for (const PassTiming& entry : entries_) {
-    if (entry.name == name) return entry.last_ms;
+    if (entry.name == name) return entry.calls > 0 ? entry.last_ms : -1.0;
   }
   return -1.0;
 }

@@ -27,6 +27,7 @@
 namespace atmo::gl {
 
 class ComputeProgram;
+class TimerQueries;
 
 // Whether a GL_RENDERER string names one of Mesa's software rasterisers: llvmpipe, softpipe,
 // SWR (OpenSWR) or swrast ("Software Rasterizer"), compared without case. On those the GL passes
@@ -56,6 +57,8 @@ class Context {
   void* window() const { return window_; }
   // Presents the window's back buffer (nothing for a headless context).
   void SwapBuffers() const;
+  // Waits until the GPU has run every command issued so far (glFinish).
+  void Finish() const;
 
   const std::string& renderer() const { return renderer_; }  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   const std::string& version() const { return version_; }    // GL_VERSION, e.g. "4.5 (Core Profile) Mesa 22.3.6"
@@ -81,11 +84,14 @@ class Context {
   void* context_ = nullptr;  // EGLContext
   void* window_ = nullptr;   // GLFWwindow* (windowed), else null
 
-  void ReadDriverStrings();
+  void FinishConstruction();  // driver strings, timer queries (once current)
+  void EndTimerQueries();     // reads the GPU times still unread (while current)
   std::string renderer_;
   std::string version_;
   // By the shared files' names and the main source.
   mutable std::unordered_map<std::string, std::unique_ptr<ComputeProgram>> programs_;
+  // The GPU timer queries of the passes run in this context (src/atmo/gl/timer_queries.h).
+  std::shared_ptr<TimerQueries> timer_queries_;
 };
 
 }  // namespace atmo::gl

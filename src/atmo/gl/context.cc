@@ -28,6 +28,7 @@
 #include "atmo/error.h"
 #include "gl/program.h"
 #include "gl/shader_sources.h"
+#include "gl/timer_queries.h"
 
 namespace atmo::gl {
 namespace {
@@ -128,7 +129,7 @@ Context::Context() {
     break;
   }
   if (context_ == nullptr) throw Error("no headless OpenGL 4.5 context: " + why);
-  ReadDriverStrings();
+  FinishConstruction();
 }
 
 bool IsSoftwareRenderer(std::string_view renderer) {
@@ -140,11 +141,21 @@ bool IsSoftwareRenderer(std::string_view renderer) {
   return false;
 }
 
-void Context::ReadDriverStrings() {
+void Context::FinishConstruction() {
   const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
   renderer_ = renderer != nullptr ? renderer : "";
   version_ = version != nullptr ? version : "";
+  timer_queries_ = std::make_shared<TimerQueries>();
+  SetCurrentTimerQueries(timer_queries_.get());
+}
+
+void Context::EndTimerQueries() {
+  // While the context is current: the times still unread are read, so that a PassTimings that
+  // outlives the context holds them (timer_queries.h).
+  timer_queries_->Drain();
+  if (CurrentTimerQueries() == timer_queries_) SetCurrentTimerQueries(nullptr);
+  timer_queries_.reset();
 }
 
 #ifdef ATMO_HAVE_GLFW
@@ -186,7 +197,7 @@ Context::Context(const WindowOptions& options) {
   ++g_live_windows;
   window_ = window;
   glfwMakeContextCurrent(window);
-  ReadDriverStrings();
+  FinishConstruction();
 #else
   (void)options;
   throw Error("no windowed OpenGL context: this build has no GLFW (apt: libglfw3-dev)");
@@ -197,6 +208,7 @@ Context::~Context() {
 #ifdef ATMO_HAVE_GLFW
   if (window_ != nullptr) {
     glfwMakeContextCurrent(static_cast<GLFWwindow*>(window_));
+    EndTimerQueries();
     programs_.clear();  // while the context is current
     const std::lock_guard<std::mutex> lock(g_display_mutex);
     glfwDestroyWindow(static_cast<GLFWwindow*>(window_));
@@ -206,6 +218,7 @@ Context::~Context() {
 #endif
   auto display = static_cast<EGLDisplay>(display_);
   eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, static_cast<EGLContext>(context_));
+  EndTimerQueries();
   programs_.clear();  // while the context is current
   const std::lock_guard<std::mutex> lock(g_display_mutex);
   eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
@@ -218,6 +231,7 @@ void Context::MakeCurrent() const {
 #ifdef ATMO_HAVE_GLFW
   if (window_ != nullptr) {
     glfwMakeContextCurrent(static_cast<GLFWwindow*>(window_));
+    SetCurrentTimerQueries(timer_queries_.get());
     return;
   }
 #endif
@@ -225,6 +239,7 @@ void Context::MakeCurrent() const {
                       static_cast<EGLContext>(context_))) {
     throw Error("OpenGL context: eglMakeCurrent failed (" + EglErrorText() + ")");
   }
+  SetCurrentTimerQueries(timer_queries_.get());
 }
 
 void Context::SwapBuffers() const {
@@ -232,6 +247,8 @@ void Context::SwapBuffers() const {
   if (window_ != nullptr) glfwSwapBuffers(static_cast<GLFWwindow*>(window_));
 #endif
 }
+
+void Context::Finish() const { glFinish(); }
 
 const ComputeProgram& Context::Program(std::span<const std::string_view> shared_files,
                                        std::string_view main_source, std::string_view name,

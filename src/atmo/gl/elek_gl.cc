@@ -648,6 +648,13 @@ double ElekTablesBuilder::progress() const {
   return static_cast<double>(state_->steps_done) / static_cast<double>(state_->steps_total);
 }
 
+std::string ElekTablesBuilder::next_step_kind() const {
+  const State& s = *state_;
+  if (done()) return "";
+  const State::Stage& stage = s.stages[s.stage];
+  return StepKind(stage.name, s.rows_per_step <= 0 || stage.rows <= s.rows_per_step);
+}
+
 void ElekTablesBuilder::Step(PassTimings* timings) {
   State& s = *state_;
   if (done()) return;

@@ -32,6 +32,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -81,6 +82,10 @@ class ElekTablesBuilder {
 
   bool done() const;
   double progress() const;  // steps done / steps in all: 0 .. 1, rising
+  // What the next Step runs, as a key under which steps cost about the same GPU time: its pass
+  // without the order's number, and "#whole" for a pass run in one step ("" when done). The
+  // viewer budgets its frames by it (apps/viewer/skies.cc, StepBudget).
+  std::string next_step_kind() const;
   void Step(PassTimings* timings = nullptr);
   ElekTablesGl Take();  // once done()
 

@@ -8,8 +8,16 @@
 
 #include "atmo/error.h"
 #include "gl/context.h"
+#include "gl/timer_queries.h"
 
 namespace atmo::gl {
+
+std::string StepKind(std::string_view pass, bool whole) {
+  std::string kind(pass);
+  while (!kind.empty() && kind.back() >= '0' && kind.back() <= '9') kind.pop_back();
+  if (whole) kind += "#whole";
+  return kind;
+}
 
 void CheckGlError(std::string_view what) {
   const GLenum error = glGetError();
@@ -179,40 +187,34 @@ double NowMs() {
 GpuPassTimer::GpuPassTimer(PassTimings* timings) : timings_(timings) {
   if (timings_ == nullptr) return;
   const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  software_ = renderer != nullptr && IsSoftwareRenderer(renderer);
-  if (!software_) glGenQueries(1, &query_);
+  const bool software = renderer != nullptr && IsSoftwareRenderer(renderer);
+  if (!software) queries_ = CurrentTimerQueries();
   Start();
 }
 
-GpuPassTimer::~GpuPassTimer() {
-  if (query_ != 0) {
-    glEndQuery(GL_TIME_ELAPSED);
-    glDeleteQueries(1, &query_);
-  }
-}
+// An unstopped record is dropped unread (TimerQueries deletes its queries).
+GpuPassTimer::~GpuPassTimer() = default;
 
 void GpuPassTimer::Start() {
-  if (software_) {
+  if (queries_ != nullptr) {
+    record_ = queries_->Begin();
+  } else {
     glFinish();
     start_ms_ = NowMs();
-  } else {
-    glBeginQuery(GL_TIME_ELAPSED, query_);
   }
 }
 
 void GpuPassTimer::Stop(std::string_view name) {
   if (timings_ == nullptr) return;
-  double ms = 0.0;
-  if (software_) {
-    glFinish();
-    ms = NowMs() - start_ms_;
+  if (queries_ != nullptr) {
+    queries_->End(*record_);
+    timings_->AddDeferred(name, [queries = queries_, record = record_](bool wait) {
+      return queries->Read(*record, wait);
+    });
   } else {
-    glEndQuery(GL_TIME_ELAPSED);
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(query_, GL_QUERY_RESULT, &ns);
-    ms = static_cast<double>(ns) * 1e-6;
+    glFinish();
+    timings_->Add(name, NowMs() - start_ms_);
   }
-  timings_->Add(name, ms);
   Start();
 }
 

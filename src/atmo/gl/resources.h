@@ -16,12 +16,15 @@
 #pragma once
 
 #include <initializer_list>
+#include <memory>
+#include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
 #include "atmo/timing.h"
 #include "gl/program.h"
+#include "gl/timer_queries.h"
 #include "shared/shared.h"
 
 namespace atmo::gl {
@@ -84,9 +87,11 @@ void DispatchCompute1D(const ComputeProgram& program, int count);
 void DispatchWorkGroups(const ComputeProgram& program, shared::ivec3 groups);
 
 // The GPU time of the passes between construction (or the last Stop) and Stop(name), added to
-// `timings` under `name`: a GL_TIME_ELAPSED query, or, on llvmpipe (which runs a dispatch on the
-// CPU inside the call and whose queries read ~0), the wall clock up to glFinish. With a null
-// `timings` it measures nothing and never waits for the GPU.
+// `timings` under `name`. On a GPU: a pair of GL_TIMESTAMP queries whose result `timings`
+// collects later (PassTimings::AddDeferred; gl/timer_queries.h), so timing never waits for the
+// GPU. On llvmpipe (which runs a dispatch on the CPU inside the call and whose queries read ~0):
+// the wall clock up to glFinish, added at once. With a null `timings` it measures nothing and
+// never waits for the GPU.
 class GpuPassTimer {
  public:
   explicit GpuPassTimer(PassTimings* timings);
@@ -100,10 +105,14 @@ class GpuPassTimer {
   void Start();
 
   PassTimings* timings_;
-  unsigned query_ = 0;
-  bool software_ = false;
+  std::shared_ptr<TimerQueries> queries_;  // null: the wall clock (a software GL, or no Context)
+  std::shared_ptr<GpuTimeRecord> record_;
   double start_ms_ = 0.0;
 };
+
+// The kind of a table builder's step (next_step_kind): `pass` without its trailing order number
+// ("source4d_gather_3" -> "source4d_gather_"), plus "#whole" when the pass runs in one step.
+std::string StepKind(std::string_view pass, bool whole);
 
 // Throws atmo::Error naming `what` when GL has recorded an error.
 void CheckGlError(std::string_view what);

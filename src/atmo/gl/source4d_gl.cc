@@ -827,6 +827,14 @@ double Source4dTablesBuilder::progress() const {
   return static_cast<double>(state_->steps_done) / static_cast<double>(state_->steps_total);
 }
 
+std::string Source4dTablesBuilder::next_step_kind() const {
+  const State& s = *state_;
+  if (done()) return "";
+  const State::Stage& stage = s.stages[s.stage];
+  if (stage.host) return "host";
+  return StepKind(stage.name, stage.groups_per_step <= 0 || stage.groups <= 1);
+}
+
 void Source4dTablesBuilder::Step(PassTimings* timings) {
   State& s = *state_;
   if (done()) return;

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include <glm/glm.hpp>
 
@@ -76,6 +77,10 @@ class Source4dTablesBuilder {
 
   bool done() const;
   double progress() const;  // steps done / steps in all: 0 .. 1, rising
+  // What the next Step runs, as a key under which steps cost about the same GPU time: its pass
+  // without the order's number, and "#whole" for a pass run in one step ("" when done). The
+  // viewer budgets its frames by it (apps/viewer/skies.cc, StepBudget).
+  std::string next_step_kind() const;
   void Step(PassTimings* timings = nullptr);
   Source4dTablesGl Take();  // once done()
 

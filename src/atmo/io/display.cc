@@ -225,8 +225,10 @@ double AutoExposureEv100(const Image& image, Metering metering) {
   const double low = log_luminance[low_rank];
   double sum = 0.0;
   for (double l : log_luminance) sum += std::clamp(l, low, high);
-  const double log2_average = sum / static_cast<double>(n);
+  return MeteredEv100(sum / static_cast<double>(n), metering);
+}
 
+double MeteredEv100(double log2_average, Metering metering) {
   if (metering == Metering::kAdaptive) {
     // The average at the adapted key: exposure * L_avg = key, exposure = 1 / (1.2 * 2^EV100).
     return log2_average - std::log2(1.2 * MeteringKey(std::exp2(log2_average)));
