@@ -32,6 +32,7 @@
 namespace atmo::gl {
 namespace {
 
+using testing::GlBound;
 using testing::SamplerSlack;
 
 // Per invocation i of `count`: the sun-zenith axis's unit of mu_s = -1 + 2 (i + 0.5) / count, the
@@ -404,6 +405,49 @@ TEST(GlSource4d, GpuTablesMatchCpu) {
   ExpectGpuTablesMatch(context, "atmosphere-plus", /*tail=*/false);
 }
 
+// The quadrature matrices of the GPU pass (which the builder uses on a hardware GPU) against the
+// CPU's, for Rayleigh and two Mie phase functions, on the default gathering grid (49 x 9) and
+// table (24 x 48 directions): each entry within a small fraction of its row's largest (float
+// against double, the sub-samples summed per node instead of per sub-sample), every row a
+// partition of unity, the irradiance weights the CPU's own.
+TEST(GlSource4d, QuadratureOnTheGpuMatchesTheCpu) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const cpu::Source4dSettings settings;  // the defaults
+  for (const char* preset : {"earth", "atmosphere-plus"}) {
+    const shared::AtmosphereParameters km = ToSharedParameters(Preset(preset), 0, 1000.0);
+    const cpu::Source4dQuadrature cpu = cpu::ComputeSource4dQuadrature(km, settings);
+    const cpu::Source4dQuadrature gpu = ComputeSource4dQuadratureGl(context, km, settings);
+    ASSERT_EQ(gpu.out_count, cpu.out_count);
+    ASSERT_EQ(gpu.in_count, cpu.in_count);
+    ASSERT_EQ(gpu.rayleigh.size(), cpu.rayleigh.size());
+    ASSERT_EQ(gpu.mie.size(), cpu.mie.size());
+    EXPECT_EQ(gpu.irradiance, cpu.irradiance);
+    double worst[2] = {0.0, 0.0};
+    double worst_sum = 0.0;
+    for (int medium = 0; medium < 2; ++medium) {
+      const std::vector<float>& g = medium == 0 ? gpu.rayleigh : gpu.mie;
+      const std::vector<float>& c = medium == 0 ? cpu.rayleigh : cpu.mie;
+      for (int cd = 0; cd < cpu.out_count; ++cd) {
+        const std::size_t row = static_cast<std::size_t>(cd) * cpu.in_count;
+        const float peak = *std::max_element(c.begin() + row, c.begin() + row + cpu.in_count);
+        double sum = 0.0;
+        for (int ab = 0; ab < cpu.in_count; ++ab) {
+          worst[medium] = std::max(worst[medium], std::abs(double(g[row + ab]) - c[row + ab]) / peak);
+          sum += g[row + ab];
+        }
+        worst_sum = std::max(worst_sum, std::abs(sum - 1.0));
+      }
+    }
+    std::printf("%s quadrature GPU vs CPU: max |difference| / row peak: rayleigh %.2g, mie %.2g; row sums off by %.2g\n",
+                preset, worst[0], worst[1], worst_sum);
+    // Measured: llvmpipe rayleigh 5.9e-7, mie 4.3e-6; an H200 8.1e-7 and 1.8e-5 (its sin, cos
+    // and pow are a few ulp coarser).
+    EXPECT_LT(worst[0], 1e-5) << preset;
+    EXPECT_LT(worst[1], GlBound(context, 1e-5, 4e-5)) << preset;
+    EXPECT_LT(worst_sum, 1e-5) << preset;
+  }
+}
+
 // The stepped builder (atmo-viewer's) gives the tables of the whole passes bit for bit, with
 // the gathering cut into steps of 3 work groups (the products 1), the CPU's part on its own
 // thread, and another builder (another
@@ -510,10 +554,11 @@ TEST_F(GlSource4dCli, SampleMatchesCpuBackend) {
   std::printf("atmo sample source4d gl vs cpu: max rel radiance %.2g, transmittance %.2g\n", max_radiance,
               max_transmittance);
   // The lookups are the CPU's on both; G and the ground irradiance differ as in
-  // GpuTablesMatchCpu (measured 1.9e-5 here), and the transmittance table is computed on the CPU
-  // for both (in km for GL, in double either way: 0 measured at the CSV's 10 digits).
+  // GpuTablesMatchCpu (measured 1.9e-5 here), and the transmittance table is the GPU's in float
+  // (hillaire's kernel, bounded at 5e-4 relative by GlHillaire.TransmittanceTableMatchesCpu;
+  // measured 3.2e-6 at these points on llvmpipe).
   EXPECT_LT(max_radiance, SamplerSlack(context) * kTableP99);
-  EXPECT_LT(max_transmittance, 1e-6);
+  EXPECT_LT(max_transmittance, GlBound(context, 2e-5, 1.6e-3));
 }
 
 }  // namespace

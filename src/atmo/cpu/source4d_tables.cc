@@ -599,6 +599,37 @@ std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmos
   return GatherRadiance(grid, tables.transmittance, tables.rayleigh, tables.mie, tables.ground_irradiance, order).values;
 }
 
+std::vector<double> ComputeSource4dIrradianceWeights(const Source4dSettings& s) {
+  const int in_count = s.gather_zeniths * s.gather_azimuths;
+  std::vector<double> irradiance(in_count, 0.0);
+  const double d_theta = shared::kPi / (s.gather_zeniths - 1);
+  const double d_phi = shared::kPi / (s.gather_azimuths - 1);
+  // The sub-samples of every cell of the upper half (cos theta > 0), as the matrices' below: the
+  // cosine-weighted solid angle of both mirror halves, spread over the cell's nodes by the hats.
+  for (int a = 0; a + 1 < s.gather_zeniths; ++a) {
+    for (int b = 0; b + 1 < s.gather_azimuths; ++b) {
+      for (int u = 0; u < kSubSamples; ++u) {
+        const double fu = (u + 0.5) / kSubSamples;
+        const double theta = (a + fu) * d_theta;
+        const double cos_theta = std::cos(theta);
+        if (cos_theta <= 0.0) continue;
+        for (int v = 0; v < kSubSamples; ++v) {
+          const double fv = (v + 0.5) / kSubSamples;
+          const double solid_angle = std::sin(theta) * d_theta * d_phi / (kSubSamples * kSubSamples);
+          const int n00 = a * s.gather_azimuths + b;
+          const int node[4] = {n00, n00 + s.gather_azimuths, n00 + 1, n00 + s.gather_azimuths + 1};
+          const double hat[4] = {(1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv};
+          for (int k = 0; k < 4; ++k) irradiance[node[k]] += 2.0 * solid_angle * cos_theta * hat[k];
+        }
+      }
+    }
+  }
+  double sum = 0.0;
+  for (double w : irradiance) sum += w;
+  for (double& w : irradiance) w *= shared::kPi / sum;  // a uniform unit radiance gives pi
+  return irradiance;
+}
+
 Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
                                              const Source4dSettings& s) {
   Source4dQuadrature q;
@@ -645,13 +676,7 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
       }
     }
   }
-  for (const SubSample& sub : subs) {
-    if (sub.cos_theta <= 0.0) continue;
-    for (int k = 0; k < 4; ++k) q.irradiance[sub.node[k]] += 2.0 * sub.solid_angle * sub.cos_theta * sub.hat[k];
-  }
-  double irradiance_sum = 0.0;
-  for (double w : q.irradiance) irradiance_sum += w;
-  for (double& w : q.irradiance) w *= shared::kPi / irradiance_sum;  // a uniform unit radiance gives pi
+  q.irradiance = ComputeSource4dIrradianceWeights(s);
   oneapi::tbb::parallel_for(0, q.out_count, [&](int cd) {
     const int c = cd / s.phi_size;
     const int d = cd % s.phi_size;

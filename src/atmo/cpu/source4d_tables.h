@@ -84,5 +84,8 @@ std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmos
 
 Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters& atmosphere,
                                              const Source4dSettings& settings);
+// Its irradiance weights alone (they depend on the gathering grid only): for the GPU builder,
+// whose matrices are computed on the GPU (gl/source4d_gl.h).
+std::vector<double> ComputeSource4dIrradianceWeights(const Source4dSettings& settings);
 
 }  // namespace atmo::cpu

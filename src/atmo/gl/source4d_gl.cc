@@ -363,44 +363,162 @@ void main() {
 }
 )glsl";
 
-// One invocation per column and block of kSource4dConvolveBlock output directions: G of the next
-// order, both media, by the quadrature matrices (Convolve, in the CPU's order of summation over
-// the field's directions), added to the sums. A block reads each field value once for all its
-// directions (8 times fewer reads than an invocation per direction; on llvmpipe, where the reads
-// are strided across invocations, the default table's products ran 1.7x faster at the median).
-constexpr int kSource4dConvolveBlock = 8;
+// G of the next order, both media, by the quadrature matrices (Convolve on the CPU), added to the
+// sums: the matrix product C = W F with W the quadrature matrices stacked ((2 out_count) x
+// in_count: [medium][cd][ab]), F the field (in_count x columns) and C laid out as g, computed as a
+// GEMM of 64 x 64 tiles of C per work group of 16 x 16 invocations, 4 x 4 values each, through
+// shared-memory tiles of W and F 16 deep. Each value of W and F is read from memory once per tile
+// instead of once per output, and the inner loop is 16 fused multiply-adds per 8 shared reads.
+// The sum over ab runs in blocks of 16 in ab's order (float rounding differs from the CPU's
+// order by ~1e-7 relative). On an H200 the earth table's product (2304 x 441 x 384) took
+// 2.36 ms as one invocation per column and block of 8 directions.
+constexpr int kConvolveTile = 64;
 constexpr const char* kConvolveMain = R"glsl(
-layout(local_size_x = 64) in;
+layout(local_size_x = 16, local_size_y = 16) in;
 layout(std430, binding = 0) readonly buffer FieldBuffer { float field[]; };
 layout(std430, binding = 1) readonly buffer WeightBuffer { float weights[]; };  // [medium][cd][ab]
 layout(std430, binding = 2) writeonly buffer GBuffer { float g[]; };
 layout(std430, binding = 3) buffer SumBuffer { float sum[]; };
 uniform int in_count;
-const int kBlock = 8;  // kSource4dConvolveBlock
-uniform int id_offset;  // the first invocation of this dispatch (Source4dTablesBuilder's steps)
+uniform int group_offset;  // the first tile of this dispatch (Source4dTablesBuilder's steps)
+const int kTile = 64;
+const int kDepth = 16;
+shared float w_tile[kDepth][kTile];  // w_tile[ab][row]
+shared float f_tile[kDepth][kTile];  // f_tile[ab][column]
 
 void main() {
-  int id = int(gl_GlobalInvocationID.x) + id_offset;
-  int blocks = (out_count + kBlock - 1) / kBlock;
-  if (id >= blocks * columns) return;
-  int k = id % columns;
-  int cd_0 = (id / columns) * kBlock;
-  int count = min(kBlock, out_count - cd_0);
-  for (int m = 0; m < 2; ++m) {
-    float value[kBlock];
-    for (int q = 0; q < kBlock; ++q) value[q] = 0.0;
-    for (int ab = 0; ab < in_count; ++ab) {
-      float f = field[ab * columns + k];
-      for (int q = 0; q < count; ++q) {
-        float w = weights[(m * out_count + cd_0 + q) * in_count + ab];
-        if (w != 0.0) value[q] += w * f;
+  const int rows = 2 * out_count;
+  const int tiles_across = (columns + kTile - 1) / kTile;
+  const int tile = int(gl_WorkGroupID.x) + group_offset;
+  const int row_0 = (tile / tiles_across) * kTile;
+  const int column_0 = (tile % tiles_across) * kTile;
+  if (row_0 >= rows) return;  // the whole work group: no barrier is skipped by some only
+  const int tx = int(gl_LocalInvocationID.x);
+  const int ty = int(gl_LocalInvocationID.y);
+  const int lane = ty * 16 + tx;
+  float value[4][4];
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) value[i][j] = 0.0;
+  }
+  for (int ab_0 = 0; ab_0 < in_count; ab_0 += kDepth) {
+    for (int e = lane; e < kTile * kDepth; e += 256) {
+      // W: consecutive invocations read consecutive ab of one row; F: consecutive columns.
+      const int w_row = e / kDepth;
+      const int w_ab = e % kDepth;
+      const int row = row_0 + w_row;
+      const int ab = ab_0 + w_ab;
+      w_tile[w_ab][w_row] = row < rows && ab < in_count ? weights[row * in_count + ab] : 0.0;
+      const int f_ab = e / kTile;
+      const int f_column = e % kTile;
+      const int column = column_0 + f_column;
+      const int fab = ab_0 + f_ab;
+      f_tile[f_ab][f_column] = fab < in_count && column < columns ? field[fab * columns + column] : 0.0;
+    }
+    barrier();
+    for (int k = 0; k < kDepth; ++k) {
+      float w[4];
+      float f[4];
+      for (int i = 0; i < 4; ++i) w[i] = w_tile[k][ty + 16 * i];
+      for (int j = 0; j < 4; ++j) f[j] = f_tile[k][tx + 16 * j];
+      for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) value[i][j] += w[i] * f[j];
       }
     }
-    for (int q = 0; q < count; ++q) {
-      int at = (m * out_count + cd_0 + q) * columns + k;
-      g[at] = value[q];
-      sum[at] += value[q];
+    barrier();
+  }
+  for (int i = 0; i < 4; ++i) {
+    const int row = row_0 + ty + 16 * i;
+    if (row >= rows) continue;
+    for (int j = 0; j < 4; ++j) {
+      const int column = column_0 + tx + 16 * j;
+      if (column >= columns) continue;
+      const int at = row * columns + column;
+      g[at] = value[i][j];
+      sum[at] += value[i][j];
     }
+  }
+}
+)glsl";
+
+// The quadrature matrices (cpu::ComputeSource4dQuadrature) on the GPU: one work group per output
+// direction cd, an invocation per gathering node ab (strided), which sums over the 4 x 4
+// sub-samples of the up to four cells around its node the phase functions of the view and its
+// mirror image times the sub-sample's solid angle and the node's hat weight; the row is then
+// normalised by its sum (the hats of a sub-sample sum to 1, so the row sums to the CPU's sum
+// over sub-samples). Float against the CPU's double, summed per node instead of per sub-sample.
+constexpr const char* kQuadratureMain = R"glsl(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) buffer WeightBuffer { float weights[]; };  // [medium][cd][ab]
+uniform int mu_size;
+uniform int phi_size;
+const int kSub = 4;  // cpu/source4d_tables.cc, kSubSamples
+shared float partial_r[64];
+shared float partial_m[64];
+
+void main() {
+  const int cd = int(gl_WorkGroupID.x);
+  const int lane = int(gl_LocalInvocationIndex);
+  const int in_count = gather_zeniths * gather_azimuths;
+  const float theta_v = GetSource4dNodeAngle(cd / phi_size, mu_size, kPi);
+  const float phi_v = GetSource4dNodeAngle(cd % phi_size, phi_size, kPi);
+  const float cv = cos(theta_v);
+  const float sv = sin(theta_v);
+  const float cos_phi_v = cos(phi_v);
+  const float sin_phi_v = sin(phi_v);
+  const float d_theta = kPi / float(gather_zeniths - 1);
+  const float d_phi = kPi / float(gather_azimuths - 1);
+  float sum_r = 0.0;
+  float sum_m = 0.0;
+  for (int ab = lane; ab < in_count; ab += 64) {
+    const int a = ab / gather_azimuths;
+    const int b = ab % gather_azimuths;
+    float wr = 0.0;
+    float wm = 0.0;
+    for (int ca = max(a - 1, 0); ca <= min(a, gather_zeniths - 2); ++ca) {
+      for (int cb = max(b - 1, 0); cb <= min(b, gather_azimuths - 2); ++cb) {
+        for (int u = 0; u < kSub; ++u) {
+          const float fu = (float(u) + 0.5) / float(kSub);
+          const float theta = (float(ca) + fu) * d_theta;
+          const float cos_theta = cos(theta);
+          const float sin_theta = sin(theta);
+          const float hat_u = a == ca + 1 ? fu : 1.0 - fu;
+          const float solid_angle = sin_theta * d_theta * d_phi / float(kSub * kSub);
+          for (int v = 0; v < kSub; ++v) {
+            const float fv = (float(v) + 0.5) / float(kSub);
+            const float phi = (float(cb) + fv) * d_phi;
+            const float cos_phi = cos(phi);
+            const float sin_phi = sin(phi);
+            const float hat = hat_u * (b == cb + 1 ? fv : 1.0 - fv);
+            // The view and its mirror image: cos(phi - phi_v) and cos(phi + phi_v).
+            const float nu_0 = ClampCosine(cv * cos_theta + sv * sin_theta * (cos_phi * cos_phi_v + sin_phi * sin_phi_v));
+            const float nu_1 = ClampCosine(cv * cos_theta + sv * sin_theta * (cos_phi * cos_phi_v - sin_phi * sin_phi_v));
+            const float w = solid_angle * hat;
+            wr += w * (GetRayleighPhase(atmosphere, nu_0) + GetRayleighPhase(atmosphere, nu_1));
+            wm += w * (GetMiePhase(atmosphere, nu_0) + GetMiePhase(atmosphere, nu_1));
+          }
+        }
+      }
+    }
+    weights[cd * in_count + ab] = wr;
+    weights[(out_count + cd) * in_count + ab] = wm;
+    sum_r += wr;
+    sum_m += wm;
+  }
+  partial_r[lane] = sum_r;
+  partial_m[lane] = sum_m;
+  barrier();
+  for (int offset = 32; offset > 0; offset /= 2) {
+    if (lane < offset) {
+      partial_r[lane] += partial_r[lane + offset];
+      partial_m[lane] += partial_m[lane + offset];
+    }
+    barrier();
+  }
+  const float total_r = partial_r[0];
+  const float total_m = partial_m[0];
+  for (int ab = lane; ab < in_count; ab += 64) {  // this invocation's own writes, read back
+    weights[cd * in_count + ab] /= total_r;
+    weights[(out_count + cd) * in_count + ab] /= total_m;
   }
 }
 )glsl";
@@ -529,6 +647,12 @@ class StorageBuffer {
   StorageBuffer(const StorageBuffer&) = delete;
   StorageBuffer& operator=(const StorageBuffer&) = delete;
   void Bind(unsigned binding) const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer_); }
+  std::vector<float> Download(std::size_t count) const {  // waits for the GPU
+    std::vector<float> values(count);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(buffer_, 0, static_cast<GLsizeiptr>(count * sizeof(float)), values.data());
+    return values;
+  }
 
  private:
   GLuint buffer_ = 0;
@@ -548,17 +672,30 @@ const ComputeProgram& BuilderProgram(const Context& context, const char* main_so
 
 int GroupCount1D(long long count) { return static_cast<int>((count + kGroupSize1D - 1) / kGroupSize1D); }
 
-// A matrix-product invocation (2 x 8 output directions times every gathering direction, 441 of
-// them by default) costs about 10x a gathering one (24 steps) on llvmpipe (atmo bench --backend
-// gl --model source4d: 1.7 s for 864 work groups against 1.15 s for 5292): its steps are 8x
-// fewer work groups, so that every step takes a few ms.
-constexpr int kConvolveStepDivisor = 8;
+// The quadrature matrices on the GPU into `weights` ((2 out_count) x in_count floats).
+void RunQuadraturePass(const Context& context, const shared::AtmosphereParameters& km, const cpu::Source4dSettings& t,
+                       const StorageBuffer& weights, double& compile_ms) {
+  const ComputeProgram& p = BuilderProgram(context, kQuadratureMain, "source4d quadrature", compile_ms);
+  p.Use();
+  SetAtmosphereUniforms(p, "atmosphere", km);
+  p.SetInt("gather_zeniths", t.gather_zeniths);
+  p.SetInt("gather_azimuths", t.gather_azimuths);
+  p.SetInt("out_count", t.mu_size * t.phi_size);
+  p.SetInt("mu_size", t.mu_size);
+  p.SetInt("phi_size", t.phi_size);
+  weights.Bind(0);
+  DispatchWorkGroups(p, {t.mu_size * t.phi_size, 1, 1});
+}
 
-// The builder's work on the CPU (the transmittance table, the quadrature matrices) and its times.
+// A matrix-product work group (a 64 x 64 tile of G over all 441 gathering directions by default)
+// is 4x the work of the product's invocations of 64 gathering steps' (a gathering work group): its
+// steps are 32x fewer work groups, so that every step takes a few ms on llvmpipe.
+constexpr int kConvolveStepDivisor = 32;
+
+// The builder's work on the CPU (the quadrature matrices, which depend only on the phase
+// functions) and its time.
 struct Source4dHostParts {
-  shared::Texture2D transmittance;
   cpu::Source4dQuadrature quadrature;
-  double transmittance_ms = 0.0;
   double quadrature_ms = 0.0;
 };
 
@@ -571,9 +708,6 @@ Source4dHostParts ComputeHostParts(const shared::AtmosphereParameters& km, const
     start = now;
     return ms;
   };
-  parts.transmittance = shared::Texture2D(settings.transmittance_lut.x, settings.transmittance_lut.y);
-  cpu::ComputeTransmittanceTable(km, settings.transmittance_samples, parts.transmittance);
-  parts.transmittance_ms = since();
   parts.quadrature = cpu::ComputeSource4dQuadrature(km, settings);
   parts.quadrature_ms = since();
   return parts;
@@ -589,6 +723,7 @@ struct Source4dTablesBuilder::State {
   cpu::Source4dSettings settings;
   const ComputeProgram* gather = nullptr;
   const ComputeProgram* convolve = nullptr;
+  bool gpu_quadrature = false;  // the matrices on the GPU (else on the CPU, on a thread)
   const ComputeProgram* ground = nullptr;
   const ComputeProgram* tail = nullptr;
   const ComputeProgram* ground_sum = nullptr;
@@ -633,9 +768,9 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
   const int nodes = t.r_size * t.mu_s_size;
   const int columns = nodes * 3;
   const long long gather_count = static_cast<long long>(nodes) * t.gather_zeniths * t.gather_azimuths;
-  const long long convolve_count =
-      static_cast<long long>((t.mu_size * t.phi_size + kSource4dConvolveBlock - 1) / kSource4dConvolveBlock) * columns;
-  if (std::max(gather_count, convolve_count) > 65535LL * kGroupSize1D) {
+  const long long convolve_groups = ((2LL * t.mu_size * t.phi_size + kConvolveTile - 1) / kConvolveTile) *
+                                    ((columns + kConvolveTile - 1) / kConvolveTile);
+  if (gather_count > 65535LL * kGroupSize1D || convolve_groups > 65535LL) {
     throw Error("GL source4d: table " + std::to_string(t.r_size) + "x" + std::to_string(t.mu_size) + "x" +
                 std::to_string(t.mu_s_size) + "x" + std::to_string(t.phi_size) + " with gather " +
                 std::to_string(t.gather_zeniths) + "x" + std::to_string(t.gather_azimuths) +
@@ -650,6 +785,7 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
   s.tail = &BuilderProgram(context, kTailMain, "source4d tail", compile_ms);
   s.ground_sum = &BuilderProgram(context, kGroundSumMain, "source4d ground sum", compile_ms);
   s.log_table = &BuilderProgram(context, kLogMain, "source4d log table", compile_ms);
+  if (!context.software_renderer()) BuilderProgram(context, kQuadratureMain, "source4d quadrature", compile_ms);
   if (timings != nullptr) timings->Add("source4d_gl_compile", compile_ms);
   s.tables.mu_s_size = t.mu_s_size;
 
@@ -681,34 +817,20 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
     DispatchWorkGroups(program, {group_count, 1, 1});
   };
 
-  // On the CPU: the transmittance table and the quadrature matrices (which depend only on the
-  // phase functions), uploaded.
-  s.host = std::async(groups_per_step > 0 ? std::launch::async : std::launch::deferred, ComputeHostParts, s.km,
-                      s.settings);
-  State::Stage host_stage;
-  host_stage.name = "cpu_source4d";
-  host_stage.groups = 1;
-  host_stage.groups_per_step = 0;
-  host_stage.host = true;
-  host_stage.run = [&s, nodes, columns, groups_per_step](int, int, PassTimings* timings) {
-    if (groups_per_step > 0 && s.host.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) {
-      return false;
-    }
-    const auto start = std::chrono::steady_clock::now();
-    const Source4dHostParts parts = s.host.get();
-    s.tables.transmittance = GpuTexture::Upload(parts.transmittance);
-    const double upload_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    const cpu::Source4dQuadrature& q = parts.quadrature;
-    s.out_count = q.out_count;
-    s.in_count = q.in_count;
-    std::vector<float> weights = q.rayleigh;
-    weights.insert(weights.end(), q.mie.begin(), q.mie.end());
-    s.weights = std::make_unique<StorageBuffer>(weights);
-    s.irradiance_weights =
-        std::make_unique<StorageBuffer>(std::vector<float>(q.irradiance.begin(), q.irradiance.end()));
-    const std::size_t g_size = 2 * static_cast<std::size_t>(q.out_count) * columns;
-    s.field = std::make_unique<StorageBuffer>(static_cast<std::size_t>(q.in_count) * columns);
+  // The transmittance table on the GPU: the kernel of hillaire's table (RunTransmittancePass),
+  // the same texel function as the CPU's ComputeTransmittanceTable, in float. On an H200 the CPU's
+  // table took 10 ms on 16 cores of the tables' 27 ms.
+  add("source4d_transmittance_lut", 1, [&s](int, int) {
+    s.tables.transmittance = GpuTexture::Make2D({s.settings.transmittance_lut.x, s.settings.transmittance_lut.y});
+    RunTransmittancePass(s.context, s.km, s.settings.transmittance_samples, s.tables.transmittance);
+  });
+  // The buffers of the orders, once the quadrature's sizes are known.
+  const auto allocate = [&s, nodes, columns](int out_count, int in_count, const std::vector<double>& irradiance) {
+    s.out_count = out_count;
+    s.in_count = in_count;
+    s.irradiance_weights = std::make_unique<StorageBuffer>(std::vector<float>(irradiance.begin(), irradiance.end()));
+    const std::size_t g_size = 2 * static_cast<std::size_t>(out_count) * columns;
+    s.field = std::make_unique<StorageBuffer>(static_cast<std::size_t>(in_count) * columns);
     s.g[0] = std::make_unique<StorageBuffer>(g_size);
     s.g[1] = std::make_unique<StorageBuffer>(g_size);
     s.sum = std::make_unique<StorageBuffer>(g_size);
@@ -720,16 +842,47 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
     s.tables.rayleigh = GpuTexture::Make3D(table_size);
     s.tables.mie = GpuTexture::Make3D(table_size);
     s.tables.ground_irradiance = GpuTexture::Make2D({s.settings.mu_s_size, 1});
-    if (timings != nullptr) {
-      timings->Add("cpu_source4d_transmittance_lut", parts.transmittance_ms + upload_ms);
-      timings->Add("cpu_source4d_quadrature", parts.quadrature_ms);
-    }
-    return true;
   };
-  s.stages.push_back(std::move(host_stage));
+  // The quadrature matrices: on a GPU by its own pass (on an H200 the CPU's took 4 to 7 ms on 16
+  // cores, the GPU's 0.1 ms); on a software GL by the CPU on a thread while the transmittance
+  // table is built (llvmpipe runs the pass ~20x slower than the CPU's double loops).
+  s.gpu_quadrature = !context.software_renderer();
+  if (s.gpu_quadrature) {
+    add("source4d_quadrature", 1, [&s, allocate](int, int) {
+      const cpu::Source4dSettings& t = s.settings;
+      allocate(t.mu_size * t.phi_size, t.gather_zeniths * t.gather_azimuths, cpu::ComputeSource4dIrradianceWeights(t));
+      s.weights = std::make_unique<StorageBuffer>(2 * static_cast<std::size_t>(s.out_count) * s.in_count);
+      double compile_ms = 0.0;
+      RunQuadraturePass(s.context, s.km, t, *s.weights, compile_ms);
+    });
+  } else {
+    s.host = std::async(groups_per_step > 0 ? std::launch::async : std::launch::deferred, ComputeHostParts, s.km,
+                        s.settings);
+    State::Stage host_stage;
+    host_stage.name = "cpu_source4d";
+    host_stage.groups = 1;
+    host_stage.groups_per_step = 0;
+    host_stage.host = true;
+    host_stage.run = [&s, allocate, groups_per_step](int, int, PassTimings* timings) {
+      if (groups_per_step > 0 && s.host.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) {
+        return false;
+      }
+      const auto start = std::chrono::steady_clock::now();
+      const Source4dHostParts parts = s.host.get();
+      const cpu::Source4dQuadrature& q = parts.quadrature;
+      std::vector<float> weights = q.rayleigh;
+      weights.insert(weights.end(), q.mie.begin(), q.mie.end());
+      s.weights = std::make_unique<StorageBuffer>(weights);
+      allocate(q.out_count, q.in_count, q.irradiance);
+      const double upload_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      if (timings != nullptr) timings->Add("cpu_source4d_quadrature", parts.quadrature_ms + upload_ms);
+      return true;
+    };
+    s.stages.push_back(std::move(host_stage));
+  }
 
   const int gather_groups = GroupCount1D(gather_count);
-  const int convolve_groups = GroupCount1D(convolve_count);
   const int convolve_per_step = groups_per_step <= 0 ? 0 : std::max(1, groups_per_step / kConvolveStepDivisor);
   const auto add_gather = [&](int order) {
     add_part("source4d_gather_" + std::to_string(order), gather_groups, groups_per_step,
@@ -767,15 +920,16 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
     gi = 1 - gi;
     slot = 1 - slot;
     const std::string name = "source4d_convolve_" + std::to_string(n);
-    add_part(name, convolve_groups, convolve_per_step, [&s, use, dispatch_part, gi](int first, int count) {
+    add_part(name, static_cast<int>(convolve_groups), convolve_per_step, [&s, use, gi](int first, int count) {
       const ComputeProgram& p = *s.convolve;
       use(p);
       p.SetInt("in_count", s.in_count);
+      p.SetInt("group_offset", first);
       s.field->Bind(0);
       s.weights->Bind(1);
       s.g[gi]->Bind(2);
       s.sum->Bind(3);
-      dispatch_part(p, first, count);
+      DispatchWorkGroups(p, {count, 1, 1});
     });
     add(name, 1, [&s, use, slot](int, int) {
       const ComputeProgram& p = *s.ground;
@@ -825,6 +979,25 @@ bool Source4dTablesBuilder::done() const { return state_->stage >= state_->stage
 
 double Source4dTablesBuilder::progress() const {
   return static_cast<double>(state_->steps_done) / static_cast<double>(state_->steps_total);
+}
+
+cpu::Source4dQuadrature ComputeSource4dQuadratureGl(const Context& context,
+                                                    const shared::AtmosphereParameters& km_atmosphere,
+                                                    const cpu::Source4dSettings& settings) {
+  context.MakeCurrent();
+  cpu::Source4dQuadrature q;
+  q.out_count = settings.mu_size * settings.phi_size;
+  q.in_count = settings.gather_zeniths * settings.gather_azimuths;
+  q.irradiance = cpu::ComputeSource4dIrradianceWeights(settings);
+  const std::size_t count = static_cast<std::size_t>(q.out_count) * q.in_count;
+  const StorageBuffer weights(2 * count);
+  double compile_ms = 0.0;
+  RunQuadraturePass(context, km_atmosphere, settings, weights, compile_ms);
+  const std::vector<float> both = weights.Download(2 * count);
+  q.rayleigh.assign(both.begin(), both.begin() + static_cast<std::ptrdiff_t>(count));
+  q.mie.assign(both.begin() + static_cast<std::ptrdiff_t>(count), both.end());
+  CheckGlError("source4d quadrature");
+  return q;
 }
 
 std::string Source4dTablesBuilder::next_step_kind() const {

@@ -47,11 +47,13 @@ struct Source4dTablesGl {
 Source4dTablesGl UploadSource4dTables(const cpu::Source4dTables& tables);
 
 // The tables of one batch built on the GPU, the passes of cpu::ComputeSource4dTables in float:
-// per order the gathering (one invocation per ray and node), the products with the quadrature
-// matrices and the ground irradiance, the ln-G tables of the order, then the geometric tail and
-// the sums. GPU times as source4d_gather_N, source4d_convolve_N, source4d_sum; the CPU's parts as
-// cpu_source4d_transmittance_lut and cpu_source4d_quadrature; compilation as
-// source4d_gl_compile. `km_atmosphere` = ToSharedParameters(parameters, batch, 1000). Throws
+// the transmittance table (hillaire's kernel), then per order the gathering (one invocation per
+// ray and node), the products with the quadrature matrices (a tiled matrix product) and the
+// ground irradiance, the ln-G tables of the order, then the geometric tail and the sums. GPU
+// times as source4d_transmittance_lut, source4d_gather_N, source4d_convolve_N, source4d_sum; the
+// quadrature matrices as source4d_quadrature on a hardware GPU, or on a software GL (where the
+// CPU is faster) as cpu_source4d_quadrature, computed on a thread while the transmittance table
+// is built; compilation as source4d_gl_compile. `km_atmosphere` = ToSharedParameters(parameters, batch, 1000). Throws
 // atmo::Error for a table whose passes would need more than 65535 work groups.
 Source4dTablesGl ComputeSource4dTablesGl(const Context& context, const shared::AtmosphereParameters& km_atmosphere,
                                          const cpu::Source4dSettings& settings, PassTimings* timings = nullptr);
@@ -88,6 +90,12 @@ class Source4dTablesBuilder {
   struct State;
   std::unique_ptr<State> state_;
 };
+
+// The quadrature matrices (cpu::ComputeSource4dQuadrature) computed by the builder's GPU pass and
+// downloaded (the builder uses that pass on a hardware GPU; on a software GL the CPU's): for tests.
+cpu::Source4dQuadrature ComputeSource4dQuadratureGl(const Context& context,
+                                                    const shared::AtmosphereParameters& km_atmosphere,
+                                                    const cpu::Source4dSettings& settings);
 
 // Fills every batch of `model` with tables computed on GL (ComputeSource4dTablesGl) and
 // downloaded (Source4dModel::SetComputedTables), so that its SkyView answers from them on the CPU.
