@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <optional>
 
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/task_arena.h>
@@ -31,6 +32,7 @@
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/hillaire_gl.h"
+#include "gl/resources.h"
 #endif
 
 namespace atmo::cli {
@@ -107,8 +109,19 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     } else {
       sky = std::make_unique<gl::HillaireGl>(context, parameters, GlHillaireSettings(common));
       run = [&](PassTimings* timings) {
+        // Besides each pass: the GPU's span from the first table's start to the last one's end
+        // (span_tables: the passes' sum plus the gaps between them, where the GPU waited for
+        // commands) and the CPU's time to issue them (submit_tables).
+        std::optional<gl::GpuPassTimer> span;
+        if (timings != nullptr) span.emplace(timings);
+        const auto submit = std::chrono::steady_clock::now();
         sky->Precompute(timings);
         sky->SetView(settings.altitude_m, sun, settings.terms.ground, timings);
+        if (timings != nullptr) {
+          timings->Add("submit_tables", std::chrono::duration<double, std::milli>(
+                                            std::chrono::steady_clock::now() - submit).count());
+          span->Stop("span_tables");
+        }
         sky->RenderFrame(camera, settings.terms, timings);
       };
     }
@@ -132,6 +145,7 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       // time in this repeat is the sum over the batches (total_ms; `timings` is this repeat's).
       for (const PassTiming& pass : timings.entries()) {
         samples.Add(pass.name, pass.total_ms);
+        if (pass.name.rfind("span_", 0) == 0 || pass.name.rfind("submit_", 0) == 0) continue;  // not passes
         // source4d's CPU parts (cpu_NAME) are not GPU passes.
         if (EndsWith(pass.name, "_lut") && pass.name.rfind("cpu_", 0) != 0) all_luts_ms += pass.total_ms;
         // Every pass but the frame's: the tables' whole cost, CPU parts included.
