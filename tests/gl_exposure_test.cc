@@ -220,9 +220,8 @@ TEST(GlTimerQueries, AreReadWhenReadyAndDeletedWhenDropped) {
     timings.AddDeferred("work", [queries, record](bool wait) { return queries->Read(*record, wait); });
   }
   EXPECT_EQ(queries->outstanding(), before + 1);
-  const double ms = timings.LastMs("work");  // waits
-  EXPECT_GE(ms, 0.0);
-  EXPECT_LT(ms, 10'000.0);
+  EXPECT_GE(timings.LastMs("work"), 0.0);  // waits; a time was read (an unread pass gives -1)
+  EXPECT_EQ(timings.entries()[0].calls, 1);
   EXPECT_EQ(queries->outstanding(), before);
   // A record dropped unread is deleted at the next Begin.
   { auto dropped = queries->Begin(); }

@@ -53,8 +53,8 @@ int main(int argc, char** argv) {
   app.add_option("--window-screenshot", options.window_screenshot,
                  "write the last frame as the window shows it, F.png (the display's tone mapping; needs --frames)");
   app.add_option("--build-budget", options.build_budget_ms,
-                 "milliseconds of elek's and source4d's table steps per frame while they build: GPU time on a GPU, "
-                 "the wall clock on a software GL (default 25)")
+                 "milliseconds of elek's and source4d's table steps per frame while they build: GPU time (and the "
+                 "CPU's time issuing them) on a GPU, the wall clock on a software GL (default 25)")
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--source4d-tables", options.source4d_tables,
                  "where source4d's tables are built: gpu, cpu (a worker thread) or auto (cpu on a software GL "

@@ -25,7 +25,7 @@ struct ViewerOptions {
                                        // and PNG paths are the screenshot of the last frame (empty: none)
   int frames = 0;                      // stop after this many frames (0: when the window is closed)
   double build_budget_ms = 25.0;       // per frame, of elek's and source4d's table steps while they build
-                                       // (GPU time on a GPU, wall clock on a software GL)
+                                       // (GPU time and the CPU's issuing time on a GPU, wall clock on a software GL)
   // Where source4d's tables are built: gpu (GL passes, a few steps per frame), cpu (the CPU
   // backend on a worker thread) or auto (cpu on a software GL, gl::IsSoftwareRenderer; else gpu).
   std::string source4d_tables = "auto";

@@ -110,6 +110,35 @@ class GpuPassTimer {
   double start_ms_ = 0.0;
 };
 
+// For passes with one work group of 64 invocations per texel (as Hillaire 2020 does for its
+// multiple-scattering table): invocation `lane` integrates directions lane, lane + 64, ... and
+// SumOverWorkGroup adds two vec3 partial sums over the group (a tree in shared memory); every
+// invocation receives the totals. A GPU then runs 64 times more threads, each with 1/64 of a
+// texel's rays. Used by hillaire's multiple-scattering and ground-irradiance passes and by
+// source4d's quadrature pass.
+inline constexpr std::string_view kWorkGroupSumSource = R"glsl(
+layout(local_size_x = 64) in;
+shared vec3 partial_a[64];
+shared vec3 partial_b[64];
+
+void SumOverWorkGroup(int lane, inout vec3 a, inout vec3 b) {
+  partial_a[lane] = a;
+  partial_b[lane] = b;
+  memoryBarrierShared();
+  barrier();
+  for (int stride = 32; stride > 0; stride /= 2) {
+    if (lane < stride) {
+      partial_a[lane] += partial_a[lane + stride];
+      partial_b[lane] += partial_b[lane + stride];
+    }
+    memoryBarrierShared();
+    barrier();
+  }
+  a = partial_a[0];
+  b = partial_b[0];
+}
+)glsl";
+
 // The kind of a table builder's step (next_step_kind): `pass` without its trailing order number
 // ("source4d_gather_3" -> "source4d_gather_"), plus "#whole" when the pass runs in one step.
 std::string StepKind(std::string_view pass, bool whole);

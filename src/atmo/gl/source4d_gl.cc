@@ -446,14 +446,11 @@ void main() {
 // mirror image times the sub-sample's solid angle and the node's hat weight; the row is then
 // normalised by its sum (the hats of a sub-sample sum to 1, so the row sums to the CPU's sum
 // over sub-samples). Float against the CPU's double, summed per node instead of per sub-sample.
-constexpr const char* kQuadratureMain = R"glsl(
-layout(local_size_x = 64) in;
+constexpr const char* kQuadratureBody = R"glsl(
 layout(std430, binding = 0) buffer WeightBuffer { float weights[]; };  // [medium][cd][ab]
 uniform int mu_size;
 uniform int phi_size;
 const int kSub = 4;  // cpu/source4d_tables.cc, kSubSamples
-shared float partial_r[64];
-shared float partial_m[64];
 
 void main() {
   const int cd = int(gl_WorkGroupID.x);
@@ -504,24 +501,19 @@ void main() {
     sum_r += wr;
     sum_m += wm;
   }
-  partial_r[lane] = sum_r;
-  partial_m[lane] = sum_m;
-  barrier();
-  for (int offset = 32; offset > 0; offset /= 2) {
-    if (lane < offset) {
-      partial_r[lane] += partial_r[lane + offset];
-      partial_m[lane] += partial_m[lane + offset];
-    }
-    barrier();
-  }
-  const float total_r = partial_r[0];
-  const float total_m = partial_m[0];
+  vec3 sums = vec3(sum_r, sum_m, 0.0);
+  vec3 unused = vec3(0.0);
+  SumOverWorkGroup(lane, sums, unused);
+  const float total_r = sums.x;
+  const float total_m = sums.y;
   for (int ab = lane; ab < in_count; ab += 64) {  // this invocation's own writes, read back
     weights[cd * in_count + ab] /= total_r;
     weights[(out_count + cd) * in_count + ab] /= total_m;
   }
 }
 )glsl";
+
+std::string QuadratureMain() { return std::string(kWorkGroupSumSource) + kQuadratureBody; }
 
 // One invocation per sun-zenith node: the ground node's irradiance from the field
 // (GroundIrradiance), kept as this order's (slot), added to the sum and written as the table
@@ -675,7 +667,7 @@ int GroupCount1D(long long count) { return static_cast<int>((count + kGroupSize1
 // The quadrature matrices on the GPU into `weights` ((2 out_count) x in_count floats).
 void RunQuadraturePass(const Context& context, const shared::AtmosphereParameters& km, const cpu::Source4dSettings& t,
                        const StorageBuffer& weights, double& compile_ms) {
-  const ComputeProgram& p = BuilderProgram(context, kQuadratureMain, "source4d quadrature", compile_ms);
+  const ComputeProgram& p = BuilderProgram(context, QuadratureMain().c_str(), "source4d quadrature", compile_ms);
   p.Use();
   SetAtmosphereUniforms(p, "atmosphere", km);
   p.SetInt("gather_zeniths", t.gather_zeniths);
@@ -785,7 +777,9 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
   s.tail = &BuilderProgram(context, kTailMain, "source4d tail", compile_ms);
   s.ground_sum = &BuilderProgram(context, kGroundSumMain, "source4d ground sum", compile_ms);
   s.log_table = &BuilderProgram(context, kLogMain, "source4d log table", compile_ms);
-  if (!context.software_renderer()) BuilderProgram(context, kQuadratureMain, "source4d quadrature", compile_ms);
+  if (!context.software_renderer()) {
+    BuilderProgram(context, QuadratureMain().c_str(), "source4d quadrature", compile_ms);
+  }
   if (timings != nullptr) timings->Add("source4d_gl_compile", compile_ms);
   s.tables.mu_s_size = t.mu_s_size;
 
@@ -844,8 +838,8 @@ Source4dTablesBuilder::Source4dTablesBuilder(const Context& context, const share
     s.tables.ground_irradiance = GpuTexture::Make2D({s.settings.mu_s_size, 1});
   };
   // The quadrature matrices: on a GPU by its own pass (on an H200 the CPU's took 4 to 7 ms on 16
-  // cores, the GPU's 0.1 ms); on a software GL by the CPU on a thread while the transmittance
-  // table is built (llvmpipe runs the pass ~20x slower than the CPU's double loops).
+  // cores, the GPU's 0.23 ms); on a software GL by the CPU on a thread while the transmittance
+  // table is built (on llvmpipe the pass took ~34 ms, the CPU's double loops 15 ms).
   s.gpu_quadrature = !context.software_renderer();
   if (s.gpu_quadrature) {
     add("source4d_quadrature", 1, [&s, allocate](int, int) {
