@@ -35,6 +35,13 @@ set(symbols
   tables.glsl:GetAerialPerspectiveSliceFromDistance tables.glsl:GetAerialPerspectiveTextureUvwFromScreenDistance
   tables.glsl:GetScreenDistanceFromAerialPerspectiveTextureUvw tables.glsl:atmoAerialPerspective)
 
+# EXTRA_SYMBOLS (optional, same form) adds functions after these: the web page's shader
+# (web/CMakeLists.txt) takes the cameras and the sun's limb darkening too.
+if(DEFINED EXTRA_SYMBOLS)
+  string(REPLACE "," ";" extra "${EXTRA_SYMBOLS}")
+  list(APPEND symbols ${extra})
+endif()
+
 set(renames "")
 set(undefs "")
 set(body "")

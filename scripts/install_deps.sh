@@ -12,7 +12,9 @@
 # (Dask), on which tests/python run annual skies on a local cluster, and openimageio-tools, whose
 # oiiotool reads back the Radiance HDR sky maps in tests/annual_test.cc. stellarium-data is the
 # star catalogue that atmo reads at run time for its night skies (docs/night.md; GPL-2+, not
-# shipped); with --no-install-recommends it does not pull Stellarium itself.
+# shipped); with --no-install-recommends it does not pull Stellarium itself. --tests and --web
+# also install Emscripten, which builds atmo for the browser (scripts/build_web.sh, docs/web.md),
+# and Chromium, in which the tests load the demo page headless.
 set -euo pipefail
 
 SUDO=""
@@ -34,6 +36,9 @@ PACKAGES=(
 )
 if [ "${1:-}" = "--tests" ]; then
   PACKAGES+=(blender python3-distributed openimageio-tools)
+fi
+if [ "${1:-}" = "--tests" ] || [ "${1:-}" = "--web" ]; then
+  PACKAGES+=(emscripten chromium)
 fi
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   PACKAGES+=(nodejs npm)

@@ -115,6 +115,10 @@ Cubemap DownsampleCubemap(const Cubemap& cube);
 // leaves no partial file (WriteFileAtomically).
 void WriteKtx2(const std::filesystem::path& path, std::span<const Cubemap> levels, bool float32 = false,
                const std::string& writer = "atmo");
+// The bytes WriteKtx2 writes (for writers that are not files: the browser's downloads, web/).
+// Throws atmo::Error for the levels WriteKtx2 refuses.
+std::vector<std::uint8_t> EncodeKtx2(std::span<const Cubemap> levels, bool float32 = false,
+                                     const std::string& writer = "atmo");
 
 // IEEE 754 binary16 of a float, rounded to nearest even; values beyond the largest half
 // (65504) clamp to it, NaN stays NaN (exposed for the tests).

@@ -107,9 +107,8 @@ float HalfToFloat(std::uint16_t h) {
   return std::bit_cast<float>(sign | ((exponent + 112u) << 23) | (mantissa << 13));
 }
 
-void WriteKtx2(const std::filesystem::path& path, std::span<const Cubemap> levels, bool float32,
-               const std::string& writer) {
-  const auto fail = [&](const std::string& reason) { throw Error("cannot write '" + path.string() + "': " + reason); };
+std::vector<std::uint8_t> EncodeKtx2(std::span<const Cubemap> levels, bool float32, const std::string& writer) {
+  const auto fail = [&](const std::string& reason) { throw Error(reason); };
   if (levels.empty()) fail("a KTX2 cubemap needs at least one level");
   const int base = levels[0].face_size;
   for (std::size_t l = 0; l < levels.size(); ++l) {
@@ -217,10 +216,21 @@ void WriteKtx2(const std::filesystem::path& path, std::span<const Cubemap> level
     out.PatchU64(level_index_at + 24 * l + 16, length);
   }
 
+  return out.data();
+}
+
+void WriteKtx2(const std::filesystem::path& path, std::span<const Cubemap> levels, bool float32,
+               const std::string& writer) {
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes = EncodeKtx2(levels, float32, writer);
+  } catch (const Error& error) {
+    throw Error("cannot write '" + path.string() + "': " + error.what());
+  }
   WriteFileAtomically(path, [&](const std::filesystem::path& temporary) {
     std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
     if (!stream) throw std::runtime_error("cannot create '" + temporary.string() + "'");
-    stream.write(reinterpret_cast<const char*>(out.data().data()), static_cast<std::streamsize>(out.size()));
+    stream.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     stream.close();
     if (!stream) throw std::runtime_error("error while writing '" + temporary.string() + "'");
   });
