@@ -304,7 +304,7 @@ class WebModel {
   // (shared::GetViewAnglesFromSkyViewTextureUv, azimuth from the sun). request: {altitude,
   // sunElevation, width, height, ground}. Returns {width, height, texels, rKm, bottomRadiusKm,
   // topRadiusKm, horizonNadirAngle, sunDisc (linear sRGB cd/m^2 at the disc's centre, seen
-  // through the air), sunAngularRadius, ms}.
+  // through the air), sunAngularRadius, autoEv100 (an exposure for the sky), ms}.
   val skyView(const val& request) const {
     return Guard([&] {
       const auto start = std::chrono::steady_clock::now();
@@ -365,6 +365,16 @@ class WebModel {
       out.set("horizonNadirAngle", shared::GetHorizonNadirAngle(atmosphere, r));
       out.set("sunDisc", ToFloat64Array({disc_rgb.x, disc_rgb.y, disc_rgb.z}));
       out.set("sunAngularRadius", parameters_.sun_angular_radius_rad);
+      // An exposure for the page: atmo's adaptive metering (MeteredEv100) of the mean log2
+      // luminance of the table's sky rows (each row one band of view zenith angles).
+      double log2_sum = 0.0;
+      std::size_t count = 0;
+      for (std::size_t i = 0; i < directions.size() / 2; ++i) {
+        const double y = 0.2126 * rgb[3 * i] + 0.7152 * rgb[3 * i + 1] + 0.0722 * rgb[3 * i + 2];
+        log2_sum += std::log2(std::max(y, 1e-9));
+        ++count;
+      }
+      out.set("autoEv100", MeteredEv100(count > 0 ? log2_sum / count : 0.0));
       out.set("ms", Milliseconds(start));
       return out;
     });

@@ -116,12 +116,15 @@ Number GetSunDiscCentreRadiance(Number wavelength_nm, Number sun_angular_radius,
 // mu on the solar surface (see the top) for a view at nu = cos(theta) from the sun's centre;
 // negative off the disc (nu < cos alpha). sin^2 theta = (1 - nu)(1 + nu) and
 // sin^2 alpha = (1 - cos alpha)(1 + cos alpha), with 1 - cos alpha = 2 sin^2(alpha / 2).
+// The test is on 1 - nu against 1 - cos alpha = 2 sin^2(alpha / 2), not on nu against cos alpha:
+// in float, a GPU's cos near 0 may be off by more than 1 - cos alpha's 1e-5 ulps (SwiftShader's
+// widened the disc by two pixels of a 20-degree view), while sin of a small angle is accurate.
 Number GetSunDiscSurfaceCosine(Number nu, Number sun_angular_radius) {
-  if (nu < cos(sun_angular_radius)) {
-    return -1.0;
-  }
   Number sin_half_alpha = sin(0.5 * sun_angular_radius);
   Number one_minus_cos_alpha = 2.0 * sin_half_alpha * sin_half_alpha;
+  if (1.0 - nu > one_minus_cos_alpha) {
+    return -1.0;
+  }
   Number sin2_alpha = one_minus_cos_alpha * (2.0 - one_minus_cos_alpha);
   Number sin2_theta = max(1.0 - nu, 0.0) * (1.0 + nu);
   return sqrt(max(1.0 - sin2_theta / sin2_alpha, 0.0));

@@ -1,0 +1,342 @@
+// The demo page (docs/web.md): atmo.wasm in a worker builds the model and its sky-view table,
+// WebGL2 draws every frame from the table (renderer.js). Drag to look around, the wheel to change
+// the field of view; the panel sets the model, the preset, the haze, the sun (or date and place),
+// the altitude up to orbit and the exposure. The URL's hash holds every parameter (share link).
+//
+// Test hook (tests/web/page_test.mjs): with ?test=WIDTHxHEIGHT the page draws the hash's view once
+// into a float target and POSTs the linear cd/m^2 pixels to /result, with its timings.
+import { encodeExr } from './exr.js';
+import { SkyRenderer } from './renderer.js';
+
+const defaults = {
+  model: 'hillaire', preset: 'earth', aod: '', sunElevation: 10, sunAzimuth: 180, altitude: 0, ev: '', fov: 90,
+  yaw: 180, pitch: 10, camera: 'perspective', date: '', latitude: 48.85, longitude: 2.35,
+};
+const state = { ...defaults };
+for (const [key, value] of new URLSearchParams(location.hash.slice(1))) {
+  if (key in defaults) state[key] = typeof defaults[key] === 'number' ? Number(value) : value;
+}
+
+const $ = (id) => document.getElementById(id);
+const canvas = $('sky');
+const statusLines = {};
+function status(key, text) {
+  statusLines[key] = text;
+  $('status').textContent = Object.values(statusLines).join('\n');
+}
+function showError(message) {
+  $('error').textContent = message ?? '';
+}
+
+// The worker's requests as promises.
+const worker = new Worker('worker.js', { type: 'module' });
+let nextId = 0;
+const pending = new Map();
+worker.onmessage = (event) => {
+  const { id, ok, value, error } = event.data;
+  const p = pending.get(id);
+  pending.delete(id);
+  if (ok) p.resolve(value);
+  else p.reject(new Error(error));
+};
+function ask(type, message = {}) {
+  const id = nextId++;
+  return new Promise((resolve, reject) => {
+    pending.set(id, { resolve, reject });
+    worker.postMessage({ id, type, ...message });
+  });
+}
+
+// Altitude slider: 0..1 maps to 0..400 km, the square for fine steps near the ground.
+const altitudeFromSlider = (u) => 400000 * u * u;
+const sliderFromAltitude = (a) => Math.sqrt(Math.max(a, 0) / 400000);
+
+const glsl = await (await fetch('atmo_web.glsl')).text();
+const renderer = new SkyRenderer(canvas, glsl);
+const test = new URLSearchParams(location.search).get('test');
+
+let modelInfo = null;
+let table = null;
+let autoEv = 12;
+let building = null;  // the latest requested model key
+let frameCount = 0;
+let frameClock = performance.now();
+
+function modelConfig() {
+  const config = { preset: state.preset };
+  if (state.aod !== '') config.aod = Number(state.aod);
+  return config;
+}
+
+async function rebuildModel() {
+  const key = JSON.stringify([state.model, modelConfig()]);
+  building = key;
+  status('model', `building ${state.model} ...`);
+  const start = performance.now();
+  try {
+    const info = await ask('model', { name: state.model, config: modelConfig() });
+    if (building !== key) return;  // a newer request superseded this one
+    modelInfo = info;
+    status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms ` +
+                    `(${(performance.now() - start).toFixed(0)} ms to the page)`);
+    showError(null);
+    await refreshSkyView();
+  } catch (error) {
+    showError(error.message);
+    status('model', `${state.model}: failed`);
+  }
+}
+
+let skyViewSerial = 0;
+async function refreshSkyView() {
+  if (!modelInfo) return;
+  const serial = ++skyViewSerial;
+  const start = performance.now();
+  try {
+    const t = await ask('skyView', { request: { altitude: state.altitude, sunElevation: state.sunElevation } });
+    if (serial !== skyViewSerial) return;
+    table = t;
+    autoEv = t.autoEv100;
+    renderer.setSkyView(t);
+    status('view', `sky view ${t.width}x${t.height}: ${t.ms.toFixed(1)} ms in wasm, ` +
+                   `${(performance.now() - start).toFixed(1)} ms to the GPU`);
+    showError(null);
+    requestDraw();
+  } catch (error) {
+    showError(error.message);
+  }
+}
+
+function view() {
+  const ev = state.ev === '' ? autoEv : Number(state.ev);
+  return { camera: state.camera, yaw: state.yaw, pitch: state.pitch, fov: state.fov, sunElevation: state.sunElevation,
+           sunAzimuth: state.sunAzimuth, exposure: 1 / (1.2 * 2 ** ev) };
+}
+
+let drawQueued = false;
+function requestDraw() {
+  if (drawQueued) return;
+  drawQueued = true;
+  requestAnimationFrame(() => {
+    drawQueued = false;
+    const scale = Math.min(window.devicePixelRatio || 1, 2);
+    const width = Math.round(canvas.clientWidth * scale);
+    const height = Math.round(canvas.clientHeight * scale);
+    if (canvas.width !== width || canvas.height !== height) {
+      canvas.width = width;
+      canvas.height = height;
+    }
+    renderer.draw(view(), width, height);
+    ++frameCount;
+    const now = performance.now();
+    if (now - frameClock > 1000) {
+      status('frames', `${width}x${height}: ${(1000 * frameCount / (now - frameClock)).toFixed(0)} frames/s while moving`);
+      frameCount = 0;
+      frameClock = now;
+    }
+  });
+}
+
+function saveHash() {
+  const params = new URLSearchParams();
+  for (const key of Object.keys(defaults)) {
+    if (String(state[key]) !== String(defaults[key])) params.set(key, String(state[key]));
+  }
+  history.replaceState(null, '', `#${params}`);
+}
+
+// The view direction of a canvas point (CSS pixels), in the local frame x east, y north, z up:
+// atmo's perspective camera (src/atmo/shared/camera.glsl, GetCameraRayDirection).
+function directionAt(x, y) {
+  const radians = Math.PI / 180;
+  const w = canvas.clientWidth;
+  const h = canvas.clientHeight;
+  const yaw = state.yaw * radians;
+  const pitch = state.pitch * radians;
+  const forward = [Math.cos(pitch) * Math.sin(yaw), Math.cos(pitch) * Math.cos(yaw), Math.sin(pitch)];
+  const right = [Math.cos(yaw), -Math.sin(yaw), 0];
+  const up = [right[1] * forward[2] - right[2] * forward[1], right[2] * forward[0] - right[0] * forward[2],
+              right[0] * forward[1] - right[1] * forward[0]];
+  const t = Math.tan(0.5 * state.fov * radians);
+  const u = (2 * x / w - 1) * t;
+  const v = (1 - 2 * y / h) * t * h / w;
+  const d = forward.map((f, k) => f + u * right[k] + v * up[k]);
+  const n = Math.hypot(...d);
+  return d.map((c) => c / n);
+}
+
+// The panel.
+const atmoNames = { models: ['hillaire', 'source4d', 'elek', 'simple'] };
+function fillSelect(select, names, value) {
+  select.replaceChildren(...names.map((n) => new Option(n, n, false, n === value)));
+}
+fillSelect($('model'), atmoNames.models, state.model);
+fillSelect($('preset'), ['earth', 'earth-spectral', 'us-standard', 'tropical', 'midlatitude-summer', 'midlatitude-winter',
+                         'subarctic-summer', 'subarctic-winter', 'atmosphere-plus', 'simple'], state.preset);
+const sliders = {
+  sunElevation: { get: () => state.sunElevation, set: (v) => { state.sunElevation = v; }, text: (v) => `${v.toFixed(1)}°`, sky: true },
+  sunAzimuth: { get: () => state.sunAzimuth, set: (v) => { state.sunAzimuth = v; }, text: (v) => `${v.toFixed(0)}°` },
+  altitude: { get: () => sliderFromAltitude(state.altitude), set: (v) => { state.altitude = altitudeFromSlider(v); },
+              text: () => (state.altitude < 10000 ? `${state.altitude.toFixed(0)} m` : `${(state.altitude / 1000).toFixed(1)} km`),
+              sky: true },
+  ev: { get: () => (state.ev === '' ? autoEv : Number(state.ev)), set: (v) => { state.ev = String(v); },
+        text: (v) => (state.ev === '' ? `auto ${v.toFixed(1)}` : v.toFixed(1)) },
+  fov: { get: () => state.fov, set: (v) => { state.fov = v; }, text: (v) => `${v.toFixed(0)}°` },
+};
+for (const [id, s] of Object.entries(sliders)) {
+  const input = $(id);
+  const output = input.nextElementSibling;
+  input.value = s.get();
+  output.textContent = s.text(Number(input.value));
+  input.addEventListener('input', () => {
+    s.set(Number(input.value));
+    output.textContent = s.text(Number(input.value));
+    saveHash();
+    if (s.sky) refreshSkyView();
+    else requestDraw();
+  });
+  input.addEventListener('dblclick', () => {  // double click: back to automatic exposure
+    if (id === 'ev') {
+      state.ev = '';
+      saveHash();
+      requestDraw();
+    }
+  });
+}
+$('aod').value = state.aod === '' ? 0.1 : state.aod;
+$('aod-value').textContent = state.aod === '' ? 'preset' : Number(state.aod).toFixed(2);
+$('aod').addEventListener('change', () => {
+  state.aod = $('aod').value;
+  $('aod-value').textContent = Number(state.aod).toFixed(2);
+  saveHash();
+  rebuildModel();
+});
+for (const id of ['model', 'preset']) {
+  $(id).addEventListener('change', () => {
+    state[id] = $(id).value;
+    saveHash();
+    rebuildModel();
+  });
+}
+$('date').value = state.date;
+$('latitude').value = state.latitude;
+$('longitude').value = state.longitude;
+$('useDate').addEventListener('click', async () => {
+  try {
+    state.date = $('date').value || new Date().toISOString().slice(0, 19) + 'Z';
+    state.latitude = Number($('latitude').value);
+    state.longitude = Number($('longitude').value);
+    const sun = await ask('sun', { date: state.date, latitude: state.latitude, longitude: state.longitude });
+    state.sunElevation = Math.round(sun.elevation * 100) / 100;
+    state.sunAzimuth = Math.round(sun.azimuth * 100) / 100;
+    for (const id of ['sunElevation', 'sunAzimuth']) {
+      $(id).value = state[id];
+      $(id).nextElementSibling.textContent = sliders[id].text(state[id]);
+    }
+    $('date').value = state.date;
+    saveHash();
+    showError(null);
+    refreshSkyView();
+  } catch (error) {
+    showError(error.message);
+  }
+});
+
+function download(bytes, name, type) {
+  const url = URL.createObjectURL(new Blob([bytes], { type }));
+  const a = document.createElement('a');
+  a.href = url;
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
+}
+$('exr').addEventListener('click', async () => {
+  try {
+    const w = Math.min(canvas.width, 1920);
+    const h = Math.round(w * canvas.height / canvas.width);
+    const frame = await ask('frame', { request: { width: w, height: h, fov: state.fov, yaw: state.yaw, pitch: state.pitch,
+                                                  altitude: state.altitude, sunElevation: state.sunElevation,
+                                                  sunAzimuth: state.sunAzimuth } });
+    download(encodeExr(frame.width, frame.height, ['R', 'G', 'B'], frame.pixels,
+                       { 'atmo:model': state.model, 'atmo:unit': 'cd/m^2 (linear sRGB)', 'atmo:view': location.hash }),
+             'atmo-view.exr', 'image/x-exr');
+  } catch (error) {
+    showError(error.message);
+  }
+});
+$('ktx2').addEventListener('click', async () => {
+  try {
+    const bytes = await ask('ktx2', { request: { size: 256, mips: true, altitude: state.altitude,
+                                                 sunElevation: state.sunElevation, sunAzimuth: state.sunAzimuth } });
+    download(bytes, 'atmo-environment.ktx2', 'image/ktx2');
+  } catch (error) {
+    showError(error.message);
+  }
+});
+$('share').addEventListener('click', () => {
+  saveHash();
+  navigator.clipboard?.writeText(location.href);
+  status('share', `link: ${location.href}`);
+});
+
+// Looking around and the probe.
+let drag = null;
+canvas.addEventListener('pointerdown', (e) => {
+  drag = { x: e.clientX, y: e.clientY, yaw: state.yaw, pitch: state.pitch };
+  canvas.setPointerCapture(e.pointerId);
+});
+canvas.addEventListener('pointerup', () => {
+  drag = null;
+  saveHash();
+});
+let probeSerial = 0;
+canvas.addEventListener('pointermove', async (e) => {
+  if (drag) {
+    const degreesPerPixel = state.fov / canvas.clientWidth;
+    state.yaw = (((drag.yaw - (e.clientX - drag.x) * degreesPerPixel) % 360) + 360) % 360;
+    state.pitch = Math.max(-89, Math.min(89, drag.pitch + (e.clientY - drag.y) * degreesPerPixel));
+    requestDraw();
+    return;
+  }
+  if (!modelInfo) return;
+  const d = directionAt(e.clientX, e.clientY);
+  const viewZenith = Math.acos(Math.max(-1, Math.min(1, d[2]))) * 180 / Math.PI;
+  const azimuth = ((Math.atan2(d[0], d[1]) * 180 / Math.PI - state.sunAzimuth) % 360 + 360) % 360;
+  const serial = ++probeSerial;
+  const probe = $('probe');
+  try {
+    const s = await ask('sample', { point: [state.altitude, 90 - state.sunElevation, viewZenith, azimuth] });
+    if (serial !== probeSerial) return;
+    probe.style.display = 'block';
+    probe.style.left = `${e.clientX + 14}px`;
+    probe.style.top = `${e.clientY + 10}px`;
+    probe.textContent = `${s.luminance.toPrecision(4)} cd/m²  (elevation ${(90 - viewZenith).toFixed(1)}°)`;
+  } catch (error) {
+    probe.style.display = 'none';
+  }
+});
+canvas.addEventListener('pointerleave', () => { $('probe').style.display = 'none'; });
+canvas.addEventListener('wheel', (e) => {
+  e.preventDefault();
+  state.fov = Math.max(20, Math.min(150, state.fov * Math.exp(0.001 * e.deltaY)));
+  $('fov').value = state.fov;
+  $('fov').nextElementSibling.textContent = sliders.fov.text(state.fov);
+  requestDraw();
+}, { passive: false });
+window.addEventListener('resize', requestDraw);
+
+await rebuildModel();
+
+if (test) {
+  // One fixed view for the browser test: linear cd/m^2 read back from a float target.
+  const [width, height] = test.split('x').map(Number);
+  const start = performance.now();
+  const pixels = renderer.readLinear(view(), width, height);
+  const drawMs = performance.now() - start;
+  await fetch('/result', {
+    method: 'POST',
+    headers: { 'x-width': String(width), 'x-height': String(height),
+               'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs }) },
+    body: pixels,
+  });
+}
