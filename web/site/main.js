@@ -4,7 +4,8 @@
 // the altitude up to orbit and the exposure. The URL's hash holds every parameter (share link).
 //
 // Test hook (tests/web/page_test.mjs): with ?test=WIDTHxHEIGHT the page draws the hash's view once
-// into a float target and POSTs the linear cd/m^2 pixels to /result, with its timings.
+// into a float target and POSTs the linear cd/m^2 pixels to /result, with its timings, then the
+// canvas as displayed to /screenshot.
 import { encodeExr } from './exr.js';
 import { SkyRenderer } from './renderer.js';
 
@@ -339,4 +340,8 @@ if (test) {
                'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs }) },
     body: pixels,
   });
+  // And the page as the user sees it (the panel aside): the displayed canvas as PNG.
+  renderer.draw(view(), canvas.width, canvas.height);
+  const png = await new Promise((resolve) => canvas.toBlob(resolve, 'image/png'));
+  await fetch('/screenshot', { method: 'POST', body: png });
 }

@@ -1,9 +1,11 @@
 // The page's WebGL2 renderer: each frame is drawn in one fragment shader from the model's sky-view
 // table (atmo.wasm's Model.skyView: the model's radiance at the texel centres of hillaire's
-// sky-view mapping, linear sRGB cd/m^2), as the GL backend draws its frames. The shader is the
-// page's main() after atmo_web.glsl, which web/CMakeLists.txt generates from atmo's shared
-// sources (cmake/GenerateTablesGlsl.cmake): the same mapping, camera rays and limb darkening the
-// C++ renderer compiles, and the viewer's AgX display transform. docs/web.md.
+// sky-view mapping, linear sRGB cd/m^2), as the GL backend draws its frames. The shader is
+// atmo_web.glsl, which web/CMakeLists.txt generates from atmo's shared sources
+// (cmake/GenerateTablesGlsl.cmake: the sky-view mapping, the camera rays and the limb darkening the
+// C++ renderer compiles, the viewer's AgX display transform), then the sky's shading
+// (sky_shading.js, shared with the three.js adapter), then main() below. docs/web.md.
+import { kSkyShading, skyUniformValues } from './sky_shading.js';
 
 const kVertex = `#version 300 es
 void main() {
@@ -34,13 +36,6 @@ struct CameraParameters {
 `;
 
 const kMain = `
-uniform sampler2D sky_view;    // RGBA32F, linear sRGB cd/m^2 (GL_LINEAR, s repeats)
-uniform float r_km;            // the observer's radius
-uniform float bottom_radius_km;
-uniform float top_radius_km;
-uniform vec3 sun_direction;    // local frame: x east, y north, z up
-uniform vec3 sun_centre;       // the sun disc's centre radiance through the air, linear sRGB cd/m^2
-uniform float sun_radius;      // angular radius, radians
 uniform int camera_kind;
 uniform vec2 camera_yaw_pitch; // radians
 uniform float camera_fov;      // horizontal, radians
@@ -48,68 +43,6 @@ uniform ivec2 size;            // the image's size in pixels
 uniform float exposure;        // scene-referred multiplier before the display transform
 uniform int output_mode;       // 0 display (AgX, sRGB 2.2), 1 linear cd/m^2 (float read-back)
 out vec4 colour;
-
-// The sky and ground (no sun disc) along a direction.
-vec3 Sky(vec3 view) {
-  AtmoGeometry atmosphere = AtmoGeometry(bottom_radius_km, top_radius_km);
-  return atmoSkyView(atmosphere, sky_view, r_km, view, sun_direction);
-}
-
-// The sun disc's mean radiance over the pixel: limb-darkened (Neckel and Labs at 610, 550 and
-// 465 nm for R, G, B, relative to the centre), sampled on a 4 x 4 grid of the pixel where the disc
-// spans pixels; a disc smaller than a pixel gives its whole energy to the pixel holding its
-// centre, so that its irradiance is right at any resolution.
-vec3 SunDisc(CameraParameters camera, vec2 frag, vec3 view) {
-  vec3 darkening_centre = vec3(atmo_GetSunLimbDarkening(610.0, 1.0), atmo_GetSunLimbDarkening(550.0, 1.0),
-                               atmo_GetSunLimbDarkening(465.0, 1.0));
-  // The pixel's angular size along its row (perspective: at the pixel; equirect: its height).
-  vec3 next;
-  atmo_GetCameraRayDirection(camera, frag + vec2(1.0, 0.0), next);
-  float pixel = acos(clamp(dot(view, next), -1.0, 1.0));
-  if (dot(view, sun_direction) < cos(sun_radius + 2.0 * pixel)) {
-    return vec3(0.0);
-  }
-  if (sun_radius < 0.5 * pixel) {
-    // The pixel holds the disc's centre when the sun is nearer its direction than any neighbour's.
-    float d = dot(sun_direction, view);
-    vec3 n[4];
-    atmo_GetCameraRayDirection(camera, frag + vec2(1.0, 0.0), n[0]);
-    atmo_GetCameraRayDirection(camera, frag - vec2(1.0, 0.0), n[1]);
-    atmo_GetCameraRayDirection(camera, frag + vec2(0.0, 1.0), n[2]);
-    atmo_GetCameraRayDirection(camera, frag - vec2(0.0, 1.0), n[3]);
-    for (int i = 0; i < 4; ++i) {
-      if (dot(n[i], sun_direction) > d) return vec3(0.0);
-    }
-    // Solid angles: the disc's and the pixel's (its two spans).
-    float across = acos(clamp(dot(n[0], n[1]), -1.0, 1.0)) * 0.5;
-    float along = acos(clamp(dot(n[2], n[3]), -1.0, 1.0)) * 0.5;
-    float sin_half = sin(0.5 * sun_radius);
-    float disc = 4.0 * atmo_kPi * sin_half * sin_half;  // 2 pi (1 - cos r), without cos's error near 0
-    // The disc's mean limb darkening relative to its centre: the mean of f(mu) mu over the disc's
-    // area, with mu on the solar surface; 8 rings suffice at the precision of a sub-pixel disc.
-    vec3 mean = vec3(0.0);
-    for (int k = 0; k < 8; ++k) {
-      float rho = (float(k) + 0.5) / 8.0;
-      float mu = sqrt(max(1.0 - rho * rho, 0.0));
-      mean += 2.0 * rho / 8.0 * vec3(atmo_GetSunLimbDarkening(610.0, mu), atmo_GetSunLimbDarkening(550.0, mu),
-                                     atmo_GetSunLimbDarkening(465.0, mu));
-    }
-    return sun_centre * (mean / darkening_centre) * disc / max(across * along, 1e-20);
-  }
-  vec3 sum = vec3(0.0);
-  for (int j = 0; j < 8; ++j) {
-    for (int i = 0; i < 8; ++i) {
-      vec3 v;
-      atmo_GetCameraRayDirection(camera, frag + (vec2(i, j) + 0.5) / 8.0 - 0.5, v);
-      float mu = atmo_GetSunDiscSurfaceCosine(dot(v, sun_direction), sun_radius);
-      if (mu >= 0.0) {
-        sum += vec3(atmo_GetSunLimbDarkening(610.0, mu), atmo_GetSunLimbDarkening(550.0, mu),
-                    atmo_GetSunLimbDarkening(465.0, mu)) / darkening_centre;
-      }
-    }
-  }
-  return sun_centre * sum / 64.0;
-}
 
 void main() {
   // Row 0 at the top, as atmo's cameras count rows.
@@ -121,7 +54,12 @@ void main() {
     colour = vec4(0.0, 0.0, 0.0, output_mode == 1 ? 0.0 : 1.0);
     return;
   }
-  vec3 radiance = Sky(view) + SunDisc(camera, frag, view);
+  // The pixel's footprint: the rays of the next pixel across and down.
+  vec3 right;
+  vec3 down;
+  atmo_GetCameraRayDirection(camera, frag + vec2(1.0, 0.0), right);
+  atmo_GetCameraRayDirection(camera, frag + vec2(0.0, 1.0), down);
+  vec3 radiance = AtmoSky(view) + AtmoSunDisc(view, right - view, down - view);
   if (output_mode == 1) {
     colour = vec4(radiance, 1.0);
     return;
@@ -154,7 +92,7 @@ export class SkyRenderer {
     this.floatLinear = gl.getExtension('OES_texture_float_linear') !== null;
     const program = gl.createProgram();
     gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, kVertex));
-    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, kPrelude + glsl + kMain));
+    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, kPrelude + glsl + kSkyShading + kMain));
     gl.linkProgram(program);
     if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`link: ${gl.getProgramInfoLog(program)}`);
     this.program = program;
@@ -199,15 +137,12 @@ export class SkyRenderer {
     gl.useProgram(this.program);
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_2D, this.texture);
-    gl.uniform1i(u.sky_view, 0);
-    gl.uniform1f(u.r_km, t.rKm);
-    gl.uniform1f(u.bottom_radius_km, t.bottomRadiusKm);
-    gl.uniform1f(u.top_radius_km, t.topRadiusKm);
-    const e = view.sunElevation * radians;
-    const a = view.sunAzimuth * radians;
-    gl.uniform3f(u.sun_direction, Math.cos(e) * Math.sin(a), Math.cos(e) * Math.cos(a), Math.sin(e));
-    gl.uniform3f(u.sun_centre, t.sunDisc[0], t.sunDisc[1], t.sunDisc[2]);
-    gl.uniform1f(u.sun_radius, view.sunDisc === false ? 0.0 : t.sunAngularRadius);
+    gl.uniform1i(u.atmo_sky_view, 0);
+    const values = skyUniformValues(t, view.sunElevation, view.sunAzimuth, view.sunDisc !== false);
+    for (const [name, value] of Object.entries(values)) {
+      if (Array.isArray(value)) gl.uniform3fv(u[name], value);
+      else gl.uniform1f(u[name], value);
+    }
     gl.uniform1i(u.camera_kind, CameraKind[view.camera ?? 'perspective']);
     gl.uniform2f(u.camera_yaw_pitch, view.yaw * radians, view.pitch * radians);
     gl.uniform1f(u.camera_fov, view.fov * radians);
