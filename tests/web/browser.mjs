@@ -86,6 +86,10 @@ export async function runChromium(chromium, url, until, { width = 960, height = 
     ]);
   } finally {
     clearTimeout(timer);
+    // The page's console (WebGL and shader errors, warnings) where ATMO_WEB_TEST_VERBOSE is set.
+    if (process.env.ATMO_WEB_TEST_VERBOSE) {
+      for (const line of log.split('\n')) if (!/dbus|vkCreate|VulkanError|sandbox/.test(line)) console.log(line.slice(0, 2000));
+    }
     browser.kill('SIGKILL');
     await new Promise((resolve) => setTimeout(resolve, 200));
     fs.rmSync(profile, { recursive: true, force: true });

@@ -50,7 +50,11 @@ void main() {
 }
 `;
 
+// GLSL 3 ShaderMaterials declare their output themselves; three's tone-mapping and colour-space
+// chunks write gl_FragColor.
 const kFragment = `
+layout(location = 0) out highp vec4 atmo_frag_colour;
+#define gl_FragColor atmo_frag_colour
 varying vec3 vWorldDirection;
 void main() {
   vec3 d = normalize(vWorldDirection);
