@@ -143,7 +143,12 @@ vec3 Agx(vec3 v) {
   vec3 stops = clamp(log2(max(inset * v, vec3(1e-30))), min_ev, max_ev);
   vec3 x = (stops - min_ev) / (max_ev - min_ev);
   vec3 f = clamp(vec3(AgxSigmoid(x.r), AgxSigmoid(x.g), AgxSigmoid(x.b)), 0.0, 1.0);
-  return pow(clamp(inverse(inset) * f, 0.0, 1.0), vec3(2.2));
+  // The outset, inverse(inset), as constants: no 3x3 inverse per pixel (this function is also the
+  // web page's display transform, web/CMakeLists.txt).
+  const mat3 outset = mat3(1.1969986613119143, -0.053001338688085674, -0.05300133868808568,
+                           -0.09804562695225347, 1.1519543730477466, -0.09804562695225344,
+                           -0.09895303435966087, -0.09895303435966087, 1.151046965640339);
+  return pow(clamp(outset * f, 0.0, 1.0), vec3(2.2));
 }
 // The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
 ivec2 Texel(ivec2 size) {

@@ -334,10 +334,21 @@ if (test) {
   const start = performance.now();
   const pixels = renderer.readLinear(view(), width, height);
   const drawMs = performance.now() - start;
+  const frameMs720p = renderer.timeFrames(view(), 1280, 720);
+  // A parameter change as the panel makes it: the sun moves, the worker makes the new table, the
+  // GPU gets it and draws (the time to the next picture).
+  const changeStart = performance.now();
+  state.sunElevation += 0.5;
+  await refreshSkyView();
+  renderer.timeFrames(view(), 1280, 720, 1);
+  const sunChangeMs = performance.now() - changeStart;
+  state.sunElevation -= 0.5;
+  await refreshSkyView();
   await fetch('/result', {
     method: 'POST',
     headers: { 'x-width': String(width), 'x-height': String(height),
-               'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs }) },
+               'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs, frameMs720p,
+                                             sunChangeMs }) },
     body: pixels,
   });
   // And the page as the user sees it (the panel aside): the displayed canvas as PNG.

@@ -7,14 +7,6 @@
 // (sky_shading.js, shared with the three.js adapter), then main() below. docs/web.md.
 import { kSkyShading, skyUniformValues } from './sky_shading.js';
 
-const kVertex = `#version 300 es
-void main() {
-  // One triangle over the viewport.
-  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
-  gl_Position = vec4(p, 0.0, 1.0);
-}
-`;
-
 // Before atmo_web.glsl: precision and what its camera functions take from atmo's definitions.
 const kPrelude = `#version 300 es
 precision highp float;
@@ -35,7 +27,35 @@ struct CameraParameters {
 };
 `;
 
+// The vertex stage makes the camera once per vertex (atmo's MakeCameraParameters, with its
+// trigonometry), and hands its vectors to the pixels unchanged.
+const kVertexMain = `
+uniform int camera_kind;
+uniform vec2 camera_yaw_pitch; // radians
+uniform float camera_fov;      // horizontal, radians
+uniform ivec2 size;
+flat out vec3 camera_forward;
+flat out vec3 camera_right;
+flat out vec3 camera_up;
+flat out float camera_tan_half_fov;
+void main() {
+  CameraParameters camera = atmo_MakeCameraParameters(camera_kind, size.x, size.y, camera_fov, camera_yaw_pitch.x,
+                                                      camera_yaw_pitch.y);
+  camera_forward = camera.forward;
+  camera_right = camera.right;
+  camera_up = camera.up;
+  camera_tan_half_fov = camera.tan_half_fov;
+  // One triangle over the viewport.
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+`;
+
 const kMain = `
+flat in vec3 camera_forward;
+flat in vec3 camera_right;
+flat in vec3 camera_up;
+flat in float camera_tan_half_fov;
 uniform int camera_kind;
 uniform vec2 camera_yaw_pitch; // radians
 uniform float camera_fov;      // horizontal, radians
@@ -47,19 +67,24 @@ out vec4 colour;
 void main() {
   // Row 0 at the top, as atmo's cameras count rows.
   vec2 frag = vec2(gl_FragCoord.x, float(size.y) - gl_FragCoord.y);
-  CameraParameters camera = atmo_MakeCameraParameters(camera_kind, size.x, size.y, camera_fov, camera_yaw_pitch.x,
-                                                      camera_yaw_pitch.y);
+  CameraParameters camera;
+  camera.kind = camera_kind;
+  camera.width = size.x;
+  camera.height = size.y;
+  camera.horizontal_fov = camera_fov;
+  camera.yaw = camera_yaw_pitch.x;
+  camera.pitch = camera_yaw_pitch.y;
+  camera.forward = camera_forward;
+  camera.right = camera_right;
+  camera.up = camera_up;
+  camera.tan_half_fov = camera_tan_half_fov;
   vec3 view;
   if (!atmo_GetCameraRayDirection(camera, frag, view)) {
     colour = vec4(0.0, 0.0, 0.0, output_mode == 1 ? 0.0 : 1.0);
     return;
   }
-  // The pixel's footprint: the rays of the next pixel across and down.
-  vec3 right;
-  vec3 down;
-  atmo_GetCameraRayDirection(camera, frag + vec2(1.0, 0.0), right);
-  atmo_GetCameraRayDirection(camera, frag + vec2(0.0, 1.0), down);
-  vec3 radiance = AtmoSky(view) + AtmoSunDisc(view, right - view, down - view);
+  // The pixel's footprint: the change of the ray to the next pixel across and down.
+  vec3 radiance = AtmoSky(view) + AtmoSunDisc(view, dFdx(view), -dFdy(view));
   if (output_mode == 1) {
     colour = vec4(radiance, 1.0);
     return;
@@ -91,7 +116,7 @@ export class SkyRenderer {
     this.floatTargets = gl.getExtension('EXT_color_buffer_float') !== null;
     this.floatLinear = gl.getExtension('OES_texture_float_linear') !== null;
     const program = gl.createProgram();
-    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, kVertex));
+    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, kPrelude + glsl + kVertexMain));
     gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, kPrelude + glsl + kSkyShading + kMain));
     gl.linkProgram(program);
     if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`link: ${gl.getProgramInfoLog(program)}`);
@@ -151,6 +176,31 @@ export class SkyRenderer {
     gl.uniform1i(u.output_mode, output === 'linear' ? 1 : 0);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // Milliseconds per displayed frame of width x height (an RGBA8 target, as the canvas), the
+  // mean over `frames` draws, each waited for.
+  timeFrames(view, width, height, frames = 20) {
+    const gl = this.gl;
+    const target = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, target);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, width, height);
+    const fbo = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
+    const pixel = new Uint8Array(4);
+    this.draw(view, width, height);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // warm: compile and first use
+    const start = performance.now();
+    for (let i = 0; i < frames; ++i) {
+      this.draw({ ...view, yaw: view.yaw + i }, width, height);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    }
+    const ms = (performance.now() - start) / frames;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.deleteFramebuffer(fbo);
+    gl.deleteTexture(target);
+    return ms;
   }
 
   // The frame in linear cd/m^2 as floats (RGBA, rows from the top), drawn into a float target.

@@ -11,14 +11,17 @@ uniform sampler2D atmo_sky_view;     // RGBA32F (or 16F), linear sRGB cd/m^2; s 
 uniform float atmo_r_km;             // the observer's radius
 uniform float atmo_bottom_radius_km;
 uniform float atmo_top_radius_km;
+uniform float atmo_horizon_nadir_angle;  // GetHorizonNadirAngle at atmo_r_km (the table's, in double)
 uniform vec3 atmo_sun_direction;     // local frame: x east, y north, z up
 uniform vec3 atmo_sun_centre;        // the disc's centre radiance through the air, linear sRGB cd/m^2
 uniform float atmo_sun_radius;       // angular radius, radians (0: no disc)
 
-// The sky and the lit ground (no sun disc) along a unit direction of the local frame.
+// The sky and the lit ground (no sun disc) along a unit direction of the local frame: atmoSkyView
+// with the horizon's nadir angle computed once per table.
 vec3 AtmoSky(vec3 view) {
-  AtmoGeometry atmosphere = AtmoGeometry(atmo_bottom_radius_km, atmo_top_radius_km);
-  return atmoSkyView(atmosphere, atmo_sky_view, atmo_r_km, view, atmo_sun_direction);
+  vec2 uv = atmo_GetSkyViewTextureUvFromBeta(textureSize(atmo_sky_view, 0), atmo_horizon_nadir_angle, view.z,
+                                             atmo_GetAzimuthFromSun(view, atmo_sun_direction));
+  return texture(atmo_sky_view, uv).rgb;
 }
 
 // Neckel and Labs's limb darkening at 610, 550 and 465 nm for R, G and B, relative to the centre.
@@ -79,6 +82,7 @@ export function skyUniformValues(table, sunElevationDeg, sunAzimuthDeg, sunDisc 
     atmo_r_km: table.rKm,
     atmo_bottom_radius_km: table.bottomRadiusKm,
     atmo_top_radius_km: table.topRadiusKm,
+    atmo_horizon_nadir_angle: table.horizonNadirAngle,
     atmo_sun_direction: [Math.cos(e) * Math.sin(a), Math.cos(e) * Math.cos(a), Math.sin(e)],
     atmo_sun_centre: [table.sunDisc[0], table.sunDisc[1], table.sunDisc[2]],
     atmo_sun_radius: sunDisc ? table.sunAngularRadius : 0,
