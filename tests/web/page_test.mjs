@@ -46,6 +46,9 @@ const server = await startServer(siteDir, (name, headers, body) => {
 });
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'atmo-web-page-'));
 
+// Headless Chromium's window holds 143 pixels of its own above the page: a window this much taller
+// than 720 gives the page a 1280 x 720 viewport.
+const kWindowFrame = 143;
 let failures = 0;
 const width = 320;
 const height = 180;
@@ -60,7 +63,7 @@ for (const c of cases) {
   const url = `http://127.0.0.1:${server.port}/index.html?test=${width}x${height}#${new URLSearchParams(c.params)}`;
   const page = await runChromium(chromium, url, new Promise((resolve, reject) => {
     waiting = { resolve, reject, result: null, name: `${c.params.model}-sun${c.params.sunElevation}` };
-  }));
+  }), { width: 1280, height: 720 + kWindowFrame });
   waiting = null;
   const exr = path.join(tmp, 'native.exr');
   nativeRender(cli, c.params, width, height, exr);

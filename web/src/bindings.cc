@@ -35,6 +35,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/spectrum.h"
+#include "atmo/timing.h"
 #include "atmo/sun_position.h"
 #include "cpu/camera.h"
 #include "physics/shared_parameters.h"
@@ -183,6 +184,12 @@ class WebModel {
   double sunAngularRadius() const { return parameters_.sun_angular_radius_rad; }
   std::string parametersJson() const { return ToJson(parameters_); }
   std::string parameterHash() const { return ParameterHashHex(parameters_); }
+  // The model's precomputation passes as `atmo bench` names them: {pass: milliseconds}.
+  val passTimes() const {
+    val out = val::object();
+    for (const PassTiming& pass : model_->timings().entries()) out.set(pass.name, pass.last_ms);
+    return out;
+  }
   val wavelengths() const { return ToFloat64Array(parameters_.wavelengths_nm); }
   val solarIrradiance() const { return ToFloat64Array(parameters_.solar_irradiance); }
 
@@ -469,6 +476,7 @@ EMSCRIPTEN_BINDINGS(atmo) {
       .property("sunAngularRadius", &WebModel::sunAngularRadius)
       .property("parameterHash", &WebModel::parameterHash)
       .function("parametersJson", &WebModel::parametersJson)
+      .function("passTimes", &WebModel::passTimes)
       .function("wavelengths", &WebModel::wavelengths)
       .function("solarIrradiance", &WebModel::solarIrradiance)
       .function("sample", &WebModel::sample)

@@ -343,6 +343,9 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
         const float fx = w.w_x[p];
         const float fr = w.w_row[p];
         float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
+        // One vector of lanes (GCC vectorises it as it is; clang's cost model for WebAssembly does
+        // not without the pragma, which made the web build's gathers 4x slower).
+#pragma omp simd
         for (int l = 0; l < kLanes; ++l) {
           const float low = q[l] + (q[kLanes + l] - q[l]) * fx;
           const float high = q[row_stride + l] + (q[row_stride + kLanes + l] - q[row_stride + l]) * fx;
