@@ -16,6 +16,7 @@
 // energy (the sum of L over its pixels) agrees within 2 % (8 x 8 samples per pixel against the
 // CPU's stratified integration). Exits 1 on failure; prints the measured figures and the page's
 // timings.
+import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -53,9 +54,11 @@ let failures = 0;
 const width = 320;
 const height = 180;
 const cases = [
-  { params: { model: 'hillaire', preset: 'earth', sunElevation: 12, sunAzimuth: 180, yaw: 160, pitch: 8, fov: 90, altitude: 0 },
+  { params: { model: 'hillaire', preset: 'earth', sunElevation: 10, sunAzimuth: 180, yaw: 160, pitch: 8, fov: 90, altitude: 0,
+              error: '1' },
     median: 3e-4, p99: 3e-3, sunEnergy: 0.02 },
-  { params: { model: 'source4d', preset: 'earth', sunElevation: 4, sunAzimuth: 250, yaw: 230, pitch: 5, fov: 100, altitude: 300 },
+  { params: { model: 'source4d', preset: 'earth', sunElevation: 5, sunAzimuth: 250, yaw: 230, pitch: 5, fov: 100, altitude: 0,
+              error: '1' },
     median: 2e-3, p99: 2e-2, sunEnergy: 0.02 },
 ];
 for (const c of cases) {
@@ -85,6 +88,26 @@ for (const c of cases) {
   if (!(p99 <= c.p99)) fail(`p99 ${p99} > ${c.p99}`);
   if (!(offByOnePercent <= 0.01)) fail(`${100 * offByOnePercent} % of the values off by more than 1 %`);
   if (!(Math.abs(sunRatio - 1) <= c.sunEnergy)) fail(`sun energy ratio ${sunRatio}`);
+  // The error map's statistics against the shipped reference, recomputed here from the native
+  // library's samples of the same directions: the page must report the same numbers.
+  const stats = page.timings.errorStats;
+  if (c.params.error === '1') {
+    const csv = fs.readFileSync(path.join(siteDir, 'reference_earth.csv'), 'utf8').trim().split('\n').slice(1)
+      .map((line) => line.split(',').map(Number)).filter((f) => Math.abs(90 - f[1] - c.params.sunElevation) < 1e-9);
+    const grid = path.join(tmp, 'grid.csv');
+    fs.writeFileSync(grid, 'altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg\n' +
+                           csv.map((f) => f.slice(0, 4).join(',')).join('\n') + '\n');
+    const native = execFileSync(cli, ['sample', '--model', c.params.model, '--preset', 'earth', '--grid', grid, '--unit',
+                                      'luminance'], { encoding: 'utf8' }).trim().split('\n').slice(1)
+      .map((line) => Number(line.split(',')[4]));
+    const errors = native.map((v, i) => Math.abs(v / csv[i][4] - 1)).sort((a, b) => a - b);
+    const median = errors[Math.floor(errors.length / 2)];
+    console.log(`${label}: error map against the reference: page median |error| ${stats && stats.median}, ` +
+                `native ${median} (${errors.length} directions)`);
+    if (!stats || stats.points !== errors.length || !(Math.abs(stats.median - median) <= 1e-5 * median + 1e-9)) {
+      fail(`error map statistics ${JSON.stringify(stats)} against native median ${median}`);
+    }
+  }
 }
 server.close();
 fs.rmSync(tmp, { recursive: true, force: true });

@@ -11,7 +11,7 @@ import { SkyRenderer } from './renderer.js';
 
 const defaults = {
   model: 'hillaire', preset: 'earth', aod: '', sunElevation: 10, sunAzimuth: 180, altitude: 0, ev: '', fov: 90,
-  yaw: 180, pitch: 10, camera: 'perspective', date: '', latitude: 48.85, longitude: 2.35,
+  yaw: 180, pitch: 10, camera: 'perspective', date: '', latitude: 48.85, longitude: 2.35, error: '',
 };
 const state = { ...defaults };
 for (const [key, value] of new URLSearchParams(location.hash.slice(1))) {
@@ -78,6 +78,7 @@ async function rebuildModel(interactive = false) {
     const info = await ask('model', { name: state.model, config: modelConfig() });
     if (building !== key) return;  // a newer request superseded this one
     modelInfo = info;
+    if (state.error === '1') setTimeout(showErrorMap, 0);
     status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms ` +
                     `(${(performance.now() - start).toFixed(0)} ms to the page)`);
     showError(null);
@@ -362,12 +363,120 @@ canvas.addEventListener('wheel', (e) => {
 }, { passive: false });
 window.addEventListener('resize', requestDraw);
 
+// The model's error against the reference (reference_earth.csv, scripts/make_web_reference.sh:
+// atmo's path tracer on preset earth, on the ground, six sun elevations, the sky above the horizon).
+const kErrorScale = 0.05;  // the colour scale's ends: -5 % and +5 %
+const reference = await (async () => {
+  const text = await (await fetch('reference_earth.csv')).text();
+  const lines = text.trim().split('\n');
+  const header = lines[0].split(',');
+  const column = (name) => header.indexOf(name);
+  const [sz, vz, az, lum, err] = ['sun_zenith_deg', 'view_zenith_deg', 'azimuth_deg', 'luminance_cd_m2', 'stderr'].map(column);
+  return lines.slice(1).map((line) => {
+    const f = line.split(',').map(Number);
+    return { sunZenith: f[sz], viewZenith: f[vz], azimuth: f[az], luminance: f[lum], stderr: f[err] };
+  });
+})();
+const referenceElevations = [...new Set(reference.map((r) => 90 - r.sunZenith))].sort((a, b) => a - b);
+
+function colourBar() {
+  // The diverging scale of the shader (the viewer's Diverging), encoded as the shader encodes it.
+  const encode = (c) => c.map((v) => Math.round(255 * v ** (1 / 2.2)));
+  const stops = [];
+  for (let i = 0; i <= 20; ++i) {
+    const t = i / 10 - 1;
+    const end = t < 0 ? [0.05, 0.25, 0.85] : [0.85, 0.05, 0.05];
+    const c = [0, 1, 2].map((k) => 1 + (end[k] - 1) * Math.abs(t));
+    stops.push(`rgb(${encode(c).join(',')}) ${i * 5}%`);
+  }
+  $('colourBar').style.background = `linear-gradient(to right, ${stops.join(', ')})`;
+  $('barLow').textContent = `${(-100 * kErrorScale).toFixed(0)} %`;
+  $('barHigh').textContent = `+${(100 * kErrorScale).toFixed(0)} %`;
+}
+
+// Computes and shows the error map for the current model and sun (snapped to the nearest
+// reference elevation); returns the statistics, or null where there is no reference.
+async function showErrorMap() {
+  if (state.error !== '1') {
+    renderer.setErrorMap(null);
+    $('errorLegend').style.display = 'none';
+    requestDraw();
+    return null;
+  }
+  $('errorLegend').style.display = 'block';
+  colourBar();
+  if (state.preset !== 'earth' || state.altitude > 1 || state.aod !== '') {
+    renderer.setErrorMap(null);
+    $('errorStats').textContent = 'reference samples exist for preset earth (its own haze) on the ground only';
+    requestDraw();
+    return null;
+  }
+  const nearest = referenceElevations.reduce((a, b) => (Math.abs(b - state.sunElevation) < Math.abs(a - state.sunElevation) ? b : a));
+  if (nearest !== state.sunElevation) {
+    state.sunElevation = nearest;
+    $('sunElevation').value = nearest;
+    $('sunElevation').nextElementSibling.textContent = sliders.sunElevation.text(nearest);
+    saveHash();
+    await refreshSkyView();
+  }
+  const rows = reference.filter((r) => Math.abs(90 - r.sunZenith - nearest) < 1e-9);
+  const s = await ask('sampleMany', { altitude: rows.map(() => 0), sunZenith: rows.map((r) => r.sunZenith),
+                                      viewZenith: rows.map((r) => r.viewZenith), azimuth: rows.map((r) => r.azimuth) });
+  const errors = rows.map((r, i) => s.radiance[i] / r.luminance - 1);
+  // Onto a regular grid (2-degree steps) by bilinear interpolation between the reference's rows
+  // of zenith angle and columns of azimuth.
+  const zeniths = [...new Set(rows.map((r) => r.viewZenith))].sort((a, b) => a - b);
+  const azimuths = [...new Set(rows.map((r) => r.azimuth))].sort((a, b) => a - b);
+  const at = new Map(rows.map((r, i) => [`${r.viewZenith},${r.azimuth}`, errors[i]]));
+  const bracket = (list, v) => {
+    let k = 0;
+    while (k + 2 < list.length && list[k + 1] < v) ++k;
+    const f = Math.min(1, Math.max(0, (v - list[k]) / (list[k + 1] - list[k])));
+    return [k, f];
+  };
+  const width = 91;
+  const height = 46;
+  const values = new Float32Array(width * height);
+  for (let y = 0; y < height; ++y) {
+    const [zi, zf] = bracket(zeniths, 2 * y);
+    for (let x = 0; x < width; ++x) {
+      const [ai, af] = bracket(azimuths, 2 * x);
+      const e = (z, a) => at.get(`${zeniths[z]},${azimuths[a]}`);
+      values[y * width + x] = (1 - zf) * ((1 - af) * e(zi, ai) + af * e(zi, ai + 1)) +
+                              zf * ((1 - af) * e(zi + 1, ai) + af * e(zi + 1, ai + 1));
+    }
+  }
+  renderer.setErrorMap({ width, height, values }, kErrorScale);
+  const absolute = errors.map(Math.abs).sort((a, b) => a - b);
+  const noise = rows.map((r) => r.stderr / r.luminance).sort((a, b) => a - b);
+  const stats = { sunElevation: nearest, points: rows.length, median: absolute[Math.floor(absolute.length / 2)],
+                  p95: absolute[Math.floor(0.95 * (absolute.length - 1))], max: absolute[absolute.length - 1],
+                  referenceNoise: noise[Math.floor(noise.length / 2)] };
+  $('errorStats').textContent =
+    `${state.model} against the reference, sun ${nearest}°, ${rows.length} directions: |error| median ` +
+    `${(100 * stats.median).toFixed(2)} %, p95 ${(100 * stats.p95).toFixed(2)} %, largest ${(100 * stats.max).toFixed(2)} %; ` +
+    `the reference's own noise ${(100 * stats.referenceNoise).toFixed(2)} % (median)`;
+  requestDraw();
+  return stats;
+}
+$('showError').checked = state.error === '1';
+for (const id of ['sunElevation', 'altitude']) {
+  $(id).addEventListener('change', () => { if (state.error === '1') showErrorMap(); });
+}
+$('showError').addEventListener('change', () => {
+  state.error = $('showError').checked ? '1' : '';
+  saveHash();
+  showErrorMap();
+});
+
 await rebuildModel();
+await showErrorMap();
 
 if (test) {
   // One fixed view for the browser test: linear cd/m^2 read back from a float target.
   const [width, height] = test.split('x').map(Number);
   const start = performance.now();
+  const errorStats = state.error === '1' ? await showErrorMap() : null;
   const pixels = renderer.readLinear(view(), width, height);
   const drawMs = performance.now() - start;
   const frameMs720p = renderer.timeFrames(view(), 1280, 720);
@@ -404,10 +513,14 @@ if (test) {
     headers: { 'x-width': String(width), 'x-height': String(height),
                'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs, frameMs720p,
                                              sunChangeMs, hazeChangeMs, lookingAroundFps: looking.fps,
-                                             lookingAroundBuffer: `${looking.width}x${looking.height}` }) },
+                                             lookingAroundBuffer: `${looking.width}x${looking.height}`, errorStats }) },
     body: pixels,
   });
   // And the page as the user sees it (the panel aside): the displayed canvas as PNG.
+  moving = false;
+  clearTimeout(restTimer);
+  canvas.width = canvas.clientWidth;
+  canvas.height = canvas.clientHeight;
   renderer.draw(view(), canvas.width, canvas.height);
   const png = await new Promise((resolve) => canvas.toBlob(resolve, 'image/png'));
   await fetch('/screenshot', { method: 'POST', body: png });

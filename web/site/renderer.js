@@ -62,6 +62,9 @@ uniform float camera_fov;      // horizontal, radians
 uniform ivec2 size;            // the image's size in pixels
 uniform float exposure;        // scene-referred multiplier before the display transform
 uniform int output_mode;       // 0 display (AgX, sRGB 2.2), 1 linear cd/m^2 (float read-back)
+uniform bool show_error;       // the model's error against the reference instead of the sky
+uniform sampler2D error_map;   // relative error, x: azimuth from the sun 0..180 deg, y: zenith 0..90 deg
+uniform float error_scale;     // the relative error at the colour scale's ends
 out vec4 colour;
 
 void main() {
@@ -87,6 +90,23 @@ void main() {
   vec3 radiance = AtmoSky(view) + AtmoSunDisc(view, dFdx(view), -dFdy(view));
   if (output_mode == 1) {
     colour = vec4(radiance, 1.0);
+    return;
+  }
+  if (show_error) {
+    // Above the horizon: the error's colour (the viewer's diverging scale), shaded a little by
+    // the sky's own brightness so that the scene stays readable; below it the ground, dimmed.
+    vec3 shade = atmo_Agx(max(radiance, vec3(0.0)) * exposure);
+    if (view.z >= 0.0) {
+      float azimuth = atmo_GetAzimuthFromSun(view, atmo_sun_direction);
+      azimuth = azimuth > atmo_kPi ? 2.0 * atmo_kPi - azimuth : azimuth;
+      vec2 uv = vec2(azimuth / atmo_kPi, acos(clamp(view.z, 0.0, 1.0)) / (0.5 * atmo_kPi));
+      vec2 size = vec2(textureSize(error_map, 0));
+      float error = texture(error_map, (0.5 + uv * (size - 1.0)) / size).r;
+      vec3 c = atmo_Diverging(clamp(error / error_scale, -1.0, 1.0));
+      colour = vec4(pow(c * (0.75 + 0.25 * dot(shade, vec3(0.2126, 0.7152, 0.0722))), vec3(1.0 / 2.2)), 1.0);
+    } else {
+      colour = vec4(pow(0.3 * shade, vec3(1.0 / 2.2)), 1.0);
+    }
     return;
   }
   vec3 display = atmo_Agx(max(radiance, vec3(0.0)) * exposure);  // linear display light
@@ -128,6 +148,8 @@ export class SkyRenderer {
       this.uniforms[name] = gl.getUniformLocation(program, name);
     }
     this.texture = gl.createTexture();
+    this.errorTexture = gl.createTexture();
+    this.errorScale = 0;  // 0: no error map
     this.vao = gl.createVertexArray();
     this.table = null;
   }
@@ -148,6 +170,25 @@ export class SkyRenderer {
     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
     this.table = table;
+  }
+
+  // The model's relative error against the reference on a grid of width (azimuth from the sun,
+  // 0..180 degrees) x height (zenith angle, 0..90 degrees), row 0 at the zenith; scale: the error
+  // at the colour scale's ends; null: back to the sky.
+  setErrorMap(grid, scale) {
+    const gl = this.gl;
+    if (!grid) {
+      this.errorScale = 0;
+      return;
+    }
+    gl.bindTexture(gl.TEXTURE_2D, this.errorTexture);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.R32F, grid.width, grid.height, 0, gl.RED, gl.FLOAT, grid.values);
+    const filter = this.floatLinear ? gl.LINEAR : gl.NEAREST;
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, filter);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, filter);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    this.errorScale = scale;
   }
 
   // view: {camera, yaw, pitch, fov (degrees), sunElevation, sunAzimuth, exposure}; output 'display'
@@ -174,6 +215,11 @@ export class SkyRenderer {
     gl.uniform2i(u.size, width, height);
     gl.uniform1f(u.exposure, view.exposure);
     gl.uniform1i(u.output_mode, output === 'linear' ? 1 : 0);
+    gl.uniform1i(u.show_error, this.errorScale > 0 && output !== 'linear' ? 1 : 0);
+    gl.activeTexture(gl.TEXTURE1);
+    gl.bindTexture(gl.TEXTURE_2D, this.errorTexture);
+    gl.uniform1i(u.error_map, 1);
+    gl.uniform1f(u.error_scale, this.errorScale || 1);
     gl.bindVertexArray(this.vao);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }

@@ -7,6 +7,7 @@
 //   {id, type: 'ktx2', request}          the cube map as KTX2 file bytes (atmo.encodeKtx2)
 //   {id, type: 'sample', point: [altitude m, sun zenith, view zenith, azimuth from the sun (deg)]}
 //                                        the model's luminance there (Model.sample, cd/m^2)
+//   {id, type: 'sampleMany', altitude, sunZenith, viewZenith, azimuth}   arrays of points: Model.sample
 //   {id, type: 'sun', date, latitude, longitude}   the sun from date and place (libnova)
 // Each answer is {id, ok: true, value} or {id, ok: false, error: the library's one-line message}.
 import createAtmo from './atmo.mjs';
@@ -44,7 +45,10 @@ self.onmessage = async (event) => {
       else if (type === 'frame') value = model.renderFrame(event.data.request);
       else if (type === 'cubeMap') value = model.cubeMap(event.data.request);
       else if (type === 'ktx2') value = model.ktx2(event.data.request);
-      else if (type === 'sample') {
+      else if (type === 'sampleMany') {
+        const { altitude, sunZenith, viewZenith, azimuth } = event.data;
+        value = model.sample(altitude, sunZenith, viewZenith, azimuth, 'luminance');
+      } else if (type === 'sample') {
         const [altitude, sunZenith, viewZenith, azimuth] = event.data.point;
         value = { luminance: model.sample([altitude], [sunZenith], [viewZenith], [azimuth], 'luminance').radiance[0] };
       }
