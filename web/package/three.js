@@ -98,6 +98,7 @@ export class AtmoSky extends THREE.Mesh {
         atmo_r_km: { value: 6360 },
         atmo_bottom_radius_km: { value: 6360 },
         atmo_top_radius_km: { value: 6460 },
+        atmo_horizon_nadir_angle: { value: Math.PI / 2 },
         atmo_sun_direction: { value: new THREE.Vector3(0, 0, 1) },
         atmo_sun_centre: { value: new THREE.Vector3() },
         atmo_sun_radius: { value: 0 },

@@ -33,7 +33,7 @@ vec3 AtmoLimbDarkening(float mu) {
 
 // The sun disc's mean radiance over the pixel around the unit direction \`view\`, whose
 // neighbours in x and y are view + dx and view + dy. Where the disc spans pixels it is sampled
-// on an 8 x 8 grid of the pixel; a disc narrower than half a pixel puts its whole energy (its
+// on a 16 x 16 grid of the pixel; a disc narrower than half a pixel puts its whole energy (its
 // solid angle times its mean radiance) into the one pixel that holds its centre. Either way the
 // disc's irradiance is right at any resolution.
 vec3 AtmoSunDisc(vec3 view, vec3 dx, vec3 dy) {
@@ -59,9 +59,9 @@ vec3 AtmoSunDisc(vec3 view, vec3 dx, vec3 dy) {
     return atmo_sun_centre * mean * disc / max(length(cross(dx, dy)), 1e-20);
   }
   vec3 sum = vec3(0.0);
-  for (int j = 0; j < 8; ++j) {
-    for (int i = 0; i < 8; ++i) {
-      vec2 s = (vec2(i, j) + 0.5) / 8.0 - 0.5;
+  for (int j = 0; j < 16; ++j) {
+    for (int i = 0; i < 16; ++i) {
+      vec2 s = (vec2(i, j) + 0.5) / 16.0 - 0.5;
       vec3 v = normalize(view + s.x * dx + s.y * dy);
       float mu = atmo_GetSunDiscSurfaceCosine(dot(v, atmo_sun_direction), atmo_sun_radius);
       if (mu >= 0.0) {
@@ -69,7 +69,7 @@ vec3 AtmoSunDisc(vec3 view, vec3 dx, vec3 dy) {
       }
     }
   }
-  return atmo_sun_centre * sum / 64.0;
+  return atmo_sun_centre * sum / 256.0;
 }
 `;
 
