@@ -75,17 +75,38 @@ async function rebuildModel(interactive = false) {
   status('model', `building ${state.model} ...`);
   const start = performance.now();
   try {
-    const info = await ask('model', { name: state.model, config: modelConfig() });
+    const info = await ask('model', { name: state.model, config: modelConfig(), skyView: skyViewRequest() });
     if (building !== key) return;  // a newer request superseded this one
     modelInfo = info;
     if (state.error === '1') setTimeout(showErrorMap, 0);
     status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms ` +
                     `(${(performance.now() - start).toFixed(0)} ms to the page)`);
     showError(null);
-    await refreshSkyView(interactive);
+    ++skyViewSerial;
+    applySkyView(info.table, start, interactive);
   } catch (error) {
     showError(error.message);
     status('model', `${state.model}: failed`);
+  }
+}
+
+function skyViewRequest() {
+  return { altitude: state.altitude, sunElevation: state.sunElevation };
+}
+
+function applySkyView(t, start, interactive) {
+  table = t;
+  autoEv = t.autoEv100;
+  renderer.setSkyView(t);
+  status('view', `sky view ${t.width}x${t.height}: ${t.ms.toFixed(1)} ms in wasm, ` +
+                 `${(performance.now() - start).toFixed(1)} ms to the GPU`);
+  if (interactive) {
+    // A parameter change: the new sky at once (the frame is shown at the next composite), not an
+    // animation frame later.
+    requestDraw(true);
+    drawFrame();
+  } else {
+    requestDraw();
   }
 }
 
@@ -95,15 +116,10 @@ async function refreshSkyView(interactive = false) {
   const serial = ++skyViewSerial;
   const start = performance.now();
   try {
-    const t = await ask('skyView', { request: { altitude: state.altitude, sunElevation: state.sunElevation } });
+    const t = await ask('skyView', { request: skyViewRequest() });
     if (serial !== skyViewSerial) return;
-    table = t;
-    autoEv = t.autoEv100;
-    renderer.setSkyView(t);
-    status('view', `sky view ${t.width}x${t.height}: ${t.ms.toFixed(1)} ms in wasm, ` +
-                   `${(performance.now() - start).toFixed(1)} ms to the GPU`);
     showError(null);
-    requestDraw(interactive);
+    applySkyView(t, start, interactive);
   } catch (error) {
     showError(error.message);
   }
@@ -136,30 +152,35 @@ function requestDraw(interactive = false) {
   if (drawQueued) return;
   drawQueued = true;
   requestAnimationFrame(() => {
-    drawQueued = false;
-    const now = performance.now();
-    if (moving && lastFrameAt > 0) {
-      const interval = now - lastFrameAt;
-      if (interval > 55) movingScale = Math.max(0.25, movingScale * 0.8);
-      else if (interval < 35) movingScale = Math.min(1, movingScale * 1.1);
-    }
-    lastFrameAt = now;
-    const scale = Math.min(window.devicePixelRatio || 1, 2) * (moving ? movingScale : 1);
-    const width = Math.max(1, Math.round(canvas.clientWidth * scale));
-    const height = Math.max(1, Math.round(canvas.clientHeight * scale));
-    if (canvas.width !== width || canvas.height !== height) {
-      canvas.width = width;
-      canvas.height = height;
-    }
-    renderer.draw(view(), width, height);
-    ++frameCount;
-    if (now - frameClock > 1000) {
-      status('frames', `${canvas.clientWidth}x${canvas.clientHeight}: ${(1000 * frameCount / (now - frameClock)).toFixed(0)} ` +
-                       `frames/s${moving ? ` while moving (drawn at ${width}x${height})` : ''}`);
-      frameCount = 0;
-      frameClock = now;
-    }
+    if (drawQueued) drawFrame();
   });
+}
+
+// Draws now (at the moving resolution while the view moves).
+function drawFrame() {
+  drawQueued = false;
+  const now = performance.now();
+  if (moving && lastFrameAt > 0) {
+    const interval = now - lastFrameAt;
+    if (interval > 55) movingScale = Math.max(0.25, movingScale * 0.8);
+    else if (interval < 35) movingScale = Math.min(1, movingScale * 1.1);
+  }
+  lastFrameAt = now;
+  const scale = Math.min(window.devicePixelRatio || 1, 2) * (moving ? movingScale : 1);
+  const width = Math.max(1, Math.round(canvas.clientWidth * scale));
+  const height = Math.max(1, Math.round(canvas.clientHeight * scale));
+  if (canvas.width !== width || canvas.height !== height) {
+    canvas.width = width;
+    canvas.height = height;
+  }
+  renderer.draw(view(), width, height);
+  ++frameCount;
+  if (now - frameClock > 1000) {
+    status('frames', `${canvas.clientWidth}x${canvas.clientHeight}: ${(1000 * frameCount / (now - frameClock)).toFixed(0)} ` +
+                     `frames/s${moving ? ` while moving (drawn at ${width}x${height})` : ''}`);
+    frameCount = 0;
+    frameClock = now;
+  }
 }
 
 // Looks around for `frames` frames as a drag would (the test's measure of interactivity): returns

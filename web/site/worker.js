@@ -1,6 +1,7 @@
 // The page's model worker: atmo.wasm off the main thread, so that looking around stays smooth
 // while a model builds its tables (source4d takes seconds in one thread). Messages in:
-//   {id, type: 'model', name, config}    build a model (atmo.Model)
+//   {id, type: 'model', name, config, skyView}   build a model (atmo.Model), and with skyView (a
+//                                        request) its first sky-view table
 //   {id, type: 'skyView', request}       the sky-view table of the current model (Model.skyView)
 //   {id, type: 'frame', request}         a frame as `atmo render` makes it (Model.renderFrame)
 //   {id, type: 'cubeMap', request}       a cube map in three.js's order (Model.cubeMap)
@@ -37,6 +38,8 @@ self.onmessage = async (event) => {
       model = next;
       value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, channels: model.channelCount,
                 topAltitude: model.topAltitude, parameterHash: model.parameterHash };
+      // With its first sky-view table, when asked: one round trip for a parameter change.
+      if (event.data.skyView) value.table = model.skyView(event.data.skyView);
     } else if (type === 'sun') {
       value = atmo.sunFromDate(event.data.date, event.data.latitude, event.data.longitude);
     } else {
