@@ -13,7 +13,7 @@
 # stops the build: the file cannot drift from the sources.
 
 # FILE:SYMBOL, in dependency order. A symbol is a function (copied to its closing "}" at the start
-# of a line) or a constant (to its ";").
+# of a line), a constant (to its ";") or a struct (to its closing "};" at the start of a line).
 set(symbols
   definitions.glsl:kPi
   geometry.glsl:ClampToRange geometry.glsl:ClampCosine geometry.glsl:ClampDistance geometry.glsl:SafeSqrt
@@ -56,6 +56,10 @@ foreach(entry IN LISTS symbols)
   if(head STREQUAL "")
     string(REGEX MATCH "\nconst [A-Za-z0-9_]+ ${name} =" head "${text}")
     set(terminator ";\n")
+  endif()
+  if(head STREQUAL "")
+    string(REGEX MATCH "\nstruct ${name} {" head "${text}")
+    set(terminator "\n};\n")
   endif()
   if(head STREQUAL "")
     message(FATAL_ERROR "GenerateTablesGlsl: ${name} not found in ${GLSL_DIR}/${file}")

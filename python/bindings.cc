@@ -226,12 +226,7 @@ void EvaluateSample(const PyModel& self, const double* alt, const double* sz, co
     }
   }
   const SpectralConversion convert(parameters.wavelengths_nm);
-  std::vector<double> luminance_weights(nc);
-  double weight_sum = 0.0;
-  for (std::size_t c = 0; c < nc; ++c) {
-    luminance_weights[c] = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
-    weight_sum += luminance_weights[c];
-  }
+  const std::size_t out_channels = SampleChannels(unit, nc);
   const std::vector<PointGroup> groups = GroupPoints(alt, sz, n);
   // Groups in parallel (each builds its view's tables), and each group's points in parallel.
   oneapi::tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
@@ -247,25 +242,10 @@ void EvaluateSample(const PyModel& self, const double* alt, const double* sz, co
             std::fill(e.begin(), e.end(), 0.0);
             sky->RadianceEstimate(view, l, e);
             sky->Transmittance(view, t);
-            if (unit == RadianceUnit::kLuminance) {
-              // As `atmo sample --unit luminance`: independent channel estimates add their
-              // weighted variances.
-              double luminous_transmittance = 0.0, variance = 0.0;
-              for (std::size_t c = 0; c < nc; ++c) {
-                luminous_transmittance += luminance_weights[c] * t[c];
-                variance += (luminance_weights[c] * e[c]) * (luminance_weights[c] * e[c]);
-              }
-              out_radiance[i] = convert.Luminance(l);
-              out_transmittance[i] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
-              out_error[i] = std::sqrt(variance);
-              continue;
-            }
-            for (std::size_t c = 0; c < nc; ++c) {
-              const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
-              out_radiance[i * nc + c] = scale * l[c];
-              out_transmittance[i * nc + c] = t[c];
-              out_error[i * nc + c] = scale * e[c];
-            }
+            const std::size_t at = i * out_channels;
+            ConvertSample(convert, unit, l, t, e, std::span<double>(out_radiance + at, out_channels),
+                          std::span<double>(out_transmittance + at, out_channels),
+                          std::span<double>(out_error + at, out_channels));
           }
         });
   });

@@ -3,9 +3,14 @@
 # moon from date and place), then web/ with Debian's Emscripten into build-web/:
 #   build-web/atmo.mjs, build-web/atmo.wasm   the library and its JavaScript API
 #   build-web/site/                           the demo page, ready to serve
+#   build-web/package/                        the npm package atmo-sky (`npm pack` there)
 # Needs the packages of `scripts/install_deps.sh --web` (emscripten, libglm-dev, nlohmann-json3-dev).
 # Usage: scripts/build_web.sh [BUILD_DIR]
 set -euo pipefail
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then  # the comment above
+  sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//'
+  exit 0
+fi
 cd "$(dirname "$0")/.."
 build=${1:-build-web}
 mkdir -p "$build/_deps"

@@ -4,9 +4,13 @@
 # sun at 2, 5, 10, 20, 40 and 70 degrees, the sky above the horizon at view zenith angles 0-88
 # degrees and azimuths 0-180 degrees from the sun (the sky is symmetric about the sun's vertical),
 # 262144 paths per point with next-event estimation at every vertex, seed 7: a standard error of
-# ~0.3-0.5 %, which the CSV carries. About 4 minutes on 2 cores.
+# ~0.3-0.5 %, which the CSV carries. 3 min 19 s on 2 cores.
 # Usage: scripts/make_web_reference.sh [ATMO_CLI]
 set -euo pipefail
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then  # the comment above
+  sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//'
+  exit 0
+fi
 cd "$(dirname "$0")/.."
 cli=${1:-build/apps/atmo/atmo}
 grid=$(mktemp)

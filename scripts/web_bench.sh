@@ -4,6 +4,10 @@
 # atmo.wasm under node (min of as many model builds, after one to warm the JIT), and their ratio.
 # Usage: scripts/web_bench.sh [BUILD_DIR] [BUILD_WEB_DIR]   (defaults build and build-web)
 set -euo pipefail
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then  # the comment above
+  sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//'
+  exit 0
+fi
 cd "$(dirname "$0")/.."
 build=${1:-build}
 web=${2:-build-web}

@@ -111,31 +111,22 @@ std::string EvaluatePoints(const AtmosphereParameters& parameters, const std::ve
   }
   const SpectralConversion convert(wavelengths_nm);
   std::string csv = std::string(unit == RadianceUnit::kLuminance ? kLuminanceHeader : kOutputHeader) + "\n";
+  const std::size_t out_channels = SampleChannels(unit, wavelengths_nm.size());
+  std::vector<double> radiance(out_channels), transmittance(out_channels), error(out_channels);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SamplePoint& point = points[i];
     const SampleResult& result = results[i];
     const std::string inputs = Format("%.10g,%.10g,%.10g,%.10g,", point.altitude_m, point.sun_zenith_deg,
                                       point.view_zenith_deg, point.azimuth_deg);
+    ConvertSample(convert, unit, result.radiance, result.transmittance, result.standard_error, radiance, transmittance,
+                  error);
     if (unit == RadianceUnit::kLuminance) {
-      // The channels' estimates are independent (the reference traces each channel apart), so
-      // the luminance's standard error adds their weighted variances.
-      double weight_sum = 0.0, transmittance = 0.0, variance = 0.0;
-      for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
-        const double w = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
-        weight_sum += w;
-        transmittance += w * result.transmittance[c];
-        variance += (w * result.standard_error[c]) * (w * result.standard_error[c]);
-      }
-      csv += inputs + Format("%.9e,%.9e,%.9e\n", convert.Luminance(result.radiance),
-                             weight_sum > 0.0 ? transmittance / weight_sum : 0.0, std::sqrt(variance));
+      csv += inputs + Format("%.9e,%.9e,%.9e\n", radiance[0], transmittance[0], error[0]);
       continue;
     }
     for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
-      // --unit radiance: times the solar spectral irradiance at the channel's wavelength.
-      const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
       csv += inputs;
-      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], scale * result.radiance[c], result.transmittance[c],
-                    scale * result.standard_error[c]);
+      csv += Format("%.10g,%.9e,%.9e,%.9e\n", wavelengths_nm[c], radiance[c], transmittance[c], error[c]);
     }
   }
   return csv;

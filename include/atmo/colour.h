@@ -97,6 +97,17 @@ enum class ImageColour {
   kSpectral,    // one channel per wavelength, W m^-2 sr^-1 nm^-1
 };
 
+// One point of `atmo sample` in `unit`, from the model's per-channel relative radiance,
+// transmittance and standard error: per channel for relative and radiance (radiance and error
+// times the solar spectral irradiance), one value for luminance (cd/m^2, the luminous
+// transmittance, and the luminance's standard error, the channels' independent variances
+// added). The outputs hold SampleChannels(unit, channels) values each. Shared by the command
+// line, the Python module and the web build, so that the three report the same numbers.
+std::size_t SampleChannels(RadianceUnit unit, std::size_t channels);
+void ConvertSample(const SpectralConversion& convert, RadianceUnit unit, std::span<const double> radiance,
+                   std::span<const double> transmittance, std::span<const double> standard_error,
+                   std::span<double> out_radiance, std::span<double> out_transmittance, std::span<double> out_error);
+
 // The per-channel weights of ConvertImage for kLinearSrgb or kXyz (Y in cd/m^2): output k of a
 // pixel is sum_c weights[c][k] r_c. Throws atmo::Error for kSpectral.
 std::vector<glm::vec3> ColourWeights(const SpectralConversion& convert, ImageColour colour);

@@ -24,22 +24,6 @@ import * as THREE from 'three';
 
 import { kSkyShading, skyUniformValues } from './sky_shading.js';
 
-// What atmo_web.glsl's camera functions take from atmo's definitions (they are compiled in, unused).
-const kCameraStruct = `
-struct CameraParameters {
-  int kind;
-  int width;
-  int height;
-  float horizontal_fov;
-  float yaw;
-  float pitch;
-  vec3 forward;
-  vec3 right;
-  vec3 up;
-  float tan_half_fov;
-};
-`;
-
 const kVertex = `
 varying vec3 vWorldDirection;
 void main() {
@@ -104,7 +88,7 @@ export class AtmoSky extends THREE.Mesh {
         atmo_sun_radius: { value: 0 },
       },
       vertexShader: kVertex,
-      fragmentShader: kCameraStruct + glsl + kSkyShading + kFragment,
+      fragmentShader: glsl + kSkyShading + kFragment,
       side: THREE.BackSide,
       depthWrite: false,
     });

@@ -7,24 +7,12 @@
 // (sky_shading.js, shared with the three.js adapter), then main() below. docs/web.md.
 import { kSkyShading, skyUniformValues } from './sky_shading.js';
 
-// Before atmo_web.glsl: precision and what its camera functions take from atmo's definitions.
+// Before atmo_web.glsl: precision.
 const kPrelude = `#version 300 es
 precision highp float;
 precision highp int;
 precision highp sampler2D;
 precision highp sampler3D;
-struct CameraParameters {
-  int kind;
-  int width;
-  int height;
-  float horizontal_fov;
-  float yaw;
-  float pitch;
-  vec3 forward;
-  vec3 right;
-  vec3 up;
-  float tan_half_fov;
-};
 `;
 
 // The vertex stage makes the camera once per vertex (atmo's MakeCameraParameters, with its
@@ -39,7 +27,7 @@ flat out vec3 camera_right;
 flat out vec3 camera_up;
 flat out float camera_tan_half_fov;
 void main() {
-  CameraParameters camera = atmo_MakeCameraParameters(camera_kind, size.x, size.y, camera_fov, camera_yaw_pitch.x,
+  atmo_CameraParameters camera = atmo_MakeCameraParameters(camera_kind, size.x, size.y, camera_fov, camera_yaw_pitch.x,
                                                       camera_yaw_pitch.y);
   camera_forward = camera.forward;
   camera_right = camera.right;
@@ -70,7 +58,7 @@ out vec4 colour;
 void main() {
   // Row 0 at the top, as atmo's cameras count rows.
   vec2 frag = vec2(gl_FragCoord.x, float(size.y) - gl_FragCoord.y);
-  CameraParameters camera;
+  atmo_CameraParameters camera;
   camera.kind = camera_kind;
   camera.width = size.x;
   camera.height = size.y;
@@ -228,47 +216,51 @@ export class SkyRenderer {
   // mean over `frames` draws, each waited for.
   timeFrames(view, width, height, frames = 20) {
     const gl = this.gl;
-    const target = gl.createTexture();
-    gl.bindTexture(gl.TEXTURE_2D, target);
-    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, width, height);
-    const fbo = gl.createFramebuffer();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
-    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
-    const pixel = new Uint8Array(4);
-    this.draw(view, width, height);
-    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // warm: compile and first use
-    const start = performance.now();
-    for (let i = 0; i < frames; ++i) {
-      this.draw({ ...view, yaw: view.yaw + i }, width, height);
-      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
-    }
-    const ms = (performance.now() - start) / frames;
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    gl.deleteFramebuffer(fbo);
-    gl.deleteTexture(target);
-    return ms;
+    return this.withTarget(gl.RGBA8, width, height, () => {
+      const pixel = new Uint8Array(4);
+      this.draw(view, width, height);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // warm: compile and first use
+      const start = performance.now();
+      for (let i = 0; i < frames; ++i) {
+        this.draw({ ...view, yaw: view.yaw + i }, width, height);
+        gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+      }
+      return (performance.now() - start) / frames;
+    });
   }
 
   // The frame in linear cd/m^2 as floats (RGBA, rows from the top), drawn into a float target.
   readLinear(view, width, height) {
     const gl = this.gl;
     if (!this.floatTargets) throw new Error('this browser cannot render to float targets (EXT_color_buffer_float)');
-    const target = gl.createTexture();
-    gl.bindTexture(gl.TEXTURE_2D, target);
-    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, width, height);
-    const fbo = gl.createFramebuffer();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
-    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
-    this.draw(view, width, height, 'linear');
-    const pixels = new Float32Array(width * height * 4);
-    gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, pixels);
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    gl.deleteFramebuffer(fbo);
-    gl.deleteTexture(target);
+    const pixels = this.withTarget(gl.RGBA32F, width, height, () => {
+      this.draw(view, width, height, 'linear');
+      const values = new Float32Array(width * height * 4);
+      gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, values);
+      return values;
+    });
     // GL's rows start at the bottom.
     const flipped = new Float32Array(pixels.length);
     const row = width * 4;
     for (let y = 0; y < height; ++y) flipped.set(pixels.subarray((height - 1 - y) * row, (height - y) * row), y * row);
     return flipped;
+  }
+
+  // Runs draw() into an offscreen target of `internalFormat`, width x height, then frees it.
+  withTarget(internalFormat, width, height, draw) {
+    const gl = this.gl;
+    const target = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, target);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, internalFormat, width, height);
+    const fbo = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
+    try {
+      return draw();
+    } finally {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.deleteFramebuffer(fbo);
+      gl.deleteTexture(target);
+    }
   }
 }

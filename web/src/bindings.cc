@@ -207,7 +207,7 @@ class WebModel {
       if (sz.size() != n || vz.size() != n || az.size() != n) throw Error("sample: the four arrays must have one length");
       const RadianceUnit unit = ParseRadianceUnit(unit_name);
       const std::size_t nc = parameters_.channel_count();
-      const std::size_t out_channels = unit == RadianceUnit::kLuminance ? 1 : nc;
+      const std::size_t out_channels = SampleChannels(unit, nc);
       for (std::size_t i = 0; i < n; ++i) {
         const double values[] = {alt[i], sz[i], vz[i], az[i]};
         for (double v : values) {
@@ -219,12 +219,6 @@ class WebModel {
         }
       }
       const SpectralConversion convert(parameters_.wavelengths_nm);
-      std::vector<double> luminance_weights(nc);
-      double weight_sum = 0.0;
-      for (std::size_t c = 0; c < nc; ++c) {
-        luminance_weights[c] = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
-        weight_sum += luminance_weights[c];
-      }
       std::vector<double> radiance(n * out_channels), transmittance(n * out_channels), error(n * out_channels);
       std::vector<double> l(nc), t(nc), e(nc);
       std::unique_ptr<SkyView> sky;
@@ -239,23 +233,10 @@ class WebModel {
         std::fill(e.begin(), e.end(), 0.0);
         sky->RadianceEstimate(view, l, e);
         sky->Transmittance(view, t);
-        if (unit == RadianceUnit::kLuminance) {
-          double luminous_transmittance = 0.0, variance = 0.0;
-          for (std::size_t c = 0; c < nc; ++c) {
-            luminous_transmittance += luminance_weights[c] * t[c];
-            variance += (luminance_weights[c] * e[c]) * (luminance_weights[c] * e[c]);
-          }
-          radiance[i] = convert.Luminance(l);
-          transmittance[i] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
-          error[i] = std::sqrt(variance);
-          continue;
-        }
-        for (std::size_t c = 0; c < nc; ++c) {
-          const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
-          radiance[i * nc + c] = scale * l[c];
-          transmittance[i * nc + c] = t[c];
-          error[i * nc + c] = scale * e[c];
-        }
+        const std::size_t at = i * out_channels;
+        ConvertSample(convert, unit, l, t, e, std::span<double>(radiance).subspan(at, out_channels),
+                      std::span<double>(transmittance).subspan(at, out_channels),
+                      std::span<double>(error).subspan(at, out_channels));
       }
       val out = val::object();
       out.set("radiance", ToFloat64Array(radiance));
@@ -393,14 +374,8 @@ class WebModel {
   val cubeMap(const val& request) const {
     return Guard([&] {
       const auto start = std::chrono::steady_clock::now();
-      const Observer o = ReadObserver(request, parameters_);
-      const int size = Integer(request, "size", 64);
-      if (size < 1 || size > 2048) throw Error("cubeMap: size must be in 1..2048");
-      const RadianceTerms terms{Boolean(request, "sunDisc", true), Boolean(request, "ground", true)};
-      const std::unique_ptr<SkyView> sky = model_->View(o.altitude_m, SunDirection(o.sun_elevation_deg, o.sun_azimuth_deg));
-      const SpectralConversion convert(parameters_.wavelengths_nm);
-      const Cubemap cube =
-          CubeTextureForThree(RenderCubemapFolded(*sky, size, terms, ColourWeights(convert, ImageColour::kLinearSrgb)));
+      const Cubemap cube = CubeTextureForThree(FoldedCube(request, 64, "cubeMap"));
+      const int size = cube.face_size;
       val faces = val::array();
       for (const Image& face : cube.faces) faces.call<void>("push", ToFloat32Array(face.pixels));
       val out = val::object();
@@ -416,14 +391,7 @@ class WebModel {
   // Uint8Array. request: {size, altitude, sunElevation, sunAzimuth, sunDisc, ground, mips, float32}.
   val ktx2(const val& request) const {
     return Guard([&] {
-      const Observer o = ReadObserver(request, parameters_);
-      const int size = Integer(request, "size", 256);
-      if (size < 1 || size > 2048) throw Error("ktx2: size must be in 1..2048");
-      const RadianceTerms terms{Boolean(request, "sunDisc", true), Boolean(request, "ground", true)};
-      const std::unique_ptr<SkyView> sky = model_->View(o.altitude_m, SunDirection(o.sun_elevation_deg, o.sun_azimuth_deg));
-      const SpectralConversion convert(parameters_.wavelengths_nm);
-      std::vector<Cubemap> levels{RenderCubemapFolded(*sky, size, terms, ColourWeights(convert, ImageColour::kLinearSrgb))};
-      for (Image& face : levels[0].faces) face.colour_space = ColourSpace::kLinearSrgb;
+      std::vector<Cubemap> levels{FoldedCube(request, 256, "ktx2")};
       if (Boolean(request, "mips", false)) {
         while (levels.back().face_size > 1) levels.push_back(DownsampleCubemap(levels.back()));
       }
@@ -433,6 +401,21 @@ class WebModel {
   }
 
  private:
+  // The view's cube map (atmo's cube-map convention) folded to linear sRGB cd/m^2, as
+  // `atmo render --camera cubemap` renders it. request: {size (default `default_size`), altitude,
+  // sunElevation, sunAzimuth, sunDisc, ground}; `what` names the call in errors.
+  Cubemap FoldedCube(const val& request, int default_size, const char* what) const {
+    const Observer o = ReadObserver(request, parameters_);
+    const int size = Integer(request, "size", default_size);
+    if (size < 1 || size > 2048) throw Error(std::string(what) + ": size must be in 1..2048");
+    const RadianceTerms terms{Boolean(request, "sunDisc", true), Boolean(request, "ground", true)};
+    const std::unique_ptr<SkyView> sky = model_->View(o.altitude_m, SunDirection(o.sun_elevation_deg, o.sun_azimuth_deg));
+    const SpectralConversion convert(parameters_.wavelengths_nm);
+    Cubemap cube = RenderCubemapFolded(*sky, size, terms, ColourWeights(convert, ImageColour::kLinearSrgb));
+    for (Image& face : cube.faces) face.colour_space = ColourSpace::kLinearSrgb;
+    return cube;
+  }
+
   AtmosphereParameters parameters_;
   ModelOptions options_;
   std::unique_ptr<Model> model_;

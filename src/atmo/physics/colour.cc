@@ -36,6 +36,35 @@ double ChannelWeight(const std::vector<double>& sorted, std::size_t k, double la
 
 }  // namespace
 
+std::size_t SampleChannels(RadianceUnit unit, std::size_t channels) {
+  return unit == RadianceUnit::kLuminance ? 1 : channels;
+}
+
+void ConvertSample(const SpectralConversion& convert, RadianceUnit unit, std::span<const double> radiance,
+                   std::span<const double> transmittance, std::span<const double> standard_error,
+                   std::span<double> out_radiance, std::span<double> out_transmittance, std::span<double> out_error) {
+  const std::size_t nc = convert.channel_count();
+  if (unit == RadianceUnit::kLuminance) {
+    double weight_sum = 0.0, luminous_transmittance = 0.0, variance = 0.0;
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double w = kMaxLuminousEfficacy * convert.xyz_weights()[c].y;
+      weight_sum += w;
+      luminous_transmittance += w * transmittance[c];
+      variance += (w * standard_error[c]) * (w * standard_error[c]);
+    }
+    out_radiance[0] = convert.Luminance(radiance);
+    out_transmittance[0] = weight_sum > 0.0 ? luminous_transmittance / weight_sum : 0.0;
+    out_error[0] = std::sqrt(variance);
+    return;
+  }
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double scale = unit == RadianceUnit::kRadiance ? convert.solar_irradiance()[c] : 1.0;
+    out_radiance[c] = scale * radiance[c];
+    out_transmittance[c] = transmittance[c];
+    out_error[c] = scale * standard_error[c];
+  }
+}
+
 RadianceUnit ParseRadianceUnit(std::string_view name) {
   if (name == "relative") return RadianceUnit::kRelative;
   if (name == "radiance") return RadianceUnit::kRadiance;
