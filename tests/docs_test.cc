@@ -7,15 +7,18 @@
 //    binary under test, and each must exit 0. The only commands left out are those of kSkipped,
 //    each with its reason; an entry that matches no README command fails the test, so the list
 //    cannot outlive the README. Commands with `--backend gl` run only where a GL context can be made.
-// 2. docs/cli.md: a ```sh block whose lines start with `$ ` is a transcript. `$ cat FILE` followed
+// 2. README.md and every page under docs/: a ```sh block whose lines start with `$ ` is a
+//    transcript (docs/cli.md has most of them). `$ cat FILE` followed
 //    by lines writes them to FILE (the transcript shows the input it uses); `$ atmo ...` is run and
 //    its standard output then standard error must equal the lines that follow, line by line: the
 //    text exactly, each number within a relative 1e-6 (last-digit differences of FMA builds), and
-//    a number followed by ` s` or ` ms` (a timing) matching any number.
+//    a number followed by ` s` or ` ms` (a timing) matching any number. scripts/doc_transcripts.py
+//    reruns them and rewrites the outputs (`--check` reports the drift without writing).
 // 3. Every `atmo:KEY` EXR attribute that render_command.cc and sun_options.cc write is named in
 //    docs/cli.md.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -246,38 +249,115 @@ bool LineMatches(const std::string& expected, const std::string& actual, std::st
   return true;
 }
 
+// The Markdown files whose transcripts are checked: the README and every page under docs/.
+std::vector<fs::path> ManualPages() {
+  const fs::path source = fs::path(ATMO_SOURCE_DIR);
+  std::vector<fs::path> pages = {source / "README.md"};
+  for (const auto& entry : fs::recursive_directory_iterator(source / "docs")) {
+    if (entry.is_regular_file() && entry.path().extension() == ".md") pages.push_back(entry.path());
+  }
+  std::sort(pages.begin(), pages.end());
+  return pages;
+}
+
 TEST_F(DocsTest, CliExampleOutputsAreTheCurrentOnes) {
-  const std::string manual = ReadFile(fs::path(ATMO_SOURCE_DIR) / "docs" / "cli.md");
-  ASSERT_FALSE(manual.empty());
   int transcripts = 0;
-  for (const std::vector<std::string>& block : ShellBlocks(manual)) {
-    if (block.empty() || block.front().rfind("$ ", 0) != 0) continue;  // not a transcript
-    // Each `$ ` line and the lines after it up to the next one.
-    for (std::size_t i = 0; i < block.size();) {
-      const std::string command = block[i].substr(2);
-      std::vector<std::string> expected;
-      for (++i; i < block.size() && block[i].rfind("$ ", 0) != 0; ++i) expected.push_back(block[i]);
-      if (command.rfind("cat ", 0) == 0) {
-        std::string text;
-        for (const std::string& line : expected) text += line + "\n";
-        WriteFile(dir_ / command.substr(4), text);
-        continue;
-      }
-      ++transcripts;
-      const Output output = RunShell(dir_, command);
-      const std::vector<std::string> actual = Lines(output.text);
-      std::string got;
-      for (const std::string& line : actual) got += line + "\n";
-      ASSERT_EQ(actual.size(), expected.size()) << "$ " << command << " printed:\n" << got;
-      for (std::size_t k = 0; k < expected.size(); ++k) {
-        std::string why;
-        EXPECT_TRUE(LineMatches(expected[k], actual[k], why))
-            << "$ " << command << ", line " << k + 1 << ": " << why << "\n  docs: " << expected[k]
-            << "\n  now:  " << actual[k];
+  int cli_transcripts = 0;
+  for (const fs::path& page : ManualPages()) {
+    const std::string manual = ReadFile(page);
+    ASSERT_FALSE(manual.empty()) << page;
+    const bool is_cli = page.filename() == "cli.md";
+    for (const std::vector<std::string>& block : ShellBlocks(manual)) {
+      if (block.empty() || block.front().rfind("$ ", 0) != 0) continue;  // not a transcript
+      // Each `$ ` line and the lines after it up to the next one.
+      for (std::size_t i = 0; i < block.size();) {
+        const std::string command = block[i].substr(2);
+        std::vector<std::string> expected;
+        for (++i; i < block.size() && block[i].rfind("$ ", 0) != 0; ++i) expected.push_back(block[i]);
+        if (command.rfind("cat ", 0) == 0) {
+          std::string text;
+          for (const std::string& line : expected) text += line + "\n";
+          WriteFile(dir_ / command.substr(4), text);
+          continue;
+        }
+        ++transcripts;
+        if (is_cli) ++cli_transcripts;
+        const Output output = RunShell(dir_, command);
+        const std::vector<std::string> actual = Lines(output.text);
+        std::string got;
+        for (const std::string& line : actual) got += line + "\n";
+        ASSERT_EQ(actual.size(), expected.size()) << "$ " << command << " printed:\n" << got;
+        for (std::size_t k = 0; k < expected.size(); ++k) {
+          std::string why;
+          EXPECT_TRUE(LineMatches(expected[k], actual[k], why))
+              << page.filename().string() << ": $ " << command << ", line " << k + 1 << ": " << why
+              << "\n  docs: " << expected[k]
+              << "\n  now:  " << actual[k] << "\n  (scripts/doc_transcripts.py rewrites the outputs)";
+        }
       }
     }
   }
-  EXPECT_GE(transcripts, 3) << "docs/cli.md has lost its example transcripts";
+  EXPECT_GE(cli_transcripts, 3) << "docs/cli.md has lost its example transcripts";
+  EXPECT_GE(transcripts, cli_transcripts + 1) << "docs/reliability.md has lost its memory-limit transcript";
+}
+
+// A measured block of the manual (`<!-- measured: COMMAND -->`, a ```text block of the command's
+// output, a "Measured ... on MACHINE, ... load L." stamp, `<!-- end measured -->`): its numbers are
+// measurements that scripts/doc_transcripts.py regenerates with the stamp, so only the layout is
+// checked here: the command still runs and prints the same lines with every number masked.
+TEST_F(DocsTest, MeasuredOutputsKeepTheirLayoutAndStamp) {
+  int blocks = 0;
+  for (const fs::path& page : ManualPages()) {
+    const std::vector<std::string> lines = Lines(ReadFile(page));
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const std::string line = Trim(lines[i]);
+      const std::string open = "<!-- measured: ";
+      if (line.rfind(open, 0) != 0) continue;
+      const std::string command = line.substr(open.size(), line.size() - open.size() - 4);
+      std::vector<std::string> expected;
+      std::string stamp;
+      std::size_t k = i + 1;
+      bool inside = false;
+      for (; k < lines.size() && Trim(lines[k]) != "<!-- end measured -->"; ++k) {
+        if (Trim(lines[k]) == "```text") {
+          inside = true;
+        } else if (inside && Trim(lines[k]) == "```") {
+          inside = false;
+        } else if (inside) {
+          expected.push_back(lines[k]);
+        } else if (lines[k].rfind("Measured ", 0) == 0) {
+          stamp = lines[k];
+        }
+      }
+      ASSERT_LT(k, lines.size()) << page << ": '" << line << "' has no end";
+      ++blocks;
+      EXPECT_NE(stamp.find(" cores, load "), std::string::npos) << page << ": `" << command << "` has no stamp";
+      const Output output = RunShell(dir_, command);
+      ASSERT_EQ(output.exit_code, 0) << page << ": `" << command << "` printed:\n" << output.text;
+      const std::vector<std::string> actual = Lines(output.text);
+      ASSERT_EQ(actual.size(), expected.size()) << page << ": `" << command << "` printed:\n" << output.text;
+      for (std::size_t n = 0; n < expected.size(); ++n) {
+        const std::vector<Token> e = Tokenize(expected[n]);
+        const std::vector<Token> a = Tokenize(actual[n]);
+        // Columns padded to the numbers' widths: runs of spaces count as one.
+        const auto collapsed = [](const std::string& text) {
+          std::string out;
+          for (char c : text) {
+            if (c != ' ' || out.empty() || out.back() != ' ') out += c;
+          }
+          return out;
+        };
+        bool same = e.size() == a.size();
+        for (std::size_t t = 0; same && t < e.size(); ++t) {
+          same = e[t].is_number == a[t].is_number && (e[t].is_number || collapsed(e[t].text) == collapsed(a[t].text));
+        }
+        EXPECT_TRUE(same) << page.filename().string() << ": `" << command << "`, line " << n + 1
+                          << "\n  docs: " << expected[n] << "\n  now:  " << actual[n]
+                          << "\n  (scripts/doc_transcripts.py reruns it)";
+      }
+    }
+  }
+  EXPECT_GE(blocks, 1) << "docs/performance.md has lost its measured atmo bench";
 }
 
 // Every EXR attribute the render command writes ("atmo:KEY" in its sources) is in cli.md's table.

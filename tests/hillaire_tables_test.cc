@@ -1,6 +1,9 @@
 // The CPU's row-sharing evaluation of the hillaire tables equals the shared per-texel kernels
 // that define them (and that the GPU runs as they are).
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -69,6 +72,101 @@ TEST(HillaireTables, MultipleScatteringRowsEqualPerTexelKernel) {
       }
     }
   }
+}
+
+// The gathered orders (multiple_scattering_orders > 1) from the per-texel kernels, order by
+// order through float tables as a GPU keeps them: order 1's Psi, f_ms and ground irradiance, then
+// each order from the previous one's tables, then GetMultiScatteringFromOrders.
+Texture2D GatheredTableFromKernels(const shared::AtmosphereParameters& a, const Texture2D& transmittance, ivec2 size,
+                                   int directions, int samples, const glm::dvec3& ground_transfer, int orders) {
+  std::vector<glm::dvec3> sum(size.x * size.y), f(size.x * size.y), last(size.x * size.y);
+  Texture2D order(size.x, size.y), ground(size.x, 1);
+  for (int y = 0; y < size.y; ++y) {
+    for (int x = 0; x < size.x; ++x) {
+      glm::dvec3 psi, f_ms, irradiance;
+      shared::ComputeMultiScatteringFirstOrderTexel(a, transmittance, size, vec2(x + 0.5, y + 0.5), directions, samples,
+                                                    false, ground_transfer, psi, f_ms, irradiance);
+      sum[y * size.x + x] = last[y * size.x + x] = psi;
+      f[y * size.x + x] = f_ms;
+      if (y == 0) ground.at(x, 0) = glm::vec3(shared::EncodeMultiScattering(irradiance));
+    }
+  }
+  for (int n = 2; n <= orders; ++n) {
+    for (int k = 0; k < size.x * size.y; ++k) order.texels[k] = glm::vec3(shared::EncodeMultiScattering(last[k]));
+    Texture2D next_ground(size.x, 1);
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        glm::dvec3 psi, irradiance;
+        shared::ComputeMultiScatteringGatherTexel(a, order, ground, size, vec2(x + 0.5, y + 0.5), directions, samples,
+                                                  psi, irradiance);
+        sum[y * size.x + x] += psi;
+        last[y * size.x + x] = psi;
+        if (y == 0) next_ground.at(x, 0) = glm::vec3(shared::EncodeMultiScattering(irradiance));
+      }
+    }
+    ground = next_ground;
+  }
+  Texture2D table(size.x, size.y);
+  for (int k = 0; k < size.x * size.y; ++k) {
+    table.texels[k] = glm::vec3(shared::EncodeMultiScattering(shared::GetMultiScatteringFromOrders(sum[k], last[k], f[k])));
+  }
+  return table;
+}
+
+TEST(HillaireTables, GatheredOrdersEqualThePerTexelKernels) {
+  const shared::AtmosphereParameters a = testing::EarthLike();
+  const Texture2D transmittance = TransmittanceTable(a);
+  const ivec2 size(8, 6);
+  const glm::dvec3 ground_transfer = shared::GetGroundTransfer(a, 8, 10);
+  for (int orders : {2, 4}) {
+    Texture2D table(size.x, size.y);
+    ComputeMultipleScatteringTable(a, transmittance, 16, 12, false, ground_transfer, table, orders);
+    const Texture2D kernels = GatheredTableFromKernels(a, transmittance, size, 16, 12, ground_transfer, orders);
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        // ln(Psi_ms) in both; the CPU keeps order K and the sums in double, the kernels' path
+        // rounds order K through a float logarithm (2e-6 of Psi near ln = -20).
+        ExpectSameTexel(glm::vec3(shared::DecodeMultiScattering(shared::vec3(table.at(x, y)))),
+                        shared::DecodeMultiScattering(shared::vec3(kernels.at(x, y))), x, y, 1e-5);
+      }
+    }
+  }
+}
+
+// One gathered order is Hillaire 2020's table bit for bit, and the gathered tables converge with
+// the orders: what the series assumes after order K matters less as K grows (the change from 4 to
+// 8 orders is a fraction of that from 1 to 2), and 16 orders change 8's by little.
+TEST(HillaireTables, GatheredOrdersConverge) {
+  const shared::AtmosphereParameters a = testing::EarthLike();
+  const Texture2D transmittance = TransmittanceTable(a);
+  const glm::dvec3 ground_transfer = shared::GetGroundTransfer(a, 8, 10);
+  std::vector<Texture2D> tables;
+  for (int orders : {1, 2, 4, 8, 16}) {
+    tables.emplace_back(8, 6);
+    ComputeMultipleScatteringTable(a, transmittance, 16, 12, false, ground_transfer, tables.back(), orders);
+  }
+  Texture2D hillaire(8, 6);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 12, false, ground_transfer, hillaire);
+  // The largest relative change of Psi_ms between two tables, over the texels not deep in the shadow.
+  const auto change = [&](const Texture2D& from, const Texture2D& to) {
+    double worst = 0.0;
+    for (std::size_t k = 0; k < from.texels.size(); ++k) {
+      for (int c = 0; c < 3; ++c) {
+        const double p = std::exp(double(from.texels[k][c]));
+        const double q = std::exp(double(to.texels[k][c]));
+        if (p > 1e-20) worst = std::max(worst, std::abs(q - p) / p);
+      }
+    }
+    return worst;
+  };
+  for (std::size_t k = 0; k < hillaire.texels.size(); ++k) EXPECT_EQ(hillaire.texels[k], tables[0].texels[k]);
+  const double first = change(tables[0], tables[1]);
+  const double later = change(tables[2], tables[3]);
+  const double last = change(tables[3], tables[4]);
+  std::printf("gathered orders: largest change 1 -> 2 orders %.3g, 4 -> 8 %.3g, 8 -> 16 %.3g\n", first, later, last);
+  EXPECT_GT(first, 0.05);  // the gathering changes the table: it is not the series again
+  EXPECT_LT(later, 0.25 * first);
+  EXPECT_LT(last, 0.01);
 }
 
 TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {

@@ -194,7 +194,9 @@ TEST(NightSky, RenderersAddItToEveryPixel) {
       const glm::dvec3 view = DirectionFromZenithAzimuth(zenith, std::atan2(-u, v));
       night.Radiance(view, expected);
       for (std::size_t c = 0; c < n; ++c) {
-        EXPECT_EQ(dark.pixels[i * n + c], 0.0f);  // the sun 30 degrees down lights nothing
+        // The sun 30 degrees down lights next to nothing: sunlight scattered several times through
+        // air lit over 2000 km away (hillaire's gathered orders), up to 3e-19 of the solar irradiance.
+        EXPECT_LT(std::abs(dark.pixels[i * n + c]), 1e-15f);
         EXPECT_NEAR(lit.pixels[i * n + c], expected[c] * p.solar_irradiance[c], 1e-5 * expected[c] * p.solar_irradiance[c] + 1e-12);
       }
       ++checked;
@@ -289,7 +291,7 @@ TEST(NightSky, LateTwilightIlluminanceMeetsThePublishedValues) {
 class NightCli : public testing::CliFixture {};
 
 // The first try: a render with the sun 30 degrees down is no longer black, and
-// --no-night-glow gives the old black back.
+// --no-night-glow --no-stars gives the old black back.
 TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
   const testing::RunResult r = Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 -o night");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -300,7 +302,9 @@ TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
   const testing::RunResult off =
       Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --no-night-glow --no-stars -o black");
   ASSERT_EQ(off.exit_code, 0) << off.err;
-  for (float v : ReadExr(dir_ / "black.exr").pixels) ASSERT_EQ(v, 0.0f);
+  // Black to any display: what is left is sunlight scattered several times through air lit over
+  // 2000 km away (hillaire's gathered orders), up to 8.7e-11 cd/m^2; the night sky is 1e-4 and more.
+  for (float v : ReadExr(dir_ / "black.exr").pixels) ASSERT_LT(std::abs(v), 1e-9f);
   // --night-vision: the eye's view in the PNG (scotopic at -30), refused for relative units.
   const testing::RunResult seen =
       Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --night-vision -o seen");

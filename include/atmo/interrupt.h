@@ -15,6 +15,8 @@ namespace atmo {
 // temporary file, writes "<program>: error: interrupted by SIGINT; temporary files removed" to
 // stderr, restores the default action and raises the signal again (exit status 128 + signal).
 // Everything it does is async-signal-safe. `program` must outlive the process (a literal).
+// The handler runs on the calling thread (the one that stages the files): a signal delivered to
+// another thread is passed on to it, so no file can be staged after the handler's unlinking.
 void InstallInterruptHandlers(const char* program);
 
 // The registry the handlers empty. A slot holds one path until Release; Register returns -1

@@ -216,7 +216,9 @@ def test_night_sky_is_in_renders_as_in_the_clis(cli, tmp_path):
     model = atmo.Model("hillaire", preset="earth")
     lit = model.render(32, camera="fisheye", sun_elevation_deg=-30.0)
     dark = model.render(32, camera="fisheye", sun_elevation_deg=-30.0, night_sky=False)
-    assert float(dark.max()) == 0.0
+    # Sunlight scattered several times through air lit far away (hillaire's gathered orders):
+    # up to 8.7e-11 cd/m^2, against the night sky's 1e-4.
+    assert float(dark.max()) < 1e-9
     zenith = lit[16, 16]
     luminance = 0.2126 * zenith[0] + 0.7152 * zenith[1] + 0.0722 * zenith[2]
     assert 1.2e-4 < luminance < 2.7e-4  # the published dark sky (tests/night_sky_test.cc)

@@ -240,7 +240,8 @@ class SunLookupsAlongRay {
 
   // For the sun at zenith cosine mu_s, nu = cos(ray direction, sun): the transmittance to the sun
   // at every sample (0 in the planet's shadow) and, if the ray has a multiple-scattering table,
-  // its value there. Not thread-safe (scratch arrays); one instance per thread.
+  // its value there; either output may be null. Not thread-safe (scratch arrays); one instance
+  // per thread.
   void Evaluate(double mu_s, double nu, vec3* sun_transmittance, vec3* multiple_scattering) const {
     const int n = static_cast<int>(t_.size());
     const double t_columns = transmittance_.width - 1;
@@ -249,7 +250,9 @@ class SunLookupsAlongRay {
                d_min_.data(), inverse_range_.data(), t_columns, m_columns, lit_.data(), sun_column_.data(),
                multiple_scattering_column_.data());
     for (int i = 0; i < n; ++i) {
-      sun_transmittance[i] = lit_[i] * Blend(transmittance_, transmittance_rows_[i], sun_column_[i]);
+      if (sun_transmittance != nullptr) {
+        sun_transmittance[i] = lit_[i] * Blend(transmittance_, transmittance_rows_[i], sun_column_[i]);
+      }
       if (multiple_scattering != nullptr) {
         multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
       }
@@ -366,7 +369,7 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
 
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
                                     int direction_count, int sample_count, bool media_phase,
-                                    const glm::dvec3& ground_transfer, shared::Texture2D& table) {
+                                    const glm::dvec3& ground_transfer, shared::Texture2D& table, int gathered_orders) {
   const shared::ivec2 size(table.width, table.height);
   // The directions of shared::GetMultiScatteringDirection; with the sun in the plane y = 0 the
   // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
@@ -381,14 +384,21 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
   }
 
   const PaddedTable padded_transmittance(transmittance);
+  // With gathered orders, the previous order's mean radiance, looked up along the rays like the
+  // finished table (log texels, GL_LINEAR); its texels are rewritten in place for each order.
+  PaddedTable previous_order(table);
+  const PaddedTable* lookup = gathered_orders > 1 ? &previous_order : nullptr;
+  // The rays of every row, kept for the gathered orders.
+  std::vector<std::vector<MultipleScatteringRay>> row_rays(size.y);
+  std::vector<vec3> f_ms(size.y);
   ForEachRow(size.y, [&](int y) {
     double r, unused_mu_s;
     shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
-    std::vector<MultipleScatteringRay> rays;
+    std::vector<MultipleScatteringRay>& rays = row_rays[y];
     rays.reserve(directions.size());
     vec3 transfer_sum(0.0);
     for (const auto& [direction, weight] : directions) {
-      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, nullptr, r, sample_count),
+      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
                                 {}, {}, false, 0.0, vec3(0.0)};
       ray.rayleigh_weight.reserve(sample_count);
       ray.mie_weight.reserve(sample_count);
@@ -418,36 +428,83 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
       transfer_sum += transfer * weight;
       rays.push_back(std::move(ray));
     }
-    const vec3 f_ms = transfer_sum / double(direction_count);
-
-    std::vector<vec3> sun_transmittance(sample_count);
-    for (int x = 0; x < size.x; ++x) {
-      double unused_r, mu_s;
-      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
-      const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
-      vec3 luminance_sum(0.0);
-      for (const MultipleScatteringRay& ray : rays) {
-        const double nu = glm::dot(ray.direction, sun);
-        ray.samples.Evaluate(mu_s, nu, sun_transmittance.data(), nullptr);
-        vec3 luminance(0.0);
-        // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
-        const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
-        const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
-        for (std::size_t i = 0; i < ray.samples.size(); ++i) {
-          luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
-        }
-        if (ray.hits_ground) {
-          const double r_g = a.bottom_radius;
-          const double mu_s_g = shared::ClampCosine((r * mu_s + ray.t_max * nu) / r_g);
-          luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, r_g, mu_s_g) *
-                       a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
-        }
-        luminance_sum += luminance * ray.weight;
-      }
-      table.at(x, y) = glm::vec3(
-          shared::EncodeMultiScattering(shared::GetMultiScatteringFromMeans(luminance_sum / double(direction_count), f_ms)));
-    }
+    f_ms[y] = transfer_sum / double(direction_count);
   });
+
+  // Psi_n, the mean over the sphere of order n's light, at every texel (shared::
+  // ComputeMultiScatteringFirstOrderTexel for n = 1, shared::ComputeMultiScatteringGatherTexel for
+  // n > 1), and E_n on the ground row (row 0: r = bottom radius) for order n + 1.
+  const std::size_t texel_count = static_cast<std::size_t>(size.x) * size.y;
+  std::vector<vec3> order(texel_count), next(texel_count), sum;
+  shared::Texture2D ground_irradiance(size.x, 1);
+  std::vector<vec3> next_ground_irradiance(size.x);
+  auto gather = [&](int n) {
+    ForEachRow(size.y, [&](int y) {
+      double r, unused_mu_s;
+      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
+      std::vector<vec3> sun_transmittance(sample_count), psi(sample_count);
+      for (int x = 0; x < size.x; ++x) {
+        double unused_r, mu_s;
+        shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
+        const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+        vec3 luminance_sum(0.0), irradiance_sum(0.0);
+        for (const MultipleScatteringRay& ray : row_rays[y]) {
+          const double nu = glm::dot(ray.direction, sun);
+          ray.samples.Evaluate(mu_s, nu, n == 1 ? sun_transmittance.data() : nullptr, n == 1 ? nullptr : psi.data());
+          vec3 luminance(0.0);
+          const double mu_s_g =
+              ray.hits_ground ? shared::ClampCosine((r * mu_s + ray.t_max * nu) / a.bottom_radius) : 0.0;
+          if (n == 1) {
+            // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
+            const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
+            const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
+            for (std::size_t i = 0; i < ray.samples.size(); ++i) {
+              luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
+            }
+            if (ray.hits_ground) {
+              luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, a.bottom_radius, mu_s_g) *
+                           a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
+            }
+          } else {
+            // As shared::IntegrateMultiScatteringGatherRay.
+            for (std::size_t i = 0; i < ray.samples.size(); ++i) {
+              luminance += psi[i] * (ray.rayleigh_weight[i] + ray.mie_weight[i]);
+            }
+            if (ray.hits_ground) {
+              luminance += ray.ground_throughput * a.ground_albedo / shared::kPi *
+                           shared::GetGatheredGroundIrradiance(ground_irradiance, mu_s_g);
+            }
+          }
+          luminance_sum += luminance * ray.weight;
+          if (ray.direction.z > 0.0) irradiance_sum += luminance * (ray.weight * ray.direction.z);
+        }
+        next[static_cast<std::size_t>(y) * size.x + x] = luminance_sum / double(direction_count);
+        if (y == 0) next_ground_irradiance[x] = shared::GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+      }
+    });
+    order.swap(next);
+    for (int x = 0; x < size.x; ++x) {
+      ground_irradiance.at(x, 0) = glm::vec3(shared::EncodeMultiScattering(next_ground_irradiance[x]));
+    }
+  };
+  gather(1);
+  if (gathered_orders > 1) sum = order;
+  for (int n = 2; n <= gathered_orders; ++n) {
+    for (std::size_t k = 0; k < texel_count; ++k) {
+      previous_order.texels[k] = glm::vec4(glm::vec3(shared::EncodeMultiScattering(order[k])), 0.0f);
+    }
+    gather(n);
+    for (std::size_t k = 0; k < texel_count; ++k) sum[k] += order[k];
+  }
+
+  for (int y = 0; y < size.y; ++y) {
+    for (int x = 0; x < size.x; ++x) {
+      const std::size_t k = static_cast<std::size_t>(y) * size.x + x;
+      const vec3 psi = gathered_orders == 1 ? shared::GetMultiScatteringFromMeans(order[k], f_ms[y])
+                                            : shared::GetMultiScatteringFromOrders(sum[k], order[k], f_ms[y]);
+      table.at(x, y) = glm::vec3(shared::EncodeMultiScattering(psi));
+    }
+  }
 }
 
 void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,

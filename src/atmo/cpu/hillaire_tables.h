@@ -31,7 +31,8 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
 // Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,
                                     const shared::Texture2D& transmittance, int direction_count, int sample_count,
-                                    bool media_phase, const glm::dvec3& ground_transfer, shared::Texture2D& table);
+                                    bool media_phase, const glm::dvec3& ground_transfer, shared::Texture2D& table,
+                                    int gathered_orders = 1);
 
 // Fills `table` (already sized) like shared::ComputeSkyViewTexel for an observer at radius
 // r <= top radius and a sun at zenith cosine mu_s, in parallel over rows.

@@ -145,8 +145,9 @@ void main() {
   GetMultiScatteringTexelPoint(atmosphere, imageSize(output_table), vec2(texel) + vec2(0.5), r, sun_direction);
   vec3 luminance_sum;
   vec3 transfer_sum;
+  vec3 unused_irradiance_sum;
   SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, lane, 64, direction_count,
-      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum);
+      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum, unused_irradiance_sum);
   SumOverWorkGroup(lane, luminance_sum, transfer_sum);
   if (lane == 0) {
     vec3 psi_ms = GetMultiScatteringFromMeans(luminance_sum / float(direction_count),
@@ -163,6 +164,181 @@ void main() {
   BindSamplers(program, {{"transmittance_texture", &transmittance}});
   out.BindImage(0);
   DispatchWorkGroups(program, {out.size().x, out.size().y, 1});
+}
+
+namespace {
+
+// The gathered orders' passes share their form with RunMultipleScatteringPass: on a GPU one work
+// group of 64 lanes per texel (GatherSum adds three sums over the group), on llvmpipe one texel
+// per invocation.
+std::string GatherForm(bool llvmpipe) {
+  if (llvmpipe) {
+    return R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+const int kGatherStride = 1;
+ivec2 GatherTexel() { return ivec2(gl_GlobalInvocationID.xy); }
+int GatherLane() { return 0; }
+void GatherSum(int lane, inout vec3 a, inout vec3 b, inout vec3 c) {}
+)glsl";
+  }
+  return std::string(kWorkGroupSumSource) + R"glsl(
+const int kGatherStride = 64;
+ivec2 GatherTexel() { return ivec2(gl_WorkGroupID.xy); }
+int GatherLane() { return int(gl_LocalInvocationID.x); }
+void GatherSum(int lane, inout vec3 a, inout vec3 b, inout vec3 c) {
+  SumOverWorkGroup(lane, a, b);
+  barrier();  // every lane has read the first sums before the shared arrays are reused
+  vec3 unused = vec3(0.0);
+  SumOverWorkGroup(lane, c, unused);
+}
+)glsl";
+}
+
+void DispatchGather(const ComputeProgram& program, bool llvmpipe, shared::ivec2 size) {
+  if (llvmpipe) {
+    DispatchCompute2D(program, size);
+  } else {
+    DispatchWorkGroups(program, {size.x, size.y, 1});
+  }
+}
+
+}  // namespace
+
+void RunGatheredMultipleScatteringPasses(const Context& context, const shared::AtmosphereParameters& km,
+                                         const GpuTexture& transmittance, int direction_count, int sample_count,
+                                         bool media_phase, const shared::vec3& ground_transfer, int orders,
+                                         const GpuTexture& out) {
+  const bool llvmpipe = context.renderer().find("llvmpipe") != std::string::npos;
+  const shared::ivec2 size = out.size2();
+  GpuTexture order[2] = {GpuTexture::Make2D(size), GpuTexture::Make2D(size)};
+  GpuTexture sum[2] = {GpuTexture::Make2D(size), GpuTexture::Make2D(size)};
+  GpuTexture ground[2] = {GpuTexture::Make2D({size.x, 1}), GpuTexture::Make2D({size.x, 1})};
+  GpuTexture f_ms = GpuTexture::Make2D(size);
+
+  // Order 1: Psi_1 (encoded, and plain as the first sum), f_ms, E_1.
+  const ComputeProgram& first = context.Program(kMultipleScatteringFiles, GatherForm(llvmpipe) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D order_image;
+layout(rgba32f, binding = 1) uniform writeonly image2D sum_image;
+layout(rgba32f, binding = 2) uniform writeonly image2D f_image;
+layout(rgba32f, binding = 3) uniform writeonly image2D ground_image;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D transmittance_texture;
+uniform int direction_count;
+uniform int sample_count;
+uniform bool media_phase;
+uniform vec3 ground_transfer;
+
+void main() {
+  ivec2 size = imageSize(order_image);
+  ivec2 texel = GatherTexel();
+  int lane = GatherLane();
+  if (texel.x >= size.x || texel.y >= size.y) return;  // never within a work group of one texel
+  float r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, size, vec2(texel) + vec2(0.5), r, sun_direction);
+  vec3 luminance_sum;
+  vec3 transfer_sum;
+  vec3 irradiance_sum;
+  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, lane, kGatherStride, direction_count,
+      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum, irradiance_sum);
+  GatherSum(lane, luminance_sum, transfer_sum, irradiance_sum);
+  if (lane == 0) {
+    vec3 psi = luminance_sum / float(direction_count);
+    imageStore(order_image, texel, vec4(EncodeMultiScattering(psi), 1.0));
+    imageStore(sum_image, texel, vec4(psi, 1.0));
+    imageStore(f_image, texel, vec4(transfer_sum / float(direction_count), 1.0));
+    if (texel.y == 0) {
+      vec3 irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+      imageStore(ground_image, ivec2(texel.x, 0), vec4(EncodeMultiScattering(irradiance), 1.0));
+    }
+  }
+}
+)glsl", "multiple-scattering table, first gathered order");
+  SetAtmosphereUniforms(first, "atmosphere", km);
+  first.SetInt("direction_count", direction_count);
+  first.SetInt("sample_count", sample_count);
+  first.SetInt("media_phase", media_phase ? 1 : 0);
+  first.SetVec3("ground_transfer", ground_transfer);
+  BindSamplers(first, {{"transmittance_texture", &transmittance}});
+  order[0].BindImage(0);
+  sum[0].BindImage(1);
+  f_ms.BindImage(2);
+  ground[0].BindImage(3);
+  DispatchGather(first, llvmpipe, size);
+
+  // Orders 2 ... K, each from the previous one's tables.
+  const ComputeProgram& gather = context.Program(kMultipleScatteringFiles, GatherForm(llvmpipe) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D order_image;
+layout(rgba32f, binding = 1) uniform writeonly image2D sum_image;
+layout(rgba32f, binding = 2) uniform writeonly image2D ground_image;
+uniform AtmosphereParameters atmosphere;
+uniform sampler2D previous_order_texture;
+uniform sampler2D ground_irradiance_texture;
+uniform sampler2D sum_texture;
+uniform int direction_count;
+uniform int sample_count;
+
+void main() {
+  ivec2 size = imageSize(order_image);
+  ivec2 texel = GatherTexel();
+  int lane = GatherLane();
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  float r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, size, vec2(texel) + vec2(0.5), r, sun_direction);
+  vec3 luminance_sum;
+  vec3 irradiance_sum;
+  SumMultiScatteringGatherRays(atmosphere, previous_order_texture, ground_irradiance_texture, r, sun_direction, lane,
+      kGatherStride, direction_count, sample_count, luminance_sum, irradiance_sum);
+  vec3 unused = vec3(0.0);
+  GatherSum(lane, luminance_sum, irradiance_sum, unused);
+  if (lane == 0) {
+    vec3 psi = luminance_sum / float(direction_count);
+    imageStore(order_image, texel, vec4(EncodeMultiScattering(psi), 1.0));
+    imageStore(sum_image, texel, vec4(texelFetch(sum_texture, texel, 0).rgb + psi, 1.0));
+    if (texel.y == 0) {
+      vec3 irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+      imageStore(ground_image, ivec2(texel.x, 0), vec4(EncodeMultiScattering(irradiance), 1.0));
+    }
+  }
+}
+)glsl", "multiple-scattering table, a gathered order");
+  int current = 0;
+  for (int n = 2; n <= orders; ++n) {
+    const int next = 1 - current;
+    SetAtmosphereUniforms(gather, "atmosphere", km);
+    gather.SetInt("direction_count", direction_count);
+    gather.SetInt("sample_count", sample_count);
+    BindSamplers(gather, {{"previous_order_texture", &order[current]},
+                          {"ground_irradiance_texture", &ground[current]},
+                          {"sum_texture", &sum[current]}});
+    order[next].BindImage(0);
+    sum[next].BindImage(1);
+    ground[next].BindImage(2);
+    DispatchGather(gather, llvmpipe, size);
+    current = next;
+  }
+
+  // The table: the sum, and the series after the last order.
+  const ComputeProgram& finish = context.Program(kMultipleScatteringFiles, TablePass(R"glsl(
+uniform sampler2D sum_texture;
+uniform sampler2D last_order_texture;
+uniform sampler2D f_texture;
+
+void main() {
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+  if (texel.x >= size.x || texel.y >= size.y) return;
+  vec3 last_order = DecodeMultiScattering(texelFetch(last_order_texture, texel, 0).rgb);
+  vec3 psi_ms = GetMultiScatteringFromOrders(texelFetch(sum_texture, texel, 0).rgb, last_order,
+      texelFetch(f_texture, texel, 0).rgb);
+  imageStore(output_table, texel, vec4(EncodeMultiScattering(psi_ms), 1.0));
+}
+)glsl"), "multiple-scattering table, the gathered orders' sum");
+  SetAtmosphereUniforms(finish, "atmosphere", km);
+  BindSamplers(finish, {{"sum_texture", &sum[current]}, {"last_order_texture", &order[current]}, {"f_texture", &f_ms}});
+  out.BindImage(0);
+  DispatchCompute2D(finish, size);
 }
 
 void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
@@ -303,9 +479,15 @@ void HillaireGl::Precompute(PassTimings* timings) {
   timer.Stop("transmittance_lut");
   for (std::size_t b = 0; b < batches_.size(); ++b) {
     const Batch& batch = batches_[b];
-    RunMultipleScatteringPass(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
-                              s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer[b],
-                              batch.multiple_scattering);
+    if (s.multiple_scattering_orders > 1) {
+      RunGatheredMultipleScatteringPasses(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
+                                          s.multiple_scattering_samples, s.multiple_scattering_media_phase,
+                                          ground_transfer[b], s.multiple_scattering_orders, batch.multiple_scattering);
+    } else {
+      RunMultipleScatteringPass(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
+                                s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer[b],
+                                batch.multiple_scattering);
+    }
   }
   timer.Stop("multiple_scattering_lut");
   for (const Batch& batch : batches_) {

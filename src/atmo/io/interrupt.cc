@@ -3,9 +3,17 @@
 // The handler may run at any point of any thread, so the registry is a fixed array of slots
 // claimed with an atomic flag: Register copies the path into a free slot and only then publishes
 // it (release store); the handler reads the published flag (acquire) and unlinks the path.
-// unlink, write, signal and raise are async-signal-safe; nothing here allocates or locks.
+// unlink, write, signal, raise, pthread_self and pthread_kill are async-signal-safe; nothing here
+// allocates or locks.
+//
+// The handler acts on the thread that installed it (the program's main thread, which stages the
+// files): a signal that the kernel delivers to another thread (a oneTBB worker) is passed on to
+// it. Otherwise the main thread would run on while the handler unlinks, and could create a
+// temporary file after the unlinking and before the process ends (seen under load: a SIGINT
+// during `atmo precompute` left one).
 #include "atmo/interrupt.h"
 
+#include <pthread.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -24,6 +32,8 @@ struct Slot {
 
 Slot g_slots[kMaxTemporaryFiles];
 const char* g_program = "atmo";
+pthread_t g_handling_thread;  // set by InstallInterruptHandlers before the handlers are
+std::atomic<bool> g_installed{false};
 
 void WriteAll(const char* text) {
   std::size_t left = std::strlen(text);
@@ -54,6 +64,10 @@ void Finish(int signal_number) {
 }
 
 extern "C" void HandleInterrupt(int signal_number) {
+  if (g_installed.load() && !pthread_equal(pthread_self(), g_handling_thread)) {
+    pthread_kill(g_handling_thread, signal_number);
+    return;
+  }
   g_pending.store(signal_number);
   if (g_deferring.load() > 0) return;  // the ending DeferInterrupts finishes
   const int pending = g_pending.exchange(0);
@@ -64,6 +78,8 @@ extern "C" void HandleInterrupt(int signal_number) {
 
 void InstallInterruptHandlers(const char* program) {
   g_program = program;
+  g_handling_thread = pthread_self();
+  g_installed.store(true);
   struct sigaction action {};
   action.sa_handler = HandleInterrupt;
   sigemptyset(&action.sa_mask);

@@ -4,11 +4,14 @@
 // Tables (sizes and sample counts are options, `--option key=value`):
 //   transmittance_lut=256x64          transmittance to the top, Bruneton's (r, mu) mapping
 //   transmittance_samples=40          trapezoidal intervals per texel
-//   multiple_scattering_lut=32x32     Psi_ms(mu_s, r), isotropic orders >= 2, 1/(1 - f_ms) sum
+//   multiple_scattering_lut=32x32     Psi_ms(mu_s, r), isotropic orders >= 2
 //   multiple_scattering_directions=64 directions over the sphere (even: a Fibonacci lattice on the
 //                                     half sphere and its mirror image), or 2 = the seed's up/down
 //                                     variant
 //   multiple_scattering_samples=20    ray-march steps per direction
+//   multiple_scattering_orders=4     orders >= 2 gathered one by one (each from the previous
+//                                     order's table) before the 1/(1 - f_ms) series; 1 = Hillaire
+//                                     2020's series alone
 //   multiple_scattering_phase=isotropic  the phase of the first scattering in the table: isotropic
 //                                     (Hillaire 2020) or media (Rayleigh and Mie's own)
 //   multiple_scattering_ground=on     on: the ground also reflects orders >= 2 in the 1/(1 - f_ms)
@@ -46,6 +49,7 @@ struct HillaireSettings {
   int multiple_scattering_samples = 20;
   bool multiple_scattering_media_phase = false;
   bool multiple_scattering_ground = true;
+  int multiple_scattering_orders = 4;
   glm::ivec2 sky_view_lut{192, 108};
   int sky_view_samples = 30;
   int ray_march_samples = 30;

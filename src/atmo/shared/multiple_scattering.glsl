@@ -12,6 +12,19 @@
 // (mu_s near 0): there Psi_ms falls by orders of magnitude over a few degrees as the sun sets for
 // the point and its surroundings, while it is smooth with the sun high. With 32 columns the
 // spacing near mu_s = 0 is 0.2 degrees instead of 3.6 (docs/models/hillaire.md measures it).
+//
+// Gathered orders (option multiple_scattering_orders = K > 1). The series assumes that every point
+// around x receives x's own second-order light. Near the ground with a low sun that is far from
+// true: the air above is brighter than x, and the table comes out up to 40 % dark at the horizon
+// (docs/accuracy.md, "hillaire at the sunset horizon"). With K > 1 the orders are gathered one by
+// one, each from the previous order's own table, as Bruneton 2008 gathers his 4D orders, but with
+// the isotropic radiance of Hillaire's table:
+//   Psi_1(x) = L_2nd(x)
+//   Psi_n(x) = 1/(4 pi) * integral over the sphere of [ integral_0^d sigma_s T Psi_{n-1}(y) dt
+//              + T(x, g) albedo / pi * E_{n-1}(g) ] dw               (g: the ground the ray meets)
+//   E_n(g)   = integral over the upper hemisphere of L_n(g, w) cos(theta) dw (the ground row, r = bottom)
+//   Psi_ms   = Psi_1 + ... + Psi_K + Psi_K * f_ms / (1 - f_ms)      (the series for the rest)
+// K = 1 is Hillaire 2020's Psi_1 / (1 - f_ms).
 
 Number GetMultiScatteringUnitFromMuS(Number mu_s) {
   Number m = ClampToRange(mu_s, -1.0, 1.0);
@@ -171,7 +184,9 @@ vec3 GetMultiScatteringFromMeans(IN(vec3) second_order, IN(vec3) f_ms) {
 }
 
 // The sums of IntegrateMultiScatteringRay's luminance and transfer over the directions k = first,
-// first + stride, ... < direction_count: all of them with (0, 1); a GPU work group gives each of
+// first + stride, ... < direction_count, and the sum of the luminance times cos(theta) over the
+// upward directions (the irradiance's, GetGatheredGroundIrradianceFromSum): all of them with
+// (0, 1); a GPU work group gives each of
 // its invocations a share (first = invocation, stride = group size) and adds the partial sums.
 // With the sun in the plane y = 0 (GetMultiScatteringTexelPoint), direction k + count / 2, the
 // mirror image of direction k, has the same mu and nu and so the same integrals: the first half
@@ -179,22 +194,26 @@ vec3 GetMultiScatteringFromMeans(IN(vec3) second_order, IN(vec3) f_ms) {
 // cpu::ComputeMultipleScatteringTable does.
 void SumMultiScatteringRays(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     Number r, IN(vec3) sun_direction, int first, int stride, int direction_count, int sample_count, bool media_phase,
-    IN(vec3) ground_transfer, OUT(vec3) luminance_sum, OUT(vec3) transfer_sum) {
+    IN(vec3) ground_transfer, OUT(vec3) luminance_sum, OUT(vec3) transfer_sum, OUT(vec3) irradiance_sum) {
   luminance_sum = vec3(0.0);
   transfer_sum = vec3(0.0);
+  irradiance_sum = vec3(0.0);
   bool mirrored = direction_count != 2;
   int marched = mirrored ? direction_count / 2 : direction_count;
   for (int k = first; k < marched; k += stride) {
+    vec3 direction = GetMultiScatteringDirection(k, direction_count);
     vec3 luminance;
     vec3 transfer;
-    IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, GetMultiScatteringDirection(k, direction_count),
-        sun_direction, sample_count, media_phase, ground_transfer, luminance, transfer);
+    IntegrateMultiScatteringRay(atmosphere, transmittance_texture, r, direction, sun_direction, sample_count,
+        media_phase, ground_transfer, luminance, transfer);
     luminance_sum += luminance;
     transfer_sum += transfer;
+    irradiance_sum += direction.z > 0.0 ? luminance * direction.z : vec3(0.0);
   }
   if (mirrored) {
     luminance_sum *= 2.0;
     transfer_sum *= 2.0;
+    irradiance_sum *= 2.0;
   }
 }
 
@@ -207,8 +226,124 @@ vec3 ComputeMultiScatteringTexel(IN(AtmosphereParameters) atmosphere, IN(Transmi
   GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
   vec3 luminance_sum;
   vec3 transfer_sum;
+  vec3 irradiance_sum;
   SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, 0, 1, direction_count, sample_count,
-      media_phase, ground_transfer, luminance_sum, transfer_sum);
+      media_phase, ground_transfer, luminance_sum, transfer_sum, irradiance_sum);
   return EncodeMultiScattering(
       GetMultiScatteringFromMeans(luminance_sum / Number(direction_count), transfer_sum / Number(direction_count)));
+}
+
+// The gathered orders (K > 1; see the top of this file).
+
+// The irradiance E of the ground from SumMultiScatteringRays' or SumMultiScatteringGatherRays'
+// irradiance sum: each direction stands for 4 pi / count sr.
+vec3 GetGatheredGroundIrradianceFromSum(IN(vec3) irradiance_sum, int direction_count) {
+  return irradiance_sum * (4.0 * kPi / Number(direction_count));
+}
+
+// E_{n-1} of the ground where the sun is at zenith cosine mu_s, from its table (width x 1, the
+// columns of the multiple-scattering table, EncodeMultiScattering's logarithms, GL_LINEAR).
+vec3 GetGatheredGroundIrradiance(IN(MultiScatteringTexture) ground_irradiance_texture, Number mu_s) {
+  Number u = GetTextureCoordFromUnitRange(GetMultiScatteringUnitFromMuS(mu_s),
+      textureSize(ground_irradiance_texture, 0).x);
+  return DecodeMultiScattering(vec3(texture(ground_irradiance_texture, vec2(u, 0.5))));
+}
+
+// L_n(x, w) for n > 1 along the ray from radius r in `direction`: the air lit by the previous
+// order's isotropic light Psi_{n-1} (its table, at each sample's own radius and sun), and the ground
+// lit by that order's irradiance E_{n-1}. The steps are IntegrateMultiScatteringRay's.
+vec3 IntegrateMultiScatteringGatherRay(IN(AtmosphereParameters) atmosphere,
+    IN(MultiScatteringTexture) previous_order_texture, IN(MultiScatteringTexture) ground_irradiance_texture,
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count) {
+  Number mu = direction.z;
+  Number mu_s = sun_direction.z;
+  Number nu = dot(direction, sun_direction);
+  bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
+  Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  vec3 throughput = vec3(1.0);
+  vec3 luminance = vec3(0.0);
+  for (int i = 0; i < sample_count; ++i) {
+    Number x_0 = Number(i) / Number(sample_count);
+    Number x_1 = Number(i + 1) / Number(sample_count);
+    Number dt = t_max * (x_1 * x_1 - x_0 * x_0);
+    Number t = 0.5 * t_max * (x_0 * x_0 + x_1 * x_1);
+    Number r_i = sqrt(t * t + 2.0 * r * mu * t + r * r);
+    Number mu_s_i = ClampCosine((r * mu_s + t * nu) / r_i);
+    MediumSample medium = SampleMedium(atmosphere, r_i);
+    vec3 step_transmittance = exp(-medium.extinction * dt);
+    vec3 step_integral = throughput * IntegrateStep(medium.extinction, step_transmittance, dt);
+    luminance += step_integral * medium.scattering *
+        GetMultiScattering(atmosphere, previous_order_texture, r_i, mu_s_i);
+    throughput *= step_transmittance;
+  }
+  if (ray_r_mu_intersects_ground) {
+    Number mu_s_g = ClampCosine((r * mu_s + t_max * nu) / atmosphere.bottom_radius);
+    luminance += throughput * atmosphere.ground_albedo / kPi *
+        GetGatheredGroundIrradiance(ground_irradiance_texture, mu_s_g);
+  }
+  return luminance;
+}
+
+// SumMultiScatteringRays for order n > 1: the sums of IntegrateMultiScatteringGatherRay's
+// luminance, and of the luminance times cos(theta) over the upward directions.
+void SumMultiScatteringGatherRays(IN(AtmosphereParameters) atmosphere,
+    IN(MultiScatteringTexture) previous_order_texture, IN(MultiScatteringTexture) ground_irradiance_texture,
+    Number r, IN(vec3) sun_direction, int first, int stride, int direction_count, int sample_count,
+    OUT(vec3) luminance_sum, OUT(vec3) irradiance_sum) {
+  luminance_sum = vec3(0.0);
+  irradiance_sum = vec3(0.0);
+  bool mirrored = direction_count != 2;
+  int marched = mirrored ? direction_count / 2 : direction_count;
+  for (int k = first; k < marched; k += stride) {
+    vec3 direction = GetMultiScatteringDirection(k, direction_count);
+    vec3 luminance = IntegrateMultiScatteringGatherRay(atmosphere, previous_order_texture, ground_irradiance_texture,
+        r, direction, sun_direction, sample_count);
+    luminance_sum += luminance;
+    irradiance_sum += direction.z > 0.0 ? luminance * direction.z : vec3(0.0);
+  }
+  if (mirrored) {
+    luminance_sum *= 2.0;
+    irradiance_sum *= 2.0;
+  }
+}
+
+// The per-texel kernel of order 1 when orders are gathered: Psi_1 = L_2nd (not divided by
+// 1 - f_ms), f_ms, and on the ground row (r = bottom radius) E_1, for the tables of the orders.
+void ComputeMultiScatteringFirstOrderTexel(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count,
+    int sample_count, bool media_phase, IN(vec3) ground_transfer, OUT(vec3) psi, OUT(vec3) f_ms,
+    OUT(vec3) ground_irradiance) {
+  Number r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
+  vec3 luminance_sum;
+  vec3 transfer_sum;
+  vec3 irradiance_sum;
+  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, 0, 1, direction_count, sample_count,
+      media_phase, ground_transfer, luminance_sum, transfer_sum, irradiance_sum);
+  psi = luminance_sum / Number(direction_count);
+  f_ms = transfer_sum / Number(direction_count);
+  ground_irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+}
+
+// The per-texel kernel of order n > 1: Psi_n, and E_n on the ground row.
+void ComputeMultiScatteringGatherTexel(IN(AtmosphereParameters) atmosphere,
+    IN(MultiScatteringTexture) previous_order_texture, IN(MultiScatteringTexture) ground_irradiance_texture,
+    IN(ivec2) texture_size, IN(vec2) frag_coord, int direction_count, int sample_count, OUT(vec3) psi,
+    OUT(vec3) ground_irradiance) {
+  Number r;
+  vec3 sun_direction;
+  GetMultiScatteringTexelPoint(atmosphere, texture_size, frag_coord, r, sun_direction);
+  vec3 luminance_sum;
+  vec3 irradiance_sum;
+  SumMultiScatteringGatherRays(atmosphere, previous_order_texture, ground_irradiance_texture, r, sun_direction, 0, 1,
+      direction_count, sample_count, luminance_sum, irradiance_sum);
+  psi = luminance_sum / Number(direction_count);
+  ground_irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+}
+
+// Psi_ms from the sum of the gathered orders Psi_1 + ... + Psi_K, the last one Psi_K, and f_ms:
+// Hillaire's series 1 / (1 - f_ms) continues from Psi_K.
+vec3 GetMultiScatteringFromOrders(IN(vec3) order_sum, IN(vec3) last_order, IN(vec3) f_ms) {
+  return order_sum + last_order * (vec3(1.0) / (vec3(1.0) - min(f_ms, vec3(0.999))) - vec3(1.0));
 }
