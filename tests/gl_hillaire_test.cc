@@ -193,7 +193,7 @@ TEST(GlHillaire, GatheredMultipleScatteringTableMatchesCpu) {
   const GpuTexture transmittance_gpu = GpuTexture::Upload(transmittance);
   double gpu_ms = 0.0;
   const Texture2D gl = RunTablePass(size, false, [&](const GpuTexture& out) {
-    RunGatheredMultipleScatteringPasses(context, km, transmittance_gpu, 64, 20, false, ground_transfer, 4, out);
+    RunGatheredMultipleScatteringPasses(context, km, transmittance_gpu, 64, 20, false, ground_transfer, 4, 64, out);
   }, &gpu_ms);
   Texture2D cpu(size.x, size.y);
   cpu::ComputeMultipleScatteringTable(metres, transmittance, 64, 20, false, ground_transfer, cpu, 4);

@@ -369,67 +369,80 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
 
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
                                     int direction_count, int sample_count, bool media_phase,
-                                    const glm::dvec3& ground_transfer, shared::Texture2D& table, int gathered_orders) {
+                                    const glm::dvec3& ground_transfer, shared::Texture2D& table, int gathered_orders,
+                                    int gather_direction_count) {
   const shared::ivec2 size(table.width, table.height);
-  // The directions of shared::GetMultiScatteringDirection; with the sun in the plane y = 0 the
-  // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
-  std::vector<std::pair<vec3, double>> directions;
-  if (direction_count == 2) {
-    directions = {{shared::GetMultiScatteringDirection(0, 2), 1.0}, {shared::GetMultiScatteringDirection(1, 2), 1.0}};
-  } else {
-    // Directions count/2.. are the mirror images of 0..count/2-1.
-    for (int k = 0; k < direction_count / 2; ++k) {
-      directions.emplace_back(shared::GetMultiScatteringDirection(k, direction_count), 2.0);
-    }
-  }
-
+  if (gather_direction_count <= 0) gather_direction_count = direction_count;
   const PaddedTable padded_transmittance(transmittance);
   // With gathered orders, the previous order's mean radiance, looked up along the rays like the
   // finished table (log texels, GL_LINEAR); its texels are rewritten in place for each order.
   PaddedTable previous_order(table);
   const PaddedTable* lookup = gathered_orders > 1 ? &previous_order : nullptr;
-  // The rays of every row, kept for the gathered orders.
-  std::vector<std::vector<MultipleScatteringRay>> row_rays(size.y);
-  std::vector<vec3> f_ms(size.y);
-  ForEachRow(size.y, [&](int y) {
-    double r, unused_mu_s;
-    shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
-    std::vector<MultipleScatteringRay>& rays = row_rays[y];
-    rays.reserve(directions.size());
-    vec3 transfer_sum(0.0);
-    for (const auto& [direction, weight] : directions) {
-      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
-                                {}, {}, false, 0.0, vec3(0.0)};
-      ray.rayleigh_weight.reserve(sample_count);
-      ray.mie_weight.reserve(sample_count);
-      const double mu = direction.z;
-      ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
-      ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
-      vec3 throughput(1.0);
-      vec3 transfer(0.0);
-      for (int i = 0; i < sample_count; ++i) {
-        // Steps as in shared::IntegrateMultiScatteringRay.
-        const double x_0 = double(i) / sample_count;
-        const double x_1 = double(i + 1) / sample_count;
-        const double dt = ray.t_max * (x_1 * x_1 - x_0 * x_0);
-        const double t = 0.5 * ray.t_max * (x_0 * x_0 + x_1 * x_1);
-        const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
-        const shared::MediumSample medium = shared::SampleMedium(a, r_i);
-        const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
-        const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-        ray.samples.AddSample(t, r_i);
-        ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
-        ray.mie_weight.push_back(step_integral * medium.mie_scattering);
-        transfer += step_integral * medium.scattering;
-        throughput *= step_transmittance;
-      }
-      ray.ground_throughput = throughput;
-      if (ray.hits_ground) transfer += throughput * a.ground_albedo * ground_transfer;
-      transfer_sum += transfer * weight;
-      rays.push_back(std::move(ray));
+
+  // The sun-independent part of `count` rays from every row's point, and the row's f_ms. The
+  // directions are shared::GetMultiScatteringDirection's; with the sun in the plane y = 0 the
+  // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
+  struct RaySet {
+    int count = 0;
+    std::vector<std::vector<MultipleScatteringRay>> rows;
+    std::vector<vec3> f_ms;
+  };
+  const auto build = [&](int count, RaySet& set) {
+    set.count = count;
+    set.rows.resize(size.y);
+    set.f_ms.resize(size.y);
+    std::vector<std::pair<vec3, double>> directions;
+    if (count == 2) {
+      directions = {{shared::GetMultiScatteringDirection(0, 2), 1.0}, {shared::GetMultiScatteringDirection(1, 2), 1.0}};
+    } else {
+      // Directions count/2.. are the mirror images of 0..count/2-1.
+      for (int k = 0; k < count / 2; ++k) directions.emplace_back(shared::GetMultiScatteringDirection(k, count), 2.0);
     }
-    f_ms[y] = transfer_sum / double(direction_count);
-  });
+    ForEachRow(size.y, [&](int y) {
+      double r, unused_mu_s;
+      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
+      std::vector<MultipleScatteringRay>& rays = set.rows[y];
+      rays.reserve(directions.size());
+      vec3 transfer_sum(0.0);
+      for (const auto& [direction, weight] : directions) {
+        MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
+                                  {}, {}, false, 0.0, vec3(0.0)};
+        ray.rayleigh_weight.reserve(sample_count);
+        ray.mie_weight.reserve(sample_count);
+        const double mu = direction.z;
+        ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
+        ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
+        vec3 throughput(1.0);
+        vec3 transfer(0.0);
+        for (int i = 0; i < sample_count; ++i) {
+          // Steps as in shared::IntegrateMultiScatteringRay.
+          const double x_0 = double(i) / sample_count;
+          const double x_1 = double(i + 1) / sample_count;
+          const double dt = ray.t_max * (x_1 * x_1 - x_0 * x_0);
+          const double t = 0.5 * ray.t_max * (x_0 * x_0 + x_1 * x_1);
+          const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
+          const shared::MediumSample medium = shared::SampleMedium(a, r_i);
+          const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
+          const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+          ray.samples.AddSample(t, r_i);
+          ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
+          ray.mie_weight.push_back(step_integral * medium.mie_scattering);
+          transfer += step_integral * medium.scattering;
+          throughput *= step_transmittance;
+        }
+        ray.ground_throughput = throughput;
+        if (ray.hits_ground) transfer += throughput * a.ground_albedo * ground_transfer;
+        transfer_sum += transfer * weight;
+        rays.push_back(std::move(ray));
+      }
+      set.f_ms[y] = transfer_sum / double(count);
+    });
+  };
+  RaySet first_rays, gather_rays;
+  build(direction_count, first_rays);
+  if (gathered_orders > 1 && gather_direction_count != direction_count) build(gather_direction_count, gather_rays);
+  const RaySet& gathering = gathered_orders > 1 && gather_direction_count != direction_count ? gather_rays : first_rays;
+  const std::vector<vec3>& f_ms = first_rays.f_ms;
 
   // Psi_n, the mean over the sphere of order n's light, at every texel (shared::
   // ComputeMultiScatteringFirstOrderTexel for n = 1, shared::ComputeMultiScatteringGatherTexel for
@@ -439,6 +452,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
   shared::Texture2D ground_irradiance(size.x, 1);
   std::vector<vec3> next_ground_irradiance(size.x);
   auto gather = [&](int n) {
+    const RaySet& set = n == 1 ? first_rays : gathering;
     ForEachRow(size.y, [&](int y) {
       double r, unused_mu_s;
       shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
@@ -448,7 +462,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
         const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
         vec3 luminance_sum(0.0), irradiance_sum(0.0);
-        for (const MultipleScatteringRay& ray : row_rays[y]) {
+        for (const MultipleScatteringRay& ray : set.rows[y]) {
           const double nu = glm::dot(ray.direction, sun);
           ray.samples.Evaluate(mu_s, nu, n == 1 ? sun_transmittance.data() : nullptr, n == 1 ? nullptr : psi.data());
           vec3 luminance(0.0);
@@ -478,8 +492,8 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
           luminance_sum += luminance * ray.weight;
           if (ray.direction.z > 0.0) irradiance_sum += luminance * (ray.weight * ray.direction.z);
         }
-        next[static_cast<std::size_t>(y) * size.x + x] = luminance_sum / double(direction_count);
-        if (y == 0) next_ground_irradiance[x] = shared::GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+        next[static_cast<std::size_t>(y) * size.x + x] = luminance_sum / double(set.count);
+        if (y == 0) next_ground_irradiance[x] = shared::GetGatheredGroundIrradianceFromSum(irradiance_sum, set.count);
       }
     });
     order.swap(next);

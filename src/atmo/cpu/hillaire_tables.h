@@ -28,11 +28,13 @@ void ComputeTransmittanceTable(const shared::AtmosphereParameters& atmosphere, i
 void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> batches, int sample_count,
                                 std::span<shared::Texture2D* const> tables);
 
-// Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows.
+// Fills `table` (already sized) like shared::ComputeMultiScatteringTexel, in parallel over rows;
+// with gathered_orders > 1, orders 2.. like shared::ComputeMultiScatteringGatherTexel over
+// gather_direction_count directions (0: direction_count), then GetMultiScatteringFromOrders.
 void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& atmosphere,
                                     const shared::Texture2D& transmittance, int direction_count, int sample_count,
                                     bool media_phase, const glm::dvec3& ground_transfer, shared::Texture2D& table,
-                                    int gathered_orders = 1);
+                                    int gathered_orders = 1, int gather_direction_count = 0);
 
 // Fills `table` (already sized) like shared::ComputeSkyViewTexel for an observer at radius
 // r <= top radius and a sun at zenith cosine mu_s, in parallel over rows.

@@ -207,7 +207,7 @@ void DispatchGather(const ComputeProgram& program, bool llvmpipe, shared::ivec2 
 void RunGatheredMultipleScatteringPasses(const Context& context, const shared::AtmosphereParameters& km,
                                          const GpuTexture& transmittance, int direction_count, int sample_count,
                                          bool media_phase, const shared::vec3& ground_transfer, int orders,
-                                         const GpuTexture& out) {
+                                         int gather_direction_count, const GpuTexture& out) {
   const bool llvmpipe = context.renderer().find("llvmpipe") != std::string::npos;
   const shared::ivec2 size = out.size2();
   GpuTexture order[2] = {GpuTexture::Make2D(size), GpuTexture::Make2D(size)};
@@ -307,7 +307,7 @@ void main() {
   for (int n = 2; n <= orders; ++n) {
     const int next = 1 - current;
     SetAtmosphereUniforms(gather, "atmosphere", km);
-    gather.SetInt("direction_count", direction_count);
+    gather.SetInt("direction_count", gather_direction_count);
     gather.SetInt("sample_count", sample_count);
     BindSamplers(gather, {{"previous_order_texture", &order[current]},
                           {"ground_irradiance_texture", &ground[current]},
@@ -482,7 +482,8 @@ void HillaireGl::Precompute(PassTimings* timings) {
     if (s.multiple_scattering_orders > 1) {
       RunGatheredMultipleScatteringPasses(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
                                           s.multiple_scattering_samples, s.multiple_scattering_media_phase,
-                                          ground_transfer[b], s.multiple_scattering_orders, batch.multiple_scattering);
+                                          ground_transfer[b], s.multiple_scattering_orders,
+                                          s.multiple_scattering_gather_directions, batch.multiple_scattering);
     } else {
       RunMultipleScatteringPass(context_, batch.km, batch.transmittance, s.multiple_scattering_directions,
                                 s.multiple_scattering_samples, s.multiple_scattering_media_phase, ground_transfer[b],

@@ -69,11 +69,12 @@ void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereP
                                bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out);
 // The table of multiple_scattering_orders = orders > 1 (shared/multiple_scattering.glsl): order 1
 // (ComputeMultiScatteringFirstOrderTexel), orders 2 ... orders each from the previous one's tables
-// (ComputeMultiScatteringGatherTexel), then GetMultiScatteringFromOrders into `out`.
+// (ComputeMultiScatteringGatherTexel over gather_direction_count directions), then
+// GetMultiScatteringFromOrders into `out`.
 void RunGatheredMultipleScatteringPasses(const Context& context, const shared::AtmosphereParameters& km,
                                          const GpuTexture& transmittance, int direction_count, int sample_count,
                                          bool media_phase, const shared::vec3& ground_transfer, int orders,
-                                         const GpuTexture& out);
+                                         int gather_direction_count, const GpuTexture& out);
 // width x 1: texel x = ComputeGroundIrradianceTexel(km, transmittance, multiple_scattering, width, x + 0.5, ...).
 void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
                              const GpuTexture& transmittance, const GpuTexture& multiple_scattering,

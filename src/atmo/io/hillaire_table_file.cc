@@ -209,6 +209,8 @@ std::vector<std::pair<std::string, std::string>> HillaireTableOptions(const Hill
           {"multiple_scattering_samples", i(s.multiple_scattering_samples)},
           {"multiple_scattering_phase", s.multiple_scattering_media_phase ? "media" : "isotropic"},
           {"multiple_scattering_ground", s.multiple_scattering_ground ? "on" : "off"},
+          {"multiple_scattering_orders", i(s.multiple_scattering_orders)},
+          {"multiple_scattering_gather_directions", i(s.multiple_scattering_gather_directions)},
           {"sky_view_lut", Size(s.sky_view_lut)},
           {"sky_view_samples", i(s.sky_view_samples)},
           {"ray_march_samples", i(s.ray_march_samples)},

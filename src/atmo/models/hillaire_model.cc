@@ -36,6 +36,13 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
     }
     else if (key == "multiple_scattering_samples") s.multiple_scattering_samples = ParseIntOption(key, value, 1, 100000);
     else if (key == "multiple_scattering_orders") s.multiple_scattering_orders = ParseIntOption(key, value, 1, 32);
+    else if (key == "multiple_scattering_gather_directions") {
+      s.multiple_scattering_gather_directions = ParseIntOption(key, value, 2, 65536);
+      if (s.multiple_scattering_gather_directions % 2 != 0) {
+        throw Error("option multiple_scattering_gather_directions=" + value +
+                    ": expected an even number (a lattice and its mirror image; 2 = up and down)");
+      }
+    }
     else if (key == "sky_view_lut") {
       s.sky_view_lut = ParseSizeOption(key, value, 2, 8192);
       if (s.sky_view_lut.y % 2 != 0 || s.sky_view_lut.y < 4) {
@@ -62,6 +69,7 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
       throw Error("unknown option '" + key + "' for model hillaire (known: transmittance_lut, transmittance_samples, "
                   "multiple_scattering_lut, multiple_scattering_directions, multiple_scattering_samples, "
                   "multiple_scattering_phase, multiple_scattering_ground, multiple_scattering_orders, "
+                  "multiple_scattering_gather_directions, "
                   "sky_view_lut, sky_view_samples, ray_march_samples, sky_view, ground_irradiance_lut, "
                   "ground_irradiance_directions, ground_irradiance_samples)");
     }
@@ -93,7 +101,8 @@ void HillaireModel::ComputeMultipleScatteringLut(Batch& batch) const {
           : shared::vec3(0.0);
   cpu::ComputeMultipleScatteringTable(batch.atmosphere, batch.transmittance, settings_.multiple_scattering_directions,
                                       settings_.multiple_scattering_samples, settings_.multiple_scattering_media_phase,
-                                      ground_transfer, batch.multiple_scattering, settings_.multiple_scattering_orders);
+                                      ground_transfer, batch.multiple_scattering, settings_.multiple_scattering_orders,
+                                      settings_.multiple_scattering_gather_directions);
 }
 
 void HillaireModel::Precompute() {
