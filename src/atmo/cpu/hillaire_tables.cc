@@ -169,6 +169,18 @@ __attribute__((noinline)) void SunColumns(int n, double r_mu_s, double nu, const
   }
 }
 
+// SunColumns' multiple-scattering columns alone, for lookups of that table without the sun's
+// transmittance.
+__attribute__((noinline)) void MultipleScatteringColumns(int n, double r_mu_s, double nu, const double* __restrict t,
+                                                         const double* __restrict inverse_r, double m_columns,
+                                                         double* __restrict ms_column) {
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double mu = shared::ClampToRange((r_mu_s + t[i] * nu) * inverse_r[i], -1.0, 1.0);
+    ms_column[i] = shared::GetMultiScatteringUnitFromMuS(mu) * m_columns;
+  }
+}
+
 // shared::DecodeMultiScattering over `count` packed values (the components of an array of vec3),
 // in a loop the compiler vectorises (exp from libmvec).
 __attribute__((noinline)) void DecodeMultipleScattering(int count, double* __restrict values) {
@@ -244,6 +256,16 @@ class SunLookupsAlongRay {
   // per thread.
   void Evaluate(double mu_s, double nu, vec3* sun_transmittance, vec3* multiple_scattering) const {
     const int n = static_cast<int>(t_.size());
+    if (sun_transmittance == nullptr && multiple_scattering != nullptr) {
+      // The multiple-scattering table alone (the gathered orders): its columns only.
+      MultipleScatteringColumns(n, r_ * mu_s, nu, t_.data(), inverse_r_.data(), multiple_scattering_->width - 1,
+                                multiple_scattering_column_.data());
+      for (int i = 0; i < n; ++i) {
+        multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
+      }
+      DecodeMultipleScattering(3 * n, &multiple_scattering[0].x);
+      return;
+    }
     const double t_columns = transmittance_.width - 1;
     const double m_columns = multiple_scattering_ != nullptr ? multiple_scattering_->width - 1 : 0.0;
     SunColumns(n, r_ * mu_s, nu, t_.data(), r_i_.data(), inverse_r_.data(), c_ground_.data(), c_top_.data(),
@@ -307,6 +329,7 @@ struct MultipleScatteringRay {
   SunLookupsAlongRay samples;
   std::vector<vec3> rayleigh_weight;  // throughput x step integral x Rayleigh scattering
   std::vector<vec3> mie_weight;       // throughput x step integral x Mie scattering
+  std::vector<vec3> scattering_weight;  // their sum (the gathered orders' isotropic phase)
   bool hits_ground;
   double t_max;
   vec3 ground_throughput;
@@ -406,7 +429,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
       vec3 transfer_sum(0.0);
       for (const auto& [direction, weight] : directions) {
         MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
-                                  {}, {}, false, 0.0, vec3(0.0)};
+                                  {}, {}, {}, false, 0.0, vec3(0.0)};
         ray.rayleigh_weight.reserve(sample_count);
         ray.mie_weight.reserve(sample_count);
         const double mu = direction.z;
@@ -427,6 +450,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
           ray.samples.AddSample(t, r_i);
           ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
           ray.mie_weight.push_back(step_integral * medium.mie_scattering);
+          ray.scattering_weight.push_back(ray.rayleigh_weight.back() + ray.mie_weight.back());
           transfer += step_integral * medium.scattering;
           throughput *= step_transmittance;
         }
@@ -482,7 +506,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
           } else {
             // As shared::IntegrateMultiScatteringGatherRay.
             for (std::size_t i = 0; i < ray.samples.size(); ++i) {
-              luminance += psi[i] * (ray.rayleigh_weight[i] + ray.mie_weight[i]);
+              luminance += psi[i] * ray.scattering_weight[i];
             }
             if (ray.hits_ground) {
               luminance += ray.ground_throughput * a.ground_albedo / shared::kPi *
