@@ -392,12 +392,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // The moon's light renders through a CPU model's second view (RadianceTerms::moon) for now.
   const bool wants_moon = !command.moon.no_moon && (command.moon.elevation_deg || command.moon.azimuth_deg ||
                                                     command.moon.phase_deg || HasDate(command.sun));
-  if (wants_moon && (on_gl || common.model == "reference")) {
+  if (wants_moon && common.model == "reference") {
     if (command.moon.elevation_deg || command.moon.phase_deg || command.moon.azimuth_deg) {
-      throw Error("the moon renders on the cpu backend with a deterministic model for now (not " +
-                  (on_gl ? std::string("--backend gl") : std::string("model reference")) + ")");
+      throw Error("the moon renders with a deterministic model for now (not model reference)");
     }
-    PrintWarning("the moon of --date is left out: it renders on the cpu backend with a deterministic model for now");
+    PrintWarning("the moon of --date is left out: it renders with a deterministic model for now");
   }
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const auto precompute_start = std::chrono::steady_clock::now();
@@ -444,21 +443,46 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     std::optional<Moon> moon;
     std::unique_ptr<SkyView> sky;
   };
-  const auto moon_for = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated) {
-    FrameMoon result;
+  // The moon alone (no view of the model): its place and its disc's light; recorded in the EXR.
+  const auto moon_place_for = [&](const RenderSettings& frame,
+                                  const std::optional<SunAtInstant>& dated) -> std::optional<Moon> {
     const std::optional<MoonPosition> place =
         ResolveMoon(command.moon, command.sun, frame.sun_azimuth_deg,
                     dated ? std::optional<double>(dated->julian_day_utc) : std::nullopt);
-    if (!place) return result;
-    const glm::dvec3 direction = SunDirection(place->elevation_deg, place->azimuth_deg);
-    result.moon.emplace(direction, place->phase_angle_deg, place->distance_km, model_parameters.wavelengths_nm,
-                        SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
-    result.sky = model->View(frame.altitude_m, direction);
+    if (!place) return std::nullopt;
     set_metadata("atmo:moonElevationDeg", Format("%.10g", place->elevation_deg));
     set_metadata("atmo:moonAzimuthDeg", Format("%.10g", place->azimuth_deg));
     set_metadata("atmo:moonPhaseDeg", Format("%.10g", place->phase_angle_deg));
+    return Moon(SunDirection(place->elevation_deg, place->azimuth_deg), place->phase_angle_deg, place->distance_km,
+                model_parameters.wavelengths_nm, SunDirection(frame.sun_elevation_deg, frame.sun_azimuth_deg));
+  };
+  const auto moon_for = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated) {
+    FrameMoon result;
+    result.moon = moon_place_for(frame, dated);
+    if (result.moon) result.sky = model->View(frame.altitude_m, result.moon->direction());
     return result;
   };
+#ifdef ATMO_HAVE_GL
+  // A GL frame with its night sky and moon: the moonlit sky is a second GL frame with the sun put
+  // in the moon's direction (the models are linear in their source), added on the host with the
+  // moon's disc (AddMoonLight), as the night sky is (AddNightSky).
+  const auto render_gl = [&](const gl::Context& context, const RenderSettings& frame,
+                             const std::optional<SunAtInstant>& dated) {
+    Image image = RenderOnGl(context, common, model_parameters, frame);
+    const NightSky night = night_sky_for(frame, dated);
+    AddNightSky(night.Scaled(model_parameters.solar_irradiance), frame.camera, image);
+    if (const std::optional<Moon> moon = moon_place_for(frame, dated)) {
+      RenderSettings lit_by_moon = frame;
+      const glm::dvec3& d = moon->direction();
+      lit_by_moon.sun_elevation_deg = glm::degrees(std::asin(std::clamp(d.z, -1.0, 1.0)));
+      lit_by_moon.sun_azimuth_deg = glm::degrees(std::atan2(d.x, d.y));
+      lit_by_moon.terms.sun_disc = false;
+      const Image moonlit = RenderOnGl(context, common, model_parameters, lit_by_moon);
+      AddMoonLight(*moon, moonlit, night, frame.camera, model_parameters.solar_irradiance, image);
+    }
+    return image;
+  };
+#endif
   const auto render_cpu = [&](const RenderSettings& frame, const std::optional<SunAtInstant>& dated,
                               const RowProgress& progress = {}) {
     const auto view_start = std::chrono::steady_clock::now();
@@ -520,8 +544,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         image = render_cpu(frame, sun);
       } else {
 #ifdef ATMO_HAVE_GL
-        image = RenderOnGl(*context, common, model_parameters, frame);
-        AddNightSky(night.Scaled(model_parameters.solar_irradiance), frame.camera, image);
+        image = render_gl(*context, frame, sun);
 #endif
       }
       const double frame_ms =
@@ -600,9 +623,7 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     if (on_gl) {
       const gl::Context context;
       const auto gl_start = std::chrono::steady_clock::now();
-      image = RenderOnGl(context, common, model_parameters, settings);
-      AddNightSky(night_sky_for(settings, plan.dated_sun).Scaled(model_parameters.solar_irradiance), settings.camera,
-                  image);
+      image = render_gl(context, settings, plan.dated_sun);
       frame_s = seconds_since(gl_start);
     } else {
       image = render_cpu(settings, plan.dated_sun, rows);

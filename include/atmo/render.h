@@ -79,6 +79,15 @@ void RenderView(const SkyView& sky, const Camera& camera, const RadianceTerms& t
 void AddNightSky(const NightSky::Folded& night, const Camera& camera, Image& image);
 // Only the stars of such a pass (NightSky::SetStars): each shared among the 2 x 2 pixels around it.
 void AddStars(const NightSky::Folded& night, const Camera& camera, Image& image);
+// The moon for images made elsewhere (the GL renderers), what RenderView does with
+// RadianceTerms::moon: `moonlit` is the same renderer's image through `camera` with the sun put in
+// the moon's direction, without the sun disc and the night sky (in the units of `image`: per
+// unit solar irradiance times `solar_irradiance`); it is added times the moon's irradiance
+// relative to the sun's, and then the moon's disc, integrated over the pixels and attenuated by
+// `night`'s transmittance (the one the stars get). Throws atmo::Error for a size or channel
+// mismatch.
+void AddMoonLight(const Moon& moon, const Image& moonlit, const NightSky& night, const Camera& camera,
+                  std::span<const double> solar_irradiance, Image& image);
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
 // (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the

@@ -262,6 +262,30 @@ void AddNightSky(const NightSky::Folded& night, const Camera& camera_settings, I
   AddStars(night, camera_settings, image);
 }
 
+void AddMoonLight(const Moon& moon, const Image& moonlit, const NightSky& night, const Camera& camera,
+                  std::span<const double> solar_irradiance, Image& image) {
+  ValidateCamera(camera);
+  const std::size_t n = moon.relative_irradiance().size();
+  if (image.width != camera.width || image.height != camera.height || static_cast<std::size_t>(image.channels) != n ||
+      moonlit.width != image.width || moonlit.height != image.height || moonlit.channels != image.channels ||
+      solar_irradiance.size() != n || night.channel_count() != n) {
+    throw Error("AddMoonLight: the images, the camera, the moon and the night sky do not match");
+  }
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    image.pixels[i] += moonlit.pixels[i] * static_cast<float>(moon.relative_irradiance()[i % n]);
+  }
+  AddSunDisc(
+      camera, moon.direction(), moon.angular_radius_rad(),
+      [&](const glm::dvec3& view, std::span<double> out) {
+        thread_local std::vector<double> transmittance;
+        transmittance.resize(n);
+        moon.DiscRadiance(view, out);
+        night.Transmittance(view.z, transmittance);
+        for (std::size_t c = 0; c < n; ++c) out[c] *= transmittance[c];
+      },
+      solar_irradiance, image);
+}
+
 namespace {
 
 // The frame loop shared by RenderView and RenderViewFolded: camera rays per row (rows in
