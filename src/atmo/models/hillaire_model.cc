@@ -23,6 +23,7 @@ using Clock = std::chrono::steady_clock;
 
 HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
   HillaireSettings s;
+  bool gather_directions_given = false;
   for (const auto& [key, value] : options) {
     if (key == "transmittance_lut") s.transmittance_lut = ParseSizeOption(key, value, 2, 4096);
     else if (key == "transmittance_samples") s.transmittance_samples = ParseIntOption(key, value, 1, 100000);
@@ -38,6 +39,7 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
     else if (key == "multiple_scattering_orders") s.multiple_scattering_orders = ParseIntOption(key, value, 1, 32);
     else if (key == "multiple_scattering_gather_directions") {
       s.multiple_scattering_gather_directions = ParseIntOption(key, value, 2, 65536);
+      gather_directions_given = true;
       if (s.multiple_scattering_gather_directions % 2 != 0) {
         throw Error("option multiple_scattering_gather_directions=" + value +
                     ": expected an even number (a lattice and its mirror image; 2 = up and down)");
@@ -74,6 +76,8 @@ HillaireSettings HillaireSettings::FromOptions(const ModelOptions& options) {
                   "ground_irradiance_directions, ground_irradiance_samples)");
     }
   }
+  // The gathered orders use order 1's directions unless told otherwise (the seed's pair stays a pair).
+  if (!gather_directions_given) s.multiple_scattering_gather_directions = s.multiple_scattering_directions;
   return s;
 }
 

@@ -12,7 +12,8 @@
 //   multiple_scattering_orders=4     orders >= 2 gathered one by one (each from the previous
 //                                     order's table) before the 1/(1 - f_ms) series; 1 = Hillaire
 //                                     2020's series alone
-//   multiple_scattering_gather_directions=64  directions of the gathered orders 2.. (fewer: faster)
+//   multiple_scattering_gather_directions  directions of the gathered orders 2.. (default: those of
+//                                     multiple_scattering_directions; fewer: faster)
 //   multiple_scattering_phase=isotropic  the phase of the first scattering in the table: isotropic
 //                                     (Hillaire 2020) or media (Rayleigh and Mie's own)
 //   multiple_scattering_ground=on     on: the ground also reflects orders >= 2 in the 1/(1 - f_ms)
@@ -51,7 +52,7 @@ struct HillaireSettings {
   bool multiple_scattering_media_phase = false;
   bool multiple_scattering_ground = true;
   int multiple_scattering_orders = 4;
-  int multiple_scattering_gather_directions = 64;
+  int multiple_scattering_gather_directions = 64;  // FromOptions: multiple_scattering_directions unless given
   glm::ivec2 sky_view_lut{192, 108};
   int sky_view_samples = 30;
   int ray_march_samples = 30;
