@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -445,6 +446,29 @@ TEST(HillaireAgainstThePathTracer, SunsetHorizonAwayFromTheSun) {
   std::printf("sunset horizon, hillaire / path tracer, lowest: 4 gathered orders %.3f, the series alone %.3f\n",
               worst_gathered, worst_series);
   EXPECT_LT(worst_series, 0.7);
+}
+
+}  // namespace
+}  // namespace atmo
+
+namespace atmo {
+namespace {
+
+// The gathered orders keep every row's rays: sizes whose rays would not fit are refused with the
+// estimate before anything is allocated (24 TB here), and the series alone, which keeps one row
+// at a time, is not asked for that memory.
+TEST(HillaireMemory, GatheredOrdersRefuseRaysThatWouldNotFit) {
+  const ModelOptions huge = {{"multiple_scattering_lut", "4096x4096"},
+                             {"multiple_scattering_directions", "65536"},
+                             {"multiple_scattering_samples", "1000"}};
+  try {
+    const auto model = CreateModel("hillaire", Preset("earth"), huge);
+    model->View(0.0, Sun(30.0));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gathered multiple-scattering orders"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("would need about"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

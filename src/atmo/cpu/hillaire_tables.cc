@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+
+#include "atmo/memory.h"
 
 #if defined(__GLIBC__) && defined(__x86_64__)
 // glibc's vector exp (libmvec): declaring the SIMD variants lets the compiler vectorise loops that
@@ -402,18 +405,10 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
   PaddedTable previous_order(table);
   const PaddedTable* lookup = gathered_orders > 1 ? &previous_order : nullptr;
 
-  // The sun-independent part of `count` rays from every row's point, and the row's f_ms. The
-  // directions are shared::GetMultiScatteringDirection's; with the sun in the plane y = 0 the
-  // direction (x, y, z) sees the same sun as (x, -y, z), so one of each mirrored pair is enough.
-  struct RaySet {
-    int count = 0;
-    std::vector<std::vector<MultipleScatteringRay>> rows;
-    std::vector<vec3> f_ms;
-  };
-  const auto build = [&](int count, RaySet& set) {
-    set.count = count;
-    set.rows.resize(size.y);
-    set.f_ms.resize(size.y);
+  // The directions of shared::GetMultiScatteringDirection, with the weight each stands for; with
+  // the sun in the plane y = 0 the direction (x, y, z) sees the same sun as (x, -y, z), so one of
+  // each mirrored pair is enough.
+  const auto directions_of = [](int count) {
     std::vector<std::pair<vec3, double>> directions;
     if (count == 2) {
       directions = {{shared::GetMultiScatteringDirection(0, 2), 1.0}, {shared::GetMultiScatteringDirection(1, 2), 1.0}};
@@ -421,118 +416,141 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
       // Directions count/2.. are the mirror images of 0..count/2-1.
       for (int k = 0; k < count / 2; ++k) directions.emplace_back(shared::GetMultiScatteringDirection(k, count), 2.0);
     }
-    ForEachRow(size.y, [&](int y) {
-      double r, unused_mu_s;
-      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
-      std::vector<MultipleScatteringRay>& rays = set.rows[y];
-      rays.reserve(directions.size());
-      vec3 transfer_sum(0.0);
-      for (const auto& [direction, weight] : directions) {
-        MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
-                                  {}, {}, {}, false, 0.0, vec3(0.0)};
-        ray.rayleigh_weight.reserve(sample_count);
-        ray.mie_weight.reserve(sample_count);
-        const double mu = direction.z;
-        ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
-        ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
-        vec3 throughput(1.0);
-        vec3 transfer(0.0);
-        for (int i = 0; i < sample_count; ++i) {
-          // Steps as in shared::IntegrateMultiScatteringRay.
-          const double x_0 = double(i) / sample_count;
-          const double x_1 = double(i + 1) / sample_count;
-          const double dt = ray.t_max * (x_1 * x_1 - x_0 * x_0);
-          const double t = 0.5 * ray.t_max * (x_0 * x_0 + x_1 * x_1);
-          const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
-          const shared::MediumSample medium = shared::SampleMedium(a, r_i);
-          const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
-          const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-          ray.samples.AddSample(t, r_i);
-          ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
-          ray.mie_weight.push_back(step_integral * medium.mie_scattering);
-          ray.scattering_weight.push_back(ray.rayleigh_weight.back() + ray.mie_weight.back());
-          transfer += step_integral * medium.scattering;
-          throughput *= step_transmittance;
-        }
-        ray.ground_throughput = throughput;
-        if (ray.hits_ground) transfer += throughput * a.ground_albedo * ground_transfer;
-        transfer_sum += transfer * weight;
-        rays.push_back(std::move(ray));
-      }
-      set.f_ms[y] = transfer_sum / double(count);
-    });
+    return directions;
   };
-  RaySet first_rays, gather_rays;
-  build(direction_count, first_rays);
-  if (gathered_orders > 1 && gather_direction_count != direction_count) build(gather_direction_count, gather_rays);
-  const RaySet& gathering = gathered_orders > 1 && gather_direction_count != direction_count ? gather_rays : first_rays;
-  const std::vector<vec3>& f_ms = first_rays.f_ms;
+  // The sun-independent part of the rays from row y's point into `rays`; returns the row's f_ms.
+  const auto build_row = [&](int y, const std::vector<std::pair<vec3, double>>& directions, int count,
+                             std::vector<MultipleScatteringRay>& rays) {
+    double r, unused_mu_s;
+    shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
+    rays.reserve(directions.size());
+    vec3 transfer_sum(0.0);
+    for (const auto& [direction, weight] : directions) {
+      MultipleScatteringRay ray{direction, weight, SunLookupsAlongRay(a, padded_transmittance, lookup, r, sample_count),
+                                {}, {}, {}, false, 0.0, vec3(0.0)};
+      ray.rayleigh_weight.reserve(sample_count);
+      ray.mie_weight.reserve(sample_count);
+      ray.scattering_weight.reserve(sample_count);
+      const double mu = direction.z;
+      ray.hits_ground = shared::RayIntersectsGround(a, r, mu);
+      ray.t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, ray.hits_ground);
+      vec3 throughput(1.0);
+      vec3 transfer(0.0);
+      for (int i = 0; i < sample_count; ++i) {
+        // Steps as in shared::IntegrateMultiScatteringRay.
+        const double x_0 = double(i) / sample_count;
+        const double x_1 = double(i + 1) / sample_count;
+        const double dt = ray.t_max * (x_1 * x_1 - x_0 * x_0);
+        const double t = 0.5 * ray.t_max * (x_0 * x_0 + x_1 * x_1);
+        const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
+        const shared::MediumSample medium = shared::SampleMedium(a, r_i);
+        const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
+        const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+        ray.samples.AddSample(t, r_i);
+        ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
+        ray.mie_weight.push_back(step_integral * medium.mie_scattering);
+        ray.scattering_weight.push_back(ray.rayleigh_weight.back() + ray.mie_weight.back());
+        transfer += step_integral * medium.scattering;
+        throughput *= step_transmittance;
+      }
+      ray.ground_throughput = throughput;
+      if (ray.hits_ground) transfer += throughput * a.ground_albedo * ground_transfer;
+      transfer_sum += transfer * weight;
+      rays.push_back(std::move(ray));
+    }
+    return transfer_sum / double(count);
+  };
 
   // Psi_n, the mean over the sphere of order n's light, at every texel (shared::
   // ComputeMultiScatteringFirstOrderTexel for n = 1, shared::ComputeMultiScatteringGatherTexel for
   // n > 1), and E_n on the ground row (row 0: r = bottom radius) for order n + 1.
   const std::size_t texel_count = static_cast<std::size_t>(size.x) * size.y;
-  std::vector<vec3> order(texel_count), next(texel_count), sum;
+  std::vector<vec3> order(texel_count), next(texel_count), sum, f_ms(size.y);
   shared::Texture2D ground_irradiance(size.x, 1);
   std::vector<vec3> next_ground_irradiance(size.x);
-  auto gather = [&](int n) {
-    const RaySet& set = n == 1 ? first_rays : gathering;
-    ForEachRow(size.y, [&](int y) {
-      double r, unused_mu_s;
-      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
-      std::vector<vec3> sun_transmittance(sample_count), psi(sample_count);
-      for (int x = 0; x < size.x; ++x) {
-        double unused_r, mu_s;
-        shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
-        const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
-        vec3 luminance_sum(0.0), irradiance_sum(0.0);
-        for (const MultipleScatteringRay& ray : set.rows[y]) {
-          const double nu = glm::dot(ray.direction, sun);
-          ray.samples.Evaluate(mu_s, nu, n == 1 ? sun_transmittance.data() : nullptr, n == 1 ? nullptr : psi.data());
-          vec3 luminance(0.0);
-          const double mu_s_g =
-              ray.hits_ground ? shared::ClampCosine((r * mu_s + ray.t_max * nu) / a.bottom_radius) : 0.0;
-          if (n == 1) {
-            // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
-            const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
-            const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
-            for (std::size_t i = 0; i < ray.samples.size(); ++i) {
-              luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
-            }
-            if (ray.hits_ground) {
-              luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, a.bottom_radius, mu_s_g) *
-                           a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
-            }
-          } else {
-            // As shared::IntegrateMultiScatteringGatherRay.
-            for (std::size_t i = 0; i < ray.samples.size(); ++i) {
-              luminance += psi[i] * ray.scattering_weight[i];
-            }
-            if (ray.hits_ground) {
-              luminance += ray.ground_throughput * a.ground_albedo / shared::kPi *
-                           shared::GetGatheredGroundIrradiance(ground_irradiance, mu_s_g);
-            }
+  // Order n of row y from its rays (`count` directions) into `next`.
+  const auto gather_row = [&](int n, int y, const std::vector<MultipleScatteringRay>& rays, int count) {
+    double r, unused_mu_s;
+    shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
+    std::vector<vec3> sun_transmittance(sample_count), psi(sample_count);
+    for (int x = 0; x < size.x; ++x) {
+      double unused_r, mu_s;
+      shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
+      const vec3 sun(shared::SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+      vec3 luminance_sum(0.0), irradiance_sum(0.0);
+      for (const MultipleScatteringRay& ray : rays) {
+        const double nu = glm::dot(ray.direction, sun);
+        ray.samples.Evaluate(mu_s, nu, n == 1 ? sun_transmittance.data() : nullptr, n == 1 ? nullptr : psi.data());
+        vec3 luminance(0.0);
+        const double mu_s_g = ray.hits_ground ? shared::ClampCosine((r * mu_s + ray.t_max * nu) / a.bottom_radius) : 0.0;
+        if (n == 1) {
+          // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
+          const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
+          const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
+          for (std::size_t i = 0; i < ray.samples.size(); ++i) {
+            luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
           }
-          luminance_sum += luminance * ray.weight;
-          if (ray.direction.z > 0.0) irradiance_sum += luminance * (ray.weight * ray.direction.z);
+          if (ray.hits_ground) {
+            luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, a.bottom_radius, mu_s_g) *
+                         a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
+          }
+        } else {
+          // As shared::IntegrateMultiScatteringGatherRay.
+          for (std::size_t i = 0; i < ray.samples.size(); ++i) luminance += psi[i] * ray.scattering_weight[i];
+          if (ray.hits_ground) {
+            luminance += ray.ground_throughput * a.ground_albedo / shared::kPi *
+                         shared::GetGatheredGroundIrradiance(ground_irradiance, mu_s_g);
+          }
         }
-        next[static_cast<std::size_t>(y) * size.x + x] = luminance_sum / double(set.count);
-        if (y == 0) next_ground_irradiance[x] = shared::GetGatheredGroundIrradianceFromSum(irradiance_sum, set.count);
+        luminance_sum += luminance * ray.weight;
+        if (ray.direction.z > 0.0) irradiance_sum += luminance * (ray.weight * ray.direction.z);
       }
-    });
+      next[static_cast<std::size_t>(y) * size.x + x] = luminance_sum / double(count);
+      if (y == 0) next_ground_irradiance[x] = shared::GetGatheredGroundIrradianceFromSum(irradiance_sum, count);
+    }
+  };
+  const auto finish_order = [&] {
     order.swap(next);
     for (int x = 0; x < size.x; ++x) {
       ground_irradiance.at(x, 0) = glm::vec3(shared::EncodeMultiScattering(next_ground_irradiance[x]));
     }
   };
-  gather(1);
-  if (gathered_orders > 1) sum = order;
-  for (int n = 2; n <= gathered_orders; ++n) {
-    for (std::size_t k = 0; k < texel_count; ++k) {
-      previous_order.texels[k] = glm::vec4(glm::vec3(shared::EncodeMultiScattering(order[k])), 0.0f);
+
+  const auto first_directions = directions_of(direction_count);
+  if (gathered_orders == 1) {
+    // Hillaire 2020's series: each row's rays live only while the row is computed.
+    ForEachRow(size.y, [&](int y) {
+      std::vector<MultipleScatteringRay> rays;
+      f_ms[y] = build_row(y, first_directions, direction_count, rays);
+      gather_row(1, y, rays, direction_count);
+    });
+    finish_order();
+  } else {
+    // The gathered orders pass over every row again: the rays of all rows are kept (about 200
+    // bytes per step, measured from the ray's arrays), once per direction set.
+    const bool own_set = gather_direction_count != direction_count;
+    const double rays_per_row = first_directions.size() + (own_set ? directions_of(gather_direction_count).size() : 0);
+    CheckMemory("hillaire's gathered multiple-scattering orders (" + std::to_string(size.x) + "x" +
+                    std::to_string(size.y) + " texels, " + std::to_string(sample_count) + " samples per ray)",
+                200.0 * size.y * rays_per_row * sample_count);
+    std::vector<std::vector<MultipleScatteringRay>> first_rays(size.y), gather_rays(own_set ? size.y : 0);
+    const auto gather_directions = own_set ? directions_of(gather_direction_count) : first_directions;
+    ForEachRow(size.y, [&](int y) {
+      f_ms[y] = build_row(y, first_directions, direction_count, first_rays[y]);
+      if (own_set) build_row(y, gather_directions, gather_direction_count, gather_rays[y]);
+    });
+    const auto& gathering = own_set ? gather_rays : first_rays;
+    ForEachRow(size.y, [&](int y) { gather_row(1, y, first_rays[y], direction_count); });
+    finish_order();
+    sum = order;
+    for (int n = 2; n <= gathered_orders; ++n) {
+      for (std::size_t k = 0; k < texel_count; ++k) {
+        previous_order.texels[k] = glm::vec4(glm::vec3(shared::EncodeMultiScattering(order[k])), 0.0f);
+      }
+      ForEachRow(size.y, [&](int y) { gather_row(n, y, gathering[y], gather_direction_count); });
+      finish_order();
+      for (std::size_t k = 0; k < texel_count; ++k) sum[k] += order[k];
     }
-    gather(n);
-    for (std::size_t k = 0; k < texel_count; ++k) sum[k] += order[k];
   }
 
   for (int y = 0; y < size.y; ++y) {
