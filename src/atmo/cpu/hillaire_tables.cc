@@ -399,6 +399,16 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
                                     int gather_direction_count) {
   const shared::ivec2 size(table.width, table.height);
   if (gather_direction_count <= 0) gather_direction_count = direction_count;
+  if (gathered_orders > 1) {
+    // The gathered orders pass over every row again: the rays of all rows are kept (about 200
+    // bytes per step, from the ray's arrays), once per direction set, and a float copy of the table.
+    const auto marched = [](int count) { return count == 2 ? 2.0 : count / 2.0; };
+    const double rays_per_row =
+        marched(direction_count) + (gather_direction_count != direction_count ? marched(gather_direction_count) : 0.0);
+    CheckMemory("hillaire's gathered multiple-scattering orders (" + std::to_string(size.x) + "x" +
+                    std::to_string(size.y) + " texels, " + std::to_string(sample_count) + " samples per ray)",
+                200.0 * size.y * rays_per_row * sample_count + 16.0 * size.x * size.y);
+  }
   const PaddedTable padded_transmittance(transmittance);
   // With gathered orders, the previous order's mean radiance, looked up along the rays like the
   // finished table (log texels, GL_LINEAR); its texels are rewritten in place for each order.
@@ -526,13 +536,7 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
     });
     finish_order();
   } else {
-    // The gathered orders pass over every row again: the rays of all rows are kept (about 200
-    // bytes per step, measured from the ray's arrays), once per direction set.
     const bool own_set = gather_direction_count != direction_count;
-    const double rays_per_row = first_directions.size() + (own_set ? directions_of(gather_direction_count).size() : 0);
-    CheckMemory("hillaire's gathered multiple-scattering orders (" + std::to_string(size.x) + "x" +
-                    std::to_string(size.y) + " texels, " + std::to_string(sample_count) + " samples per ray)",
-                200.0 * size.y * rays_per_row * sample_count);
     std::vector<std::vector<MultipleScatteringRay>> first_rays(size.y), gather_rays(own_set ? size.y : 0);
     const auto gather_directions = own_set ? directions_of(gather_direction_count) : first_directions;
     ForEachRow(size.y, [&](int y) {
