@@ -60,6 +60,16 @@ void ClipToGamut(float* rgb);
 
 class NightSky {
  public:
+  // Entries of the per-angle tables (Folded::airglow, Folded::transmitted), uniform in the cosine
+  // of the view zenith angle over [-1, 1].
+  static constexpr int kAngleSamples = 4097;
+  // The zodiacal light's lookup (Leinert et al. 1998, Table 17, resampled): kZodiacalSinBeta rows
+  // uniform in |sin(ecliptic latitude)| over [0, 1], each of kZodiacalCosElongation values uniform
+  // in cos(elongation from the sun) over [-1, 1], read bilinearly; in units of Table 17.
+  static constexpr int kZodiacalSinBeta = 129;
+  static constexpr int kZodiacalCosElongation = 513;
+  static std::span<const float> ZodiacalGrid();
+
   // The night sky seen from `altitude_m` with the sun along `sun_direction` (unit); the ecliptic's
   // north pole `ecliptic_pole` (unit, at right angles to the sun; a zero vector: DefaultEclipticPole).
   // Precomputes the transmittance and the airglow path per view zenith angle (1.4 ms for 3
@@ -83,6 +93,9 @@ class NightSky {
   void Transmittance(double mu, std::span<double> out) const;
 
   bool active() const { return active_; }
+  const glm::dvec3& sun_direction() const { return sun_direction_; }
+  // Whether the zodiacal light is there (its scale > 0 and the glow on).
+  bool zodiacal() const { return zodiacal_relative_ > 0.0; }
   bool glow() const { return active_ && glow_; }
   std::size_t channel_count() const { return channel_count_; }
   const glm::dvec3& ecliptic_pole() const { return ecliptic_pole_; }
@@ -110,6 +123,17 @@ class NightSky {
     const NightSky* night() const { return night_; }
     // The fold: output k of channel c is weights()[c * outputs() + k].
     const std::vector<float>& weights() const { return weights_; }
+    // The per-angle tables (kAngleSamples x outputs(); empty when the night sky is inactive): the
+    // attenuated airglow, and the transmittance times the zodiacal light per unit of ZodiacalGrid.
+    // A pixel adds, at x = (mu + 1) (kAngleSamples - 1) / 2, a = min(floor(x), kAngleSamples - 2),
+    // f = x - a: (1 - f) (airglow[a] + z transmitted[a]) + f (airglow[a + 1] + z transmitted[a + 1]),
+    // z the zodiacal grid's value (0 without the zodiacal light).
+    const std::vector<float>& airglow() const { return airglow_; }
+    const std::vector<float>& transmitted() const { return transmitted_; }
+    // The stars above the horizon as the renderers add them: each star's direction (local frame)
+    // and its outputs() values (its irradiance over the sun's times the transmittance, folded;
+    // brought into the gamut with 3 outputs), star-major. Empty without stars.
+    void Stars(std::vector<glm::dvec3>& directions, std::vector<float>& values) const;
 
    private:
     friend class NightSky;

@@ -98,17 +98,13 @@ void AddStars(const NightSky::Folded& night_folded, const Camera& camera_setting
   const int width = camera_settings.width;
   const int height = camera_settings.height;
   const bool wraps = camera_settings.kind == CameraKind::kEquirect;
-  const std::size_t n = night->channel_count();
   const std::size_t m = static_cast<std::size_t>(night_folded.outputs());
-  const std::vector<float>& w = night_folded.weights();
-  const std::vector<Star>& stars = night->stars()->stars();
-  const std::vector<double>& irradiance = night->star_irradiance();
-  std::vector<double> transmittance(n);
-  std::vector<float> star(m);
-  for (std::size_t i = 0; i < stars.size(); ++i) {
-    const glm::dvec3 d = night->frame().ToLocal(stars[i]);
+  std::vector<glm::dvec3> directions;
+  std::vector<float> values;
+  night_folded.Stars(directions, values);
+  for (std::size_t i = 0; i < directions.size(); ++i) {
     shared::vec2 frag;
-    if (!shared::GetCameraFragCoordFromDirection(camera, d, frag)) continue;
+    if (!shared::GetCameraFragCoordFromDirection(camera, directions[i], frag)) continue;
     // The four pixels whose centres surround the star, and their bilinear shares.
     const double fx = frag.x - 0.5;
     const double fy = frag.y - 0.5;
@@ -131,14 +127,7 @@ void AddStars(const NightSky::Folded& night_folded, const Camera& camera_setting
       kept += share.weight;
     }
     if (!(kept > 0.0)) continue;
-    night->Transmittance(d.z, transmittance);
-    std::fill(star.begin(), star.end(), 0.0f);
-    for (std::size_t c = 0; c < n; ++c) {
-      const double value = irradiance[i * n + c] * transmittance[c];
-      if (value == 0.0) continue;
-      for (std::size_t k = 0; k < m; ++k) star[k] += static_cast<float>(w[c * m + k] * value);
-    }
-    if (m == 3) ClipToGamut(star.data());  // a red star low in the sky may leave linear sRGB
+    const float* star = &values[i * m];
     for (const Share& share : shares) {
       if (share.weight == 0.0) continue;
       const double solid_angle = shared::GetCameraPixelSolidAngle(camera, shared::ivec2(share.x, share.y));

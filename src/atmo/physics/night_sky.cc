@@ -27,7 +27,7 @@ constexpr double kPi = std::numbers::pi;
 // Entries of the per-angle tables, uniform in the cosine mu of the view zenith angle over [-1, 1]
 // (a lookup without acos): 0.028 degrees apart at the horizon, where the attenuated airglow
 // changes fastest, 1.8 degrees at the zenith, where it is flat.
-constexpr int kAngles = 4097;
+constexpr int kAngles = NightSky::kAngleSamples;
 // Trapezoid intervals of the transmittance quadrature (shared/transmittance.glsl: 40 err by at
 // most 2.5e-3).
 constexpr int kTransmittanceIntervals = 64;
@@ -155,8 +155,8 @@ const ZodiacalGrid& Zodiacal() {
 // of a view with the ecliptic's pole and the sun, so that a pixel needs no inverse trigonometry:
 // cos(elongation) = cos(beta) cos(lambda - lambda_sun).
 struct ZodiacalDotGrid {
-  static constexpr int kSin = 129;
-  static constexpr int kCos = 513;
+  static constexpr int kSin = NightSky::kZodiacalSinBeta;
+  static constexpr int kCos = NightSky::kZodiacalCosElongation;
   std::vector<float> value = std::vector<float>(static_cast<std::size_t>(kSin) * kCos);
   ZodiacalDotGrid() {
     const ZodiacalGrid& grid = Zodiacal();
@@ -369,6 +369,35 @@ void NightSky::Radiance(const glm::dvec3& view, std::span<double> out) const {
   AirglowRadiance(view, out);
   ZodiacalRadiance(view, zodiacal);
   for (std::size_t c = 0; c < channel_count_; ++c) out[c] += zodiacal[c];
+}
+
+std::span<const float> NightSky::ZodiacalGrid() { return ZodiacalDots().value; }
+
+void NightSky::Folded::Stars(std::vector<glm::dvec3>& directions, std::vector<float>& values) const {
+  directions.clear();
+  values.clear();
+  if (night_ == nullptr || night_->stars_ == nullptr) return;
+  const std::size_t n = night_->channel_count_;
+  const std::size_t m = static_cast<std::size_t>(outputs_);
+  const std::vector<Star>& stars = night_->stars_->stars();
+  std::vector<double> transmittance(n);
+  std::vector<float> star(m);
+  for (std::size_t i = 0; i < stars.size(); ++i) {
+    const glm::dvec3 d = night_->frame_.ToLocal(stars[i]);
+    night_->Transmittance(d.z, transmittance);
+    std::fill(star.begin(), star.end(), 0.0f);
+    bool any = false;
+    for (std::size_t c = 0; c < n; ++c) {
+      const double value = night_->star_irradiance_[i * n + c] * transmittance[c];
+      if (value == 0.0) continue;
+      any = true;
+      for (std::size_t k = 0; k < m; ++k) star[k] += static_cast<float>(weights_[c * m + k] * value);
+    }
+    if (!any) continue;  // hidden by the ground (transmittance 0)
+    if (m == 3) ClipToGamut(star.data());  // a red star low in the sky may leave linear sRGB
+    directions.push_back(d);
+    values.insert(values.end(), star.begin(), star.end());
+  }
 }
 
 NightSky::Folded NightSky::Fold(std::span<const glm::vec3> weights, int outputs) const {
