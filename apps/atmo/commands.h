@@ -181,6 +181,10 @@ struct RenderPlan {
 };
 // Throws atmo::Error for what RunRender rejects in these flags.
 RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command);
+// The star catalogue of a render (atmo render, atmo-viewer): --star-catalogue (atmo::Error if it
+// cannot be read), else Debian's stellarium-data when installed; null with --no-stars, for a
+// half-space, or (with a warning) when no catalogue is installed.
+const StarCatalogue* LoadStarsFor(const RenderCommand& command, const AtmosphereParameters& parameters);
 
 // The EXR and PNG outputs of `atmo render`: the image converted to the EXR's unit, the metadata
 // table of docs/cli.md#atmo-render, the PNG's exposure (--exposure, --ev, auto or the preset's).

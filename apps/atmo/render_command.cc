@@ -72,6 +72,8 @@ std::string UnitDescription(RadianceUnit unit, bool xyz, const std::vector<doubl
   return "sr^-1 per unit solar irradiance, times solar_irradiance (" + JoinValues(solar_irradiance) + ")";
 }
 
+}  // namespace
+
 // The star catalogue of a render: --star-catalogue (an error if it cannot be read), else Debian's
 // stellarium-data when it is installed; none with --no-stars, for a half-space, or (with a warning)
 // when no catalogue is installed.
@@ -90,8 +92,6 @@ const StarCatalogue* LoadStarsFor(const RenderCommand& command, const Atmosphere
   }
   return &StarCatalogue::Default();
 }
-
-}  // namespace
 
 RenderPlan PlanRender(const CommonOptions& common, const RenderCommand& command) {
   RenderPlan plan;

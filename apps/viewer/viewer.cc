@@ -26,12 +26,14 @@
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/night_sky.h"
 #include "atmo/parameters.h"
 #include "atmo/spectrum.h"
 #include "cpu/camera.h"
 #include "gl/context.h"
 #include "gl/exposure_gl.h"
 #include "gl/hillaire_gl.h"
+#include "gl/night_gl.h"
 #include "gl/program.h"
 #include "gl/resources.h"
 #include "gl/shader_sources.h"
@@ -604,6 +606,13 @@ class Viewer {
   void Screenshot(const std::string& exr_path, const std::string& png_path);
   void FollowDate();  // the sun of --date + date_hours
   cli::RenderPlan CurrentPlan() const;
+  // The night sky of the shown view (include/atmo/night_sky.h), rebuilt when the sky, the
+  // observer, the sun or the instant changed; null for a half-space. NightShown: whether the
+  // frames get it on the GPU now (NightSkyGl).
+  void UpdateNight();
+  bool NightShown() const;
+  // Adds the night sky to `sky`'s frame textures, just rendered through `camera`.
+  void AddNight(const Sky& sky, const Camera& camera);
 
   ViewerOptions options_;
   cli::RenderPlan plan_;               // from the flags, as `atmo render` plans them
@@ -635,6 +644,7 @@ class Viewer {
   bool waiting_for_build_ = false;
   Camera drawn_camera_;
   RadianceTerms drawn_terms_;
+  bool drawn_night_ = false;  // the night sky is in the frame textures
   ViewState shown_knobs_;  // the atmosphere knobs of what is shown
   std::unique_ptr<gl::Context> context_;
   std::unique_ptr<Sky> sky_;      // shown
@@ -683,6 +693,13 @@ class Viewer {
   double metered_ev100_ = 0.0;
   bool metered_ = false;  // metered_ev100_ is of the shown sky
   std::unique_ptr<gl::ExposureMeter> meter_;  // auto-exposure on the GPU
+  // The night sky: the glow and the stars of the shown view (night_), added to every frame the
+  // sky renders while the sun is below the horizon (NightShown) by night_gl_, and on the host to
+  // screenshots (as `atmo render` adds it). night_key_ is what night_ was made for.
+  const StarCatalogue* stars_ = nullptr;  // --star-catalogue or stellarium-data; null: none
+  std::unique_ptr<NightSky> night_;
+  std::unique_ptr<gl::NightSkyGl> night_gl_;
+  std::vector<double> night_key_;
   std::unique_ptr<OffscreenTarget> offscreen_;  // --offscreen: the window's stand-in (else null)
   Metering metering_ = Metering::kAdaptive;   // of the last metering queued
   int settings_generation_ = 0;          // counts the panel's hillaire option changes
@@ -838,6 +855,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   ImGui_ImplOpenGL3_Init("#version 450");
   display_ = std::make_unique<DisplayPass>();
   meter_ = std::make_unique<gl::ExposureMeter>();
+  night_gl_ = std::make_unique<gl::NightSkyGl>(*context_);
+  stars_ = cli::LoadStarsFor(options_.render, base_);
 }
 
 Viewer::~Viewer() {
@@ -849,6 +868,7 @@ Viewer::~Viewer() {
   JoinSource4dCpuBuilds();  // of skies destroyed while their tables were built (cancelled)
   display_.reset();
   meter_.reset();
+  night_gl_.reset();
   offscreen_.reset();
   ImGui_ImplOpenGL3_Shutdown();
   if (context_->window() != nullptr) ImGui_ImplGlfw_Shutdown();
@@ -918,6 +938,12 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   std::uint64_t samples_per_pixel = 0;
   Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
   drawn_generation_ = -1;  // the screenshot's frame (no disc) is in the frame textures now
+  // The night sky, as `atmo render` adds it (reference's progressive render leaves it out in the
+  // viewer, docs/viewer.md).
+  UpdateNight();
+  if (night_ != nullptr && night_->active() && shown_model_ != "reference") {
+    AddNightSky(night_->Scaled(plan.model_parameters.solar_irradiance), plan.settings.camera, image);
+  }
   // Reference's estimate has its own (smaller) size.
   plan.settings.camera.width = image.width;
   plan.settings.camera.height = image.height;
@@ -1153,6 +1179,46 @@ void Viewer::FollowDate() {
   dated_sun_ = cli::SunAt(options_.render.sun, julian_day);
   state_.sun_elevation_deg = dated_sun_->position.elevation_deg;
   state_.sun_azimuth_deg = dated_sun_->position.azimuth_deg;
+}
+
+// The sun below the horizon (above it the night sky is less than 1e-6 of the sky's light: at sun
+// 0 degrees the clear sky is some 10^3 cd/m^2, the moonless night sky 2e-4), a model other than
+// reference (whose frames come from the CPU's progressive render, uploaded when a pass ends), a
+// planet's atmosphere.
+bool Viewer::NightShown() const {
+  return night_ != nullptr && night_->active() && shown_model_ != "reference" && state_.sun_elevation_deg < 0.0;
+}
+
+void Viewer::UpdateNight() {
+  if (sky_ == nullptr) return;
+  const std::optional<cli::SunAtInstant> dated = date_follows_ ? dated_sun_ : std::nullopt;
+  const std::vector<double> key = {static_cast<double>(sky_generation_), state_.altitude_m, state_.sun_elevation_deg,
+                                   state_.sun_azimuth_deg, dated ? dated->julian_day_utc : -1.0};
+  if (key == night_key_) return;
+  night_key_ = key;
+  night_.reset();
+  if (current_.geometry != Geometry::kSpherical) {
+    night_gl_->Set(NightSky::Folded());
+    return;
+  }
+  const glm::dvec3 sun = SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg);
+  const cli::SunOptions& place = options_.render.sun;
+  const glm::dvec3 pole = dated ? EclipticPoleDirection(dated->julian_day_utc, *place.latitude_deg, *place.longitude_deg)
+                                : glm::dvec3(0.0);
+  night_ = std::make_unique<NightSky>(current_, std::max(state_.altitude_m, 0.0), sun, pole);
+  if (stars_ != nullptr) {
+    night_->SetStars(*stars_, dated ? CelestialFrame::FromDate(dated->julian_day_utc, *place.latitude_deg,
+                                                               *place.longitude_deg)
+                                    : CelestialFrame::FromSun(sun));
+  }
+  night_gl_->Set(night_->Scaled(CurrentPlan().model_parameters.solar_irradiance));
+}
+
+void Viewer::AddNight(const Sky& sky, const Camera& camera) {
+  if (sky.batch_count() > night_gl_->batch_count()) return;  // a compared sky of other channels
+  std::vector<const gl::GpuTexture*> frames;
+  for (std::size_t b = 0; b < sky.batch_count(); ++b) frames.push_back(&sky.frame_texture(b));
+  night_gl_->Add(ToSharedCamera(camera), frames, pass_timings_);
 }
 
 void Viewer::HandleInput(double dt_s) {
@@ -1610,9 +1676,13 @@ int Viewer::Run() {
       const bool meter = state_.auto_exposure && (frame_ % 16 == 0 || frame_ < 2 || !metered_) && sky_->HasFrame();
       // Hillaire alone in RGB, tone-mapped, not metered in this frame: its frame pass runs in the
       // display's fragment shader (DrawFused), no frame texture.
-      const gl::HillaireGl* fused = compare_sky_ == nullptr && !false_colour_ && !meter && sky_->batch_count() == 1
-                                        ? sky_->hillaire_gl()
-                                        : nullptr;
+      // The night sky is added to the frame textures: not with the fused pass.
+      UpdateNight();
+      const bool night = NightShown();
+      const gl::HillaireGl* fused =
+          compare_sky_ == nullptr && !false_colour_ && !meter && !night && sky_->batch_count() == 1
+              ? sky_->hillaire_gl()
+              : nullptr;
       // While the next sky's tables build on a thread of their own (source4d with
       // --source4d-tables cpu), the shown frame is drawn again only when what it depends on
       // changed: on llvmpipe the same frame again would take the cores from the build (1280x720:
@@ -1623,19 +1693,22 @@ int Viewer::Run() {
           drawn_generation_ == sky_generation_ && !view_changed && camera.kind == drawn.kind &&
           camera.width == drawn.width && camera.height == drawn.height && camera.fov_deg == drawn.fov_deg &&
           camera.yaw_deg == drawn.yaw_deg && camera.pitch_deg == drawn.pitch_deg &&
-          terms.sun_disc == drawn_terms_.sun_disc && terms.ground == drawn_terms_.ground;
+          terms.sun_disc == drawn_terms_.sun_disc && terms.ground == drawn_terms_.ground && night == drawn_night_;
       const bool reuse_frame = frame_current && compare_sky_ == nullptr && pending_ != nullptr &&
                                pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
       waiting_for_build_ = reuse_frame;
       if (fused == nullptr && !reuse_frame) {
         sky_->RenderFrame(camera, terms, pass_timings_);
+        if (night) AddNight(*sky_, camera);
         drawn_generation_ = sky_generation_;
         drawn_camera_ = camera;
         drawn_terms_ = terms;
+        drawn_night_ = night;
       }
       if (fused != nullptr) drawn_generation_ = -1;
       if (compare_sky_ != nullptr) {
         compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
+        if (night && compare_shown_model_ != "reference") AddNight(*compare_sky_, camera);
       }
       if (meter) {
         std::vector<const gl::GpuTexture*> frames;

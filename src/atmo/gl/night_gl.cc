@@ -60,12 +60,15 @@ void main() {
 }
 )glsl";
 
-// The stars: vertex 4 s + k is star s's share in pixel k of the 2 x 2 around it (AddStars).
-constexpr const char* kStarsVertexMain = R"glsl(
+// The stars, first each star's places: vertex 4 s + k is star s's share in pixel k of the 2 x 2
+// around it (AddStars): the pixel's centre in clip space and the share over the pixel's solid
+// angle (0: nothing drawn). One invocation per star, so that the projection runs once per star.
+constexpr const char* kStarPlacesMain = R"glsl(
+layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Directions { vec4 directions[]; };
-layout(std430, binding = 1) readonly buffer Values { vec4 values[]; };
+layout(std430, binding = 2) writeonly buffer Places { vec4 places[]; };
 uniform CameraParameters camera;
-flat out vec3 star_value;
+uniform int star_count;
 
 bool Seen(ivec2 pixel) {
   if (pixel.x < 0 || pixel.y < 0 || pixel.x >= camera.width || pixel.y >= camera.height) return false;
@@ -74,35 +77,46 @@ bool Seen(ivec2 pixel) {
 }
 
 void main() {
-  int star = gl_VertexID >> 2;
-  int corner = gl_VertexID & 3;
-  gl_Position = vec4(2.0, 2.0, 0.0, 1.0);  // outside the viewport: nothing drawn
-  gl_PointSize = 1.0;
-  star_value = vec3(0.0);
+  int star = int(gl_GlobalInvocationID.x);
+  if (star >= star_count) return;
+  for (int k = 0; k < 4; ++k) places[4 * star + k] = vec4(0.0);
   vec2 frag;
   if (!GetCameraFragCoordFromDirection(camera, directions[star].xyz, frag)) return;
   vec2 f = frag - vec2(0.5);
   ivec2 origin = ivec2(floor(f));
   vec2 a = f - vec2(origin);
+  ivec2 pixel[4];
+  float weight[4];
   float kept = 0.0;
-  float own = 0.0;
-  ivec2 own_pixel = ivec2(0);
   for (int k = 0; k < 4; ++k) {
-    ivec2 pixel = origin + ivec2(k & 1, k >> 1);
-    if (camera.kind == kCameraEquirect) pixel.x = (pixel.x % camera.width + camera.width) % camera.width;
-    float weight = ((k & 1) == 1 ? a.x : 1.0 - a.x) * ((k >> 1) == 1 ? a.y : 1.0 - a.y);
-    if (!Seen(pixel)) weight = 0.0;
-    kept += weight;
-    if (k == corner) {
-      own = weight;
-      own_pixel = pixel;
-    }
+    pixel[k] = origin + ivec2(k & 1, k >> 1);
+    if (camera.kind == kCameraEquirect) pixel[k].x = (pixel[k].x % camera.width + camera.width) % camera.width;
+    weight[k] = ((k & 1) == 1 ? a.x : 1.0 - a.x) * ((k >> 1) == 1 ? a.y : 1.0 - a.y);
+    if (!Seen(pixel[k])) weight[k] = 0.0;
+    kept += weight[k];
   }
-  if (!(kept > 0.0) || own == 0.0) return;
-  float solid_angle = GetCameraPixelSolidAngle(camera, own_pixel);
-  if (!(solid_angle > 0.0)) return;
-  star_value = values[star].rgb * (own / kept / solid_angle);
-  gl_Position = vec4((vec2(own_pixel) + vec2(0.5)) / vec2(camera.width, camera.height) * 2.0 - 1.0, 0.0, 1.0);
+  if (!(kept > 0.0)) return;
+  for (int k = 0; k < 4; ++k) {
+    if (weight[k] == 0.0) continue;
+    float solid_angle = GetCameraPixelSolidAngle(camera, pixel[k]);
+    if (!(solid_angle > 0.0)) continue;
+    vec2 clip = (vec2(pixel[k]) + vec2(0.5)) / vec2(camera.width, camera.height) * 2.0 - 1.0;
+    places[4 * star + k] = vec4(clip, weight[k] / kept / solid_angle, 0.0);
+  }
+}
+)glsl";
+
+// Then the points: each place with its star's value (this batch's three outputs).
+constexpr const char* kStarsVertexSource = R"glsl(#version 430 core
+layout(std430, binding = 1) readonly buffer Values { vec4 values[]; };
+layout(std430, binding = 2) readonly buffer Places { vec4 places[]; };
+flat out vec3 star_value;
+void main() {
+  vec4 place = places[gl_VertexID];
+  gl_PointSize = 1.0;
+  star_value = values[gl_VertexID >> 2].rgb * place.z;
+  // A share of 0: outside the viewport, nothing drawn.
+  gl_Position = place.z > 0.0 ? vec4(place.xy, 0.0, 1.0) : vec4(2.0, 2.0, 0.0, 1.0);
 }
 )glsl";
 
@@ -112,14 +126,12 @@ layout(location = 0) out vec4 colour;
 void main() { colour = vec4(star_value, 0.0); }
 )glsl";
 
-constexpr std::array<std::string_view, 3> kStarFiles = {"definitions.glsl", "geometry.glsl", "camera.glsl"};
-
 unsigned MakeBuffer(const void* data, std::size_t bytes) {
   unsigned buffer = 0;
   glCreateBuffers(1, &buffer);
   // A buffer of 0 bytes cannot be bound as a range: at least one vec4.
   glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(std::max<std::size_t>(bytes, 16)), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  if (bytes > 0) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
+  if (bytes > 0 && data != nullptr) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
   return buffer;
 }
 
@@ -147,9 +159,7 @@ NightSkyGl::NightSkyGl(const Context& context) : context_(context) {
   zodiacal_grid_ = MakeBuffer(grid.data(), grid.size_bytes());
   glCreateVertexArrays(1, &vertex_array_);
   glCreateFramebuffers(1, &framebuffer_);
-  star_program_ = std::make_unique<ComputeProgram>(BuildComputeShaderSource(kStarFiles, kStarsVertexMain),
-                                                   kStarsFragmentSource, "night stars",
-                                                   DescribeSourceStrings(kStarFiles));
+  star_program_ = std::make_unique<ComputeProgram>(kStarsVertexSource, kStarsFragmentSource, "night stars", "");
   CheckGlError("night sky buffers");
 }
 
@@ -168,6 +178,7 @@ void NightSkyGl::Release() {
   }
   batches_.clear();
   DeleteBuffer(star_directions_);
+  DeleteBuffer(star_places_);
   star_count_ = 0;
   glow_ = false;
 }
@@ -192,6 +203,7 @@ void NightSkyGl::Set(const NightSky::Folded& folded) {
     for (int k = 0; k < 3; ++k) packed[4 * i + k] = static_cast<float>(directions[i][k]);
   }
   star_directions_ = MakeBuffer(packed.data(), packed.size() * sizeof(float));
+  star_places_ = MakeBuffer(nullptr, star_count_ * 4 * 4 * sizeof(float));
   constexpr std::size_t kAngles = NightSky::kAngleSamples;
   batches_.resize(batches);
   for (std::size_t b = 0; b < batches; ++b) {
@@ -241,9 +253,16 @@ void NightSkyGl::Add(const shared::CameraParameters& camera, std::span<const Gpu
     timer.Stop("night_glow");
   }
   if (star_count_ > 0) {
+    const ComputeProgram& places = context_.Program({"definitions.glsl", "geometry.glsl", "camera.glsl"},
+                                                    kStarPlacesMain, "night star places");
+    SetCameraUniforms(places, "camera", camera);
+    places.SetInt("star_count", static_cast<int>(star_count_));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, star_directions_);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, star_places_);
+    DispatchCompute1D(places, static_cast<int>(star_count_));
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     const ComputeProgram& program = *star_program_;
     program.Use();
-    SetCameraUniforms(program, "camera", camera);
     // The state this pass changes, restored after it.
     GLint previous_framebuffer = 0;
     GLint viewport[4] = {0, 0, 0, 0};
@@ -258,7 +277,6 @@ void NightSkyGl::Add(const shared::CameraParameters& camera, std::span<const Gpu
     glBlendFunc(GL_ONE, GL_ONE);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glBindVertexArray(vertex_array_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, star_directions_);
     for (std::size_t b = 0; b < frames.size(); ++b) {
       glNamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, frames[b]->id(), 0);
       glNamedFramebufferDrawBuffer(framebuffer_, GL_COLOR_ATTACHMENT0);

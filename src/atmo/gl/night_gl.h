@@ -10,6 +10,9 @@
 //             the pixel's solid angle (the shares of pixels outside the image or outside a
 //             fisheye's circle go to the others, as on the host), added by blending (GL_ONE,
 //             GL_ONE) into the frame texture: the star's energy is right at any resolution.
+//             A compute pass places each star's points once per frame; the point pass then only
+//             reads them (a vertex shader doing the projection took 58 ms for 13 000 stars on
+//             llvmpipe, the two passes 3 ms).
 // Frame texture b holds outputs 3b .. 3b + 2 of the fold (the batches of the GL renderers, with
 // NightSky::Scaled(solar_irradiance)); its alpha is left as it is.
 //
@@ -67,6 +70,7 @@ class NightSkyGl {
   std::vector<Batch> batches_;
   unsigned zodiacal_grid_ = 0;    // NightSky::ZodiacalGrid, uploaded once
   unsigned star_directions_ = 0;  // star_count_ vec4
+  unsigned star_places_ = 0;      // 4 star_count_ vec4: each point's clip position and share
   unsigned vertex_array_ = 0;     // empty: the star points come from gl_VertexID
   unsigned framebuffer_ = 0;
   bool glow_ = false;
