@@ -523,7 +523,6 @@ py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
     const PyMoon moon = MakeMoon(model, request.altitude_m, request.sun_elevation_deg, request.sun_azimuth_deg,
                                  request.moon_elevation_deg, request.moon_azimuth_deg, request.moon_phase_deg);
     if (moon.moon) {
-      if (IsMonteCarlo(model)) throw Error("the moon renders with a deterministic model for now, not reference");
       terms.moon = &*moon.moon;
       terms.moon_sky = moon.sky.get();
     }

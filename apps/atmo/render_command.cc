@@ -389,15 +389,8 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   CheckMemory(cubemap ? Format("a cube map of %d-texel faces", command.face_size)
                    : Format("a %dx%d render", command.width, command.height),
               40.0 * pixels);
-  // The moon's light renders through a CPU model's second view (RadianceTerms::moon) for now.
-  const bool wants_moon = !command.moon.no_moon && (command.moon.elevation_deg || command.moon.azimuth_deg ||
-                                                    command.moon.phase_deg || HasDate(command.sun));
-  if (wants_moon && common.model == "reference") {
-    if (command.moon.elevation_deg || command.moon.phase_deg || command.moon.azimuth_deg) {
-      throw Error("the moon renders with a deterministic model for now (not model reference)");
-    }
-    PrintWarning("the moon of --date is left out: it renders with a deterministic model for now");
-  }
+  // The moon's light renders through the model's second view (RadianceTerms::moon): a CPU
+  // model's, the reference's progressive render (its own paths), or a second GL frame.
   // On the gl backend the GL passes compute the tables and the frame (RenderOnGl); no CPU model is made.
   const auto precompute_start = std::chrono::steady_clock::now();
   const std::unique_ptr<Model> model = on_gl ? nullptr : CreateModelFor(common, model_parameters);
@@ -535,6 +528,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
         ProgressiveSettings progressive;
         progressive.samples_per_pixel = command.spp.value_or(0);
         frame.terms.night_sky = &night;
+        const FrameMoon moon = moon_for(frame, sun);
+        if (moon.moon) {
+          frame.terms.moon = &*moon.moon;
+          frame.terms.moon_sky = moon.sky.get();
+        }
         const ProgressiveImage result = RenderProgressive(*model, frame, progressive);
         set_metadata("atmo:standardErrorChannels", "stderr.NAME: the standard error of channel NAME (same unit), the EXR layer stderr");
         set_metadata("atmo:samplesPerPixel", std::to_string(result.samples_per_pixel));
@@ -612,6 +610,11 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
     const NightSky night = night_sky_for(settings, plan.dated_sun);
     RenderSettings with_night = settings;
     with_night.terms.night_sky = &night;
+    const FrameMoon moon = moon_for(settings, plan.dated_sun);
+    if (moon.moon) {
+      with_night.terms.moon = &*moon.moon;
+      with_night.terms.moon_sky = moon.sky.get();
+    }
     image = RenderProgressive(*model, with_night, progressive).radiance;
     frame_s = seconds_since(passes_start) - outputs.write_s();
     progress.Finish();

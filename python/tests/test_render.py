@@ -199,6 +199,18 @@ def test_moon_is_the_clis(cli):
         model.render(32, camera="fisheye", sun_elevation_deg=-30.0, moon_elevation_deg=40.0)
 
 
+def test_reference_traces_the_moon():
+    """Model reference renders a moon by hand (its own paths lit from the moon): the moonlit sky
+    is that of a deterministic model within the path tracer's noise, and far brighter than none."""
+    kwargs = dict(camera="fisheye", sun_elevation_deg=-30.0, sun_disc=False)
+    moon = dict(moon_elevation_deg=40.0, moon_azimuth_deg=100.0, moon_phase_deg=20.0)
+    traced = atmo.Model("reference", seed=3).render(16, spp=32, **kwargs, **moon)
+    dark = atmo.Model("reference", seed=3).render(16, spp=32, **kwargs)
+    scattered = atmo.Model("source4d").render(16, **kwargs, **moon)
+    assert float(traced.sum()) > 4.0 * float(dark.sum())
+    assert float(traced.sum()) == pytest.approx(float(scattered.sum()), rel=0.05)
+
+
 def test_moon_position_is_the_one_render_date_uses(cli):
     """moon_position gives the moon `atmo illuminance --date` prints (its elevation and phase)."""
     from conftest import parse_csv

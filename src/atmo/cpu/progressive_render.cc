@@ -16,6 +16,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/error.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/render.h"
 #include "cpu/camera.h"
@@ -88,12 +89,41 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
   // image's unit (times the solar irradiance).
   Image disc(width, height, static_cast<int>(nc));
   if (settings.terms.sun_disc) AddSunDisc(sky, settings.camera, irradiance, disc);
-  // The night sky's direct light, deterministic like the disc (include/atmo/night_sky.h).
-  if (settings.terms.night_sky != nullptr) settings.terms.night_sky->Scaled(irradiance).Add(views, disc.pixels);
+  // The night sky's direct light and its stars, deterministic like the disc (include/atmo/night_sky.h).
+  if (settings.terms.night_sky != nullptr) {
+    if (settings.terms.night_sky->channel_count() != nc) throw Error("the night sky's channels do not match the sky's");
+    const NightSky::Folded night = settings.terms.night_sky->Scaled(irradiance);
+    night.Add(views, disc.pixels);
+    disc.alpha = alpha;  // AddStars leaves out the pixels a fisheye does not see
+    AddStars(night, settings.camera, disc);
+    disc.alpha.clear();
+  }
+  // The moon: its light is traced as the sun's, by the same tracer for a sun in the moon's
+  // direction (terms.moon_sky, a view of this model), its own paths (path indices from
+  // kMoonPaths on, so that they are independent of the sun's), times the moon's irradiance
+  // relative to the sun's; its standard error adds to the sun's in quadrature. Its disc, like the
+  // sun's, is integrated over the pixels.
+  const ReferenceSkyView* moon_sky = nullptr;
+  std::vector<double> moon_scale(nc, 0.0);
+  if ((settings.terms.moon == nullptr) != (settings.terms.moon_sky == nullptr)) {
+    throw Error("the moon needs both its Moon and its view");
+  }
+  if (settings.terms.moon != nullptr) {
+    moon_sky = dynamic_cast<const ReferenceSkyView*>(settings.terms.moon_sky);
+    if (moon_sky == nullptr || moon_sky->channel_count() != nc || settings.terms.moon->relative_irradiance().size() != nc) {
+      throw Error("the moon of a progressive render needs a view of the same reference model");
+    }
+    for (std::size_t c = 0; c < nc; ++c) moon_scale[c] = settings.terms.moon->relative_irradiance()[c] * irradiance[c];
+    if (settings.terms.sun_disc) AddMoonDisc(settings.terms, settings.camera, {}, irradiance, disc);
+  }
+  constexpr std::uint64_t kMoonPaths = std::uint64_t{1} << 62;
 
   std::vector<double> sum(pixel_count * nc, 0.0);
   std::vector<double> sum_sq(pixel_count * nc, 0.0);
-  const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count);
+  std::vector<double> moon_sum(moon_sky != nullptr ? pixel_count * nc : 0, 0.0);
+  std::vector<double> moon_sum_sq(moon_sum.size(), 0.0);
+  const std::uint64_t lights = moon_sky != nullptr ? 2 : 1;  // the sun's paths, then the moon's
+  const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count) * lights;
   std::atomic<std::uint64_t> rows_done{0};  // rows of all passes, times their path count
   std::mutex progress_mutex;
 
@@ -115,8 +145,15 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
             sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
             sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
           }
+          if (moon_sky == nullptr) continue;
+          tally.Reset();
+          moon_sky->AddPaths(views[i], settings.terms.ground, kMoonPaths + done, count, tally);
+          for (std::size_t c = 0; c < nc; ++c) {
+            moon_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
+            moon_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+          }
         }
-        const std::uint64_t paths_done = rows_done.fetch_add(count) + count;
+        const std::uint64_t paths_done = rows_done.fetch_add(lights * count) + lights * count;
         if (progressive.on_progress && progress_mutex.try_lock()) {
           progressive.on_progress(static_cast<double>(paths_done) * width, paths_in_all);
           progress_mutex.unlock();
@@ -139,8 +176,16 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
       for (std::size_t c = 0; c < nc; ++c) {
         const double mean = sum[nc * i + c] / n;
         const double variance = std::max(0.0, (sum_sq[nc * i + c] - n * mean * mean) / (n - 1.0));
-        result.radiance.pixels[nc * i + c] = static_cast<float>(mean * irradiance[c] + disc.pixels[nc * i + c]);
-        result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(variance / n) * irradiance[c]);
+        double radiance = mean * irradiance[c];
+        double error_sq = variance / n * irradiance[c] * irradiance[c];
+        if (moon_sky != nullptr) {
+          const double moon_mean = moon_sum[nc * i + c] / n;
+          const double moon_variance = std::max(0.0, (moon_sum_sq[nc * i + c] - n * moon_mean * moon_mean) / (n - 1.0));
+          radiance += moon_mean * moon_scale[c];
+          error_sq += moon_variance / n * moon_scale[c] * moon_scale[c];
+        }
+        result.radiance.pixels[nc * i + c] = static_cast<float>(radiance + disc.pixels[nc * i + c]);
+        result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(error_sq));
       }
     }
     if (progressive.on_pass) progressive.on_pass(result);

@@ -53,6 +53,8 @@ RadianceTerms MoonSkyTerms(const RadianceTerms& terms) {
   return moon_terms;
 }
 
+}  // namespace
+
 // The moon's disc through `camera`: the disc's radiance attenuated by the moon view's transmittance,
 // folded by `fold` (channels -> outputs; identity when null) and times `scale` per output.
 void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<const glm::vec3> fold,
@@ -83,8 +85,6 @@ void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<con
       },
       scale, image);
 }
-
-}  // namespace
 
 // The stars of a night sky through `camera`: each star's irradiance (times the transmittance, folded
 // as `night` folds) shared bilinearly among the 2 x 2 pixels around its direction, each share over

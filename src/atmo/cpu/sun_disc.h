@@ -44,5 +44,11 @@ void AddSunDisc(const Camera& camera, const glm::dvec3& sun_direction, double su
 // The same with the disc of a view (SkyView::SunDiscRadiance, sun_direction and
 // sun_angular_radius_rad). Throws atmo::Error for a view without a sun angular radius.
 void AddSunDisc(const SkyView& sky, const Camera& camera, std::span<const double> solar_irradiance, Image& image);
+// The moon's disc of `terms` (terms.moon and terms.moon_sky) through `camera`: its radiance
+// (Moon::DiscRadiance, with the phase) attenuated by moon_sky's transmittance, folded by `fold`
+// (channels -> 3 outputs; the channels themselves when empty) and times `scale` per output, added
+// as AddSunDisc adds the sun's (defined in cpu/render.cc).
+void AddMoonDisc(const RadianceTerms& terms, const Camera& camera, std::span<const glm::vec3> fold,
+                 std::span<const double> scale, Image& image);
 
 }  // namespace atmo
