@@ -475,6 +475,47 @@ double PathTracer::ResidualSunTransmittance(const glm::dvec3& x, const glm::dvec
   return std::exp(-tau_c) * product;
 }
 
+double PathTracer::GlowAlong(const GlowSource& glow, const glm::dvec3& p, const glm::dvec3& d, const Channel& c,
+                             Rng& rng) const {
+  const std::size_t channel = static_cast<std::size_t>(&c - channels_.data());
+  if (channel >= glow.emission.size() || !(glow.emission[channel] > 0.0)) return 0.0;
+  double length;
+  bool ground;
+  Segment(p, d, length, ground);
+  const double end = ground ? length : kInfinity;  // past the atmosphere's top the ray goes on to space
+  // Where the ray is inside a sphere of radius R: t in [-b - q, -b + q], b = p.d, q^2 = b^2 - |p|^2 + R^2.
+  const double b = glm::dot(p, d);
+  const double pp = glm::dot(p, p);
+  const auto chord = [&](double radius, double& t0, double& t1) {
+    const double q2 = b * b - pp + radius * radius;
+    if (!(q2 > 0.0)) return false;
+    const double q = std::sqrt(q2);
+    t0 = -b - q;
+    t1 = -b + q;
+    return true;
+  };
+  double out0, out1;
+  if (!chord(glow.outer_radius, out0, out1)) return 0.0;
+  // The parts inside the outer sphere and outside the inner one, cut to [0, end].
+  std::array<std::array<double, 2>, 2> parts{};
+  int count = 0;
+  double in0, in1;
+  if (chord(glow.inner_radius, in0, in1) && in0 < out1 && in1 > out0) {
+    parts[count++] = {out0, in0};
+    parts[count++] = {in1, out1};
+  } else {
+    parts[count++] = {out0, out1};
+  }
+  double sum = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const double a = std::max(parts[i][0], 0.0);
+    const double z = std::min(parts[i][1], end);
+    if (!(z > a)) continue;
+    sum += (z - a) * RatioTracking(p, d, std::min(a, length), c, rng);
+  }
+  return glow.emission[channel] * sum;
+}
+
 bool PathTracer::InShadow(const glm::dvec3& x, const glm::dvec3& sun) const {
   const double along = glm::dot(x, sun);
   const glm::dvec3 x_perp = x - along * sun;
@@ -1315,6 +1356,9 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
   glm::dvec3 entry = query.origin;
   if (!EnterAtmosphere(entry, query.view)) return;
   const std::size_t channel = static_cast<std::size_t>(&c - channels_.data());
+  // A glow query scores the shell's light at each vertex and uses none of the sun's estimates,
+  // guiding or splitting (TraceQuery::glow).
+  const GlowSource* glow = query.glow;
   // Importance splitting (settings_.importance_splitting): the walks that copies of the path
   // still have to trace, and the weight times importance at the path's first shadowed vertex,
   // which later shadowed vertices split towards (docs/models/reference.md).
@@ -1361,7 +1405,9 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
       // scored in that collision's order bin; the vertex itself then takes none.
       // The view ray (order 0: the path's first segment) takes both from its plan (PlanViewRay).
       bool segment_nee = false;
-      if (order == 0) {
+      if (glow != nullptr) {
+        segment_nee = false;
+      } else if (order == 0) {
         segment_nee = view_plan.segment_planned;
         if (segment_nee) orders[0] += weight * SegmentSunlight(view_plan.segment, p, d, query.sun, c, rng);
       } else if (!half_space_ && length < kInfinity && settings_.next_event != NextEventEstimation::kVertex) {
@@ -1380,8 +1426,9 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
       bool collided = false;
       glm::dvec4 densities(0.0);
       const bool guided_collision =
-          order == 0 ? view_plan.collision_planned
-                     : settings_.shadow_collisions == ShadowCollisions::kGuided &&
+          glow != nullptr ? false
+          : order == 0    ? view_plan.collision_planned
+                          : settings_.shadow_collisions == ShadowCollisions::kGuided &&
                            settings_.guiding == ShadowGuiding::kTable && settings_.shadow_guiding > 0.0 &&
                            !half_space_ && !end_scores && length < kInfinity && InShadow(p, query.sun);
       const double majorant = cross_to_ground || guided_collision ? 0.0 : Majorant(c, p, d, length);
@@ -1428,11 +1475,12 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
         const bool is_mie = rng.Uniform() * (rayleigh + mie) < mie;
         const int kind = is_mie ? mie_phase_ : rayleigh_phase_;
         const double g = is_mie ? mie_g_ : rayleigh_g_;
-        const double sun_transmittance = segment_nee ? 0.0 : SunTransmittance(p, query.sun, c, rng);
+        const double sun_transmittance =
+            segment_nee || glow != nullptr ? 0.0 : SunTransmittance(p, query.sun, c, rng);
         if (sun_transmittance != 0.0) {
           add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
         }
-        const bool shadowed = !half_space_ && InShadow(p, query.sun);
+        const bool shadowed = glow == nullptr && !half_space_ && InShadow(p, query.sun);
         // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
         // (nee=auto or segment): N directions from the same distribution; directions 1..N-1 score
         // their segment estimates now, each with 1/N of the weight, in the next collision's bin,
@@ -1474,7 +1522,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
         // (the table's, large where the sun shines): against the last shadowed vertex's target, the
         // roulette lifted the small weight of a rare lit vertex to that target, one path then
         // carrying several per cent of an estimate (docs/models/reference.md).
-        if (settings_.importance_splitting && (shadowed || reference_importance > 0.0) &&
+        if (glow == nullptr && settings_.importance_splitting && (shadowed || reference_importance > 0.0) &&
             settings_.next_event != NextEventEstimation::kVertex) {
           const double importance = settings_.guiding == ShadowGuiding::kTable
                                         ? GuideImportance(Guide(), LocateGuide(Guide(), p, query.sun), channel)
@@ -1504,18 +1552,22 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
           const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
           d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
         }
+        // The glow arriving along the new direction, scattered here (phase-sampled: the weight
+        // is the estimate's).
+        if (glow != nullptr) add(weight * GlowAlong(*glow, p, d, c, rng));
       } else if (end_scores) {
         const glm::dvec3 n = glm::normalize(p + length * d);
         p = n * atmosphere_.bottom_radius;
         ++order;
         const double cos_sun = glm::dot(n, query.sun);
-        if (cos_sun > 0.0) {
+        if (cos_sun > 0.0 && glow == nullptr) {
           add(weight * c.albedo / kPi * cos_sun * SunTransmittance(p, query.sun, c, rng));
         }
         weight *= c.albedo;
         if (weight <= 0.0) return;
         // Cosine-weighted: the Lambertian BRDF times cos over this pdf is the albedo.
         d = DirectionAbout(n, std::sqrt(rng.Uniform()), 2.0 * kPi * rng.Uniform());
+        if (glow != nullptr) add(weight * GlowAlong(*glow, p, d, c, rng));
       } else {
         return;  // escaped, or the view ray's own ground hit
       }

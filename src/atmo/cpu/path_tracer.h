@@ -174,6 +174,14 @@ struct PathTracerSettings {
 };
 
 // One radiance query in the tracer's frame (see PathTracer::ObserverPosition).
+// A shell of uniform, isotropic emission (the airglow of atmo::NightSky): what the paths of a
+// glow query (TraceQuery::glow) score instead of the sun.
+struct GlowSource {
+  double inner_radius = 0.0;     // m, from the planet's centre
+  double outer_radius = 0.0;     // m
+  std::vector<double> emission;  // per channel: radiance per metre of path inside the shell
+};
+
 struct TraceQuery {
   glm::dvec3 origin;  // observer position
   glm::dvec3 sun;     // unit, towards the sun
@@ -186,6 +194,12 @@ struct TraceQuery {
   // crossed with the weight of a ratio-tracking estimate of its transmittance, and paths whose
   // view ray misses the ground score 0. Implies include_first_ground_hit.
   bool ground_only = false;
+  // A glow query: the paths score the light of this shell scattered once or more (the shell's own
+  // light along the view ray, order 0, is left to the renderers, as the sun disc is), with no
+  // estimate towards the sun and no sun-led guiding or splitting. At each scattering vertex and
+  // ground reflection the path adds its weight times the shell's emission along the direction it
+  // goes on in, attenuated (GlowAlong): a one-sample estimate of the in-scattered glow. Not owned.
+  const GlowSource* glow = nullptr;
 };
 
 class PathTracer {
@@ -302,6 +316,12 @@ class PathTracer {
   double SunTransmittance(const glm::dvec3& p, const glm::dvec3& sun, const Channel& c, Rng& rng) const;
   // Ratio-tracking estimate of the transmittance of the segment [p, p + length d] (finite length).
   double RatioTracking(const glm::dvec3& p, const glm::dvec3& d, double length, const Channel& c, Rng& rng) const;
+  // The glow's radiance arriving at p from direction d (travelling along -d): the integral over the
+  // ray's parts inside the shell of the emission times the transmittance from p (ratio tracking to
+  // where the ray enters each part; the air inside the shell, above 80 km, is taken as clear: its
+  // optical depth is below 1e-4), 0 past the ground.
+  double GlowAlong(const GlowSource& glow, const glm::dvec3& p, const glm::dvec3& d, const Channel& c,
+                   Rng& rng) const;
   // The part [shadow_begin, shadow_end] of the segment [p, p + length d] inside the planet's
   // shadow (the cylinder of radius R_ground about the sun axis, behind the planet: a convex set,
   // so one interval); empty (shadow_begin >= shadow_end) when the segment stays lit.

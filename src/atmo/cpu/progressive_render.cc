@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -117,12 +118,30 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
     if (settings.terms.sun_disc) AddMoonDisc(settings.terms, settings.camera, {}, irradiance, disc);
   }
   constexpr std::uint64_t kMoonPaths = std::uint64_t{1} << 62;
+  // The night glow's diffuse light: paths of their own (from kGlowPaths on) that score the
+  // airglow shell's light scattered once or more (cpu::TraceQuery::glow; its direct light is the
+  // night sky's deterministic term above). Traced while the sun is below the horizon: above it
+  // the glow is less than 1e-6 of the sky (docs/night.md).
+  constexpr std::uint64_t kGlowPaths = (std::uint64_t{1} << 62) + (std::uint64_t{1} << 61);
+  std::optional<cpu::GlowSource> glow;
+  if (settings.terms.night_sky != nullptr && settings.terms.night_sky->glow() && settings.sun_elevation_deg < 0.0) {
+    const NightSkySettings& shell = model.parameters().night_sky;
+    const double r = model.parameters().ground_radius_m;
+    glow.emplace();
+    glow->inner_radius = r + shell.airglow_altitude_m - 0.5 * shell.airglow_thickness_m;
+    glow->outer_radius = r + shell.airglow_altitude_m + 0.5 * shell.airglow_thickness_m;
+    for (double zenith : settings.terms.night_sky->airglow_zenith()) {
+      glow->emission.push_back(zenith / shell.airglow_thickness_m);
+    }
+  }
 
   std::vector<double> sum(pixel_count * nc, 0.0);
   std::vector<double> sum_sq(pixel_count * nc, 0.0);
   std::vector<double> moon_sum(moon_sky != nullptr ? pixel_count * nc : 0, 0.0);
   std::vector<double> moon_sum_sq(moon_sum.size(), 0.0);
-  const std::uint64_t lights = moon_sky != nullptr ? 2 : 1;  // the sun's paths, then the moon's
+  std::vector<double> glow_sum(glow ? pixel_count * nc : 0, 0.0);
+  std::vector<double> glow_sum_sq(glow_sum.size(), 0.0);
+  const std::uint64_t lights = 1 + (moon_sky != nullptr ? 1 : 0) + (glow ? 1 : 0);  // the sun's, moon's, glow's paths
   const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count) * lights;
   std::atomic<std::uint64_t> rows_done{0};  // rows of all passes, times their path count
   std::mutex progress_mutex;
@@ -145,12 +164,21 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
             sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
             sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
           }
-          if (moon_sky == nullptr) continue;
-          tally.Reset();
-          moon_sky->AddPaths(views[i], settings.terms.ground, kMoonPaths + done, count, tally);
-          for (std::size_t c = 0; c < nc; ++c) {
-            moon_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
-            moon_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+          if (moon_sky != nullptr) {
+            tally.Reset();
+            moon_sky->AddPaths(views[i], settings.terms.ground, kMoonPaths + done, count, tally);
+            for (std::size_t c = 0; c < nc; ++c) {
+              moon_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
+              moon_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+            }
+          }
+          if (glow) {
+            tally.Reset();
+            sky.AddGlowPaths(views[i], settings.terms.ground, *glow, kGlowPaths + done, count, tally);
+            for (std::size_t c = 0; c < nc; ++c) {
+              glow_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
+              glow_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+            }
           }
         }
         const std::uint64_t paths_done = rows_done.fetch_add(lights * count) + lights * count;
@@ -183,6 +211,12 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
           const double moon_variance = std::max(0.0, (moon_sum_sq[nc * i + c] - n * moon_mean * moon_mean) / (n - 1.0));
           radiance += moon_mean * moon_scale[c];
           error_sq += moon_variance / n * moon_scale[c] * moon_scale[c];
+        }
+        if (glow) {
+          const double glow_mean = glow_sum[nc * i + c] / n;
+          const double glow_variance = std::max(0.0, (glow_sum_sq[nc * i + c] - n * glow_mean * glow_mean) / (n - 1.0));
+          radiance += glow_mean * irradiance[c];
+          error_sq += glow_variance / n * irradiance[c] * irradiance[c];
         }
         result.radiance.pixels[nc * i + c] = static_cast<float>(radiance + disc.pixels[nc * i + c]);
         result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(error_sq));

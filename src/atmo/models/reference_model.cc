@@ -225,6 +225,14 @@ void ReferenceSkyView::AddPaths(const glm::dvec3& view, bool ground, std::uint64
   model_.tracer().TraceSerial(query, model_.settings().seed, first, count, tally);
 }
 
+void ReferenceSkyView::AddGlowPaths(const glm::dvec3& view, bool ground, const cpu::GlowSource& glow,
+                                    std::uint64_t first, std::uint64_t count, cpu::PathTally& tally) const {
+  cpu::TraceQuery query = Query(view);
+  query.include_first_ground_hit = ground;
+  query.glow = &glow;
+  model_.tracer().TraceSerial(query, model_.settings().seed, first, count, tally);
+}
+
 void ReferenceSkyView::Transmittance(const glm::dvec3& view, std::span<double> out) const {
   const cpu::TraceQuery query = Query(view);
   model_.tracer().Transmittance(query.origin, query.view, out);

@@ -138,6 +138,10 @@ class ReferenceSkyView final : public SkyView {
   // GroundRadiance. A path's value depends only on (seed, view, ground, path index).
   void AddPaths(const glm::dvec3& view, bool ground, std::uint64_t first, std::uint64_t count,
                 cpu::PathTally& tally) const;
+  // The same for the light of `glow` scattered once or more (cpu::TraceQuery::glow): the night
+  // glow's diffuse light, which the renderers' direct term (atmo::NightSky) leaves out.
+  void AddGlowPaths(const glm::dvec3& view, bool ground, const cpu::GlowSource& glow, std::uint64_t first,
+                    std::uint64_t count, cpu::PathTally& tally) const;
 
  private:
   cpu::TraceQuery Query(const glm::dvec3& view) const;
