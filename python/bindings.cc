@@ -452,6 +452,7 @@ struct RenderRequest {
   double moon_elevation_deg = std::numeric_limits<double>::quiet_NaN();
   double moon_azimuth_deg = std::numeric_limits<double>::quiet_NaN();
   double moon_phase_deg = std::numeric_limits<double>::quiet_NaN();
+  double moon_distance_km = kMoonReferenceDistanceKm;  // the moon_position of a date gives its own
 };
 
 // The moon of a Python call and its own view of the model (RadianceTerms::moon), or none.
@@ -461,7 +462,7 @@ struct PyMoon {
 };
 
 PyMoon MakeMoon(const Model& model, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg,
-                double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg) {
+                double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg, double moon_distance_km) {
   PyMoon result;
   if (std::isnan(moon_elevation_deg) && std::isnan(moon_phase_deg) && std::isnan(moon_azimuth_deg)) return result;
   if (!std::isfinite(moon_elevation_deg) || !std::isfinite(moon_phase_deg)) {
@@ -473,7 +474,7 @@ PyMoon MakeMoon(const Model& model, double altitude_m, double sun_elevation_deg,
   const double azimuth = std::isnan(moon_azimuth_deg) ? std::fmod(sun_azimuth_deg + 180.0, 360.0) : moon_azimuth_deg;
   if (!std::isfinite(azimuth)) throw Error("moon_azimuth_deg must be finite");
   const glm::dvec3 direction = SunDirection(moon_elevation_deg, azimuth);
-  result.moon.emplace(direction, moon_phase_deg, kMoonReferenceDistanceKm, model.parameters().wavelengths_nm,
+  result.moon.emplace(direction, moon_phase_deg, moon_distance_km, model.parameters().wavelengths_nm,
                       SunDirection(sun_elevation_deg, sun_azimuth_deg));
   result.sky = model.View(altitude_m, direction);
   return result;
@@ -521,7 +522,8 @@ py::tuple RenderFrame(const PyModel& self, const RenderRequest& request) {
                                                                : ImageColour::kLinearSrgb;
     const Model& model = self.model();
     const PyMoon moon = MakeMoon(model, request.altitude_m, request.sun_elevation_deg, request.sun_azimuth_deg,
-                                 request.moon_elevation_deg, request.moon_azimuth_deg, request.moon_phase_deg);
+                                 request.moon_elevation_deg, request.moon_azimuth_deg, request.moon_phase_deg,
+                                 request.moon_distance_km);
     if (moon.moon) {
       terms.moon = &*moon.moon;
       terms.moon_sky = moon.sky.get();
@@ -856,7 +858,7 @@ PYBIND11_MODULE(_atmo, m) {
       .def(
           "illuminance",
           [](const PyModel& self, double altitude_m, double sun_elevation_deg, bool night_sky, double moon_elevation_deg,
-             double moon_azimuth_deg, double moon_phase_deg) {
+             double moon_azimuth_deg, double moon_phase_deg, double moon_distance_km) {
             Illuminance e;
             {
               py::gil_scoped_release release;
@@ -872,7 +874,7 @@ PYBIND11_MODULE(_atmo, m) {
               IlluminanceSettings settings;
               if (night_sky) settings.night_sky = &night;
               const PyMoon moon = MakeMoon(model, altitude_m, sun_elevation_deg, 0.0, moon_elevation_deg,
-                                           moon_azimuth_deg, moon_phase_deg);
+                                           moon_azimuth_deg, moon_phase_deg, moon_distance_km);
               if (moon.moon) {
                 settings.moon = &*moon.moon;
                 settings.moon_sky = moon.sky.get();
@@ -893,7 +895,7 @@ PYBIND11_MODULE(_atmo, m) {
             return d;
           },
           py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("night_sky"), py::arg("moon_elevation_deg"),
-          py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"))
+          py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"), py::arg("moon_distance_km"))
       .def("sample", &Sample, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("view_zenith_deg"),
            py::arg("azimuth_deg"), py::arg("unit"), py::arg("shape"))
       .def("radiance_batch", &RadianceBatch, py::arg("altitude_m"), py::arg("sun_zenith_deg"), py::arg("directions"),
@@ -907,16 +909,17 @@ PYBIND11_MODULE(_atmo, m) {
           [](const PyModel& self, const std::string& camera, int width, int height, double fov_deg, double yaw_deg,
              double pitch_deg, double altitude_m, double sun_elevation_deg, double sun_azimuth_deg, bool sun_disc,
              bool ground, const std::string& unit, bool xyz, std::uint64_t spp, bool night_sky,
-             double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg) {
+             double moon_elevation_deg, double moon_azimuth_deg, double moon_phase_deg, double moon_distance_km) {
             RenderRequest request{camera,   width,    height, fov_deg, yaw_deg, pitch_deg, altitude_m, sun_elevation_deg,
                                   sun_azimuth_deg, sun_disc, ground, unit,    xyz,     spp,     night_sky,
-                                  moon_elevation_deg, moon_azimuth_deg, moon_phase_deg};
+                                  moon_elevation_deg, moon_azimuth_deg, moon_phase_deg, moon_distance_km};
             return RenderFrame(self, request);
           },
           py::arg("camera"), py::arg("width"), py::arg("height"), py::arg("fov_deg"), py::arg("yaw_deg"),
           py::arg("pitch_deg"), py::arg("altitude_m"), py::arg("sun_elevation_deg"), py::arg("sun_azimuth_deg"),
           py::arg("sun_disc"), py::arg("ground"), py::arg("unit"), py::arg("xyz"), py::arg("spp"),
-          py::arg("night_sky"), py::arg("moon_elevation_deg"), py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"));
+          py::arg("night_sky"), py::arg("moon_elevation_deg"), py::arg("moon_azimuth_deg"), py::arg("moon_phase_deg"),
+          py::arg("moon_distance_km"));
 
   m.def("camera_directions", &CameraDirections, py::arg("camera"), py::arg("width"), py::arg("height"),
         py::arg("fov_deg"), py::arg("yaw_deg"), py::arg("pitch_deg"));

@@ -230,6 +230,9 @@ struct SampleCommand {
   std::string unit = "relative";
   bool night_sky = false;  // add the night sky's own light to the radiance (include/atmo/night_sky.h)
   SunOptions sun;  // --date: the sun zenith of the single query from a date and place
+  // A moon (--moon-elevation, --moon-azimuth relative to the sun's azimuth, which sample puts at
+  // 0, --moon-phase; or --date's): its light as the model scatters it, added to the radiance.
+  MoonOptions moon;
 };
 int RunSample(const CommonOptions& common, const SampleCommand& command);
 

@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
   for (CLI::Option* option : single) grid->excludes(option);
   // --date gives the single query's sun zenith (sun_options.h).
   CLI::Option* sample_date = AddSunOptions(sample_app, sample.sun)->excludes(grid)->excludes(single[1]);
+  AddMoonOptions(sample_app, sample.moon, sample_date);
   // The render convention for the sun's height; the azimuth stays the one between view and sun (docs/design.md §4).
   std::optional<double> sample_sun_elevation;
   AddOptionalNumber(sample_app, "--sun-elevation", sample_sun_elevation,

@@ -6,7 +6,9 @@
 //
 // One output row per input row and channel, channels in the order of parameters.wavelengths_nm.
 // `radiance` is the model's scattered light; with --night-sky it also holds the night sky's own
-// light (airglow and zodiacal light, include/atmo/night_sky.h, default ecliptic), as images do.
+// light (airglow and zodiacal light, include/atmo/night_sky.h, default ecliptic), as images do;
+// with a moon (--moon-elevation and --moon-phase, --moon-azimuth measured from the sun's; or the
+// moon of --date) the moon's light as the model scatters it (its disc, as the sun's, is not in it).
 // Angles are in degrees; the sun lies at compass azimuth 0 and the view at `azimuth_deg`, so the
 // azimuth is the one between the horizontal projections of the view and sun directions.
 //
@@ -19,6 +21,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string_view>
 #include <utility>
 
@@ -28,6 +31,7 @@
 #include "atmo/spectrum.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "commands.h"
 #include "grid.h"
@@ -80,12 +84,24 @@ std::vector<PointGroup> GroupPoints(const std::vector<SamplePoint>& points) {
 
 glm::dvec3 SunOf(const PointGroup& group) { return DirectionFromZenithAzimuth(glm::radians(group.sun_zenith_deg), 0.0); }
 
-// Evaluates one group's points into `results` (indexed like the points); throws atmo::Error.
-using GroupEvaluator = std::function<void(const PointGroup& group, std::vector<SampleResult>& results)>;
+// Evaluates one group's points into `results` (indexed like the points) for a source along `light`
+// (the group's sun, or the moon: the models are linear in their source); throws atmo::Error.
+using GroupEvaluator =
+    std::function<void(const PointGroup& group, const glm::dvec3& light, std::vector<SampleResult>& results)>;
+
+// The moon of the samples, in sample's frame (the sun at compass azimuth 0): its elevation, its
+// azimuth from the sun's, its phase and distance.
+struct SampleMoon {
+  double elevation_deg = 0.0;
+  double azimuth_from_sun_deg = 0.0;
+  double phase_deg = 0.0;
+  double distance_km = kMoonReferenceDistanceKm;
+};
 
 // Every point through `evaluate`, group by group, and the whole CSV text in the input order.
 std::string EvaluatePoints(const AtmosphereParameters& parameters, const std::vector<SamplePoint>& points,
-                           RadianceUnit unit, bool night_sky, const GroupEvaluator& evaluate) {
+                           RadianceUnit unit, bool night_sky, const std::optional<SampleMoon>& moon,
+                           const GroupEvaluator& evaluate) {
   const std::vector<double>& wavelengths_nm = parameters.wavelengths_nm;
   std::vector<SampleResult> results(points.size());
   ProgressBar progress("sample");
@@ -93,7 +109,23 @@ std::string EvaluatePoints(const AtmosphereParameters& parameters, const std::ve
   for (const PointGroup& group : GroupPoints(points)) {
     progress.Update(static_cast<double>(done), static_cast<double>(points.size()));
     try {
-      evaluate(group, results);
+      evaluate(group, SunOf(group), results);
+      if (moon) {
+        // The moonlit sky: the same model lit from the moon, times the moon's irradiance relative
+        // to the sun's; standard errors in quadrature. No disc (sample has none of the sun's).
+        const glm::dvec3 direction = SunDirection(moon->elevation_deg, moon->azimuth_from_sun_deg);
+        const Moon lit(direction, moon->phase_deg, moon->distance_km, wavelengths_nm, SunOf(group));
+        std::vector<SampleResult> moonlit(points.size());
+        evaluate(group, direction, moonlit);
+        for (std::size_t index : group.indices) {
+          SampleResult& result = results[index];
+          for (std::size_t c = 0; c < result.radiance.size(); ++c) {
+            const double scale = lit.relative_irradiance()[c];
+            result.radiance[c] += scale * moonlit[index].radiance[c];
+            result.standard_error[c] = std::hypot(result.standard_error[c], scale * moonlit[index].standard_error[c]);
+          }
+        }
+      }
       if (night_sky) {
         const NightSky night(parameters, std::max(group.altitude_m, 0.0), SunOf(group));
         std::vector<double> glow(wavelengths_nm.size());
@@ -134,8 +166,8 @@ std::string EvaluatePoints(const AtmosphereParameters& parameters, const std::ve
 
 // A model's views (the CPU, or tables the gl backend computed), one query per point.
 GroupEvaluator ModelEvaluator(const Model& model) {
-  return [&model](const PointGroup& group, std::vector<SampleResult>& results) {
-    const std::unique_ptr<SkyView> sky = model.View(group.altitude_m, SunOf(group));
+  return [&model](const PointGroup& group, const glm::dvec3& light, std::vector<SampleResult>& results) {
+    const std::unique_ptr<SkyView> sky = model.View(group.altitude_m, light);
     const std::size_t channels = sky->channel_count();
     for (std::size_t k = 0; k < group.indices.size(); ++k) {
       SampleResult& result = results[group.indices[k]];
@@ -149,8 +181,8 @@ GroupEvaluator ModelEvaluator(const Model& model) {
 #ifdef ATMO_HAVE_GL
 // Model hillaire on the gl backend: per group the view's tables and one GPU pass over its directions.
 GroupEvaluator HillaireGlEvaluator(gl::HillaireGl& sky) {
-  return [&sky](const PointGroup& group, std::vector<SampleResult>& results) {
-    sky.SetView(group.altitude_m, SunOf(group), /*ground=*/false);
+  return [&sky](const PointGroup& group, const glm::dvec3& light, std::vector<SampleResult>& results) {
+    sky.SetView(group.altitude_m, light, /*ground=*/false);
     std::vector<double> radiance, transmittance;  // channel_count values per view
     sky.Sample(group.views, radiance, transmittance);
     const std::size_t nc = sky.channel_count();
@@ -193,18 +225,35 @@ int RunSample(const CommonOptions& common, const SampleCommand& command) {
   if (!command.out_path.empty()) CheckOutputWritable(command.out_path);
   CheckExtension("--out", command.out_path, ".csv");
 
+  // The moon: by hand in sample's frame (the sun at azimuth 0), or the date's, its azimuth then
+  // taken from the sun's.
+  std::optional<SampleMoon> moon;
+  {
+    std::optional<double> julian_day;
+    double sun_azimuth_deg = 0.0;
+    if (HasDate(command.sun)) {
+      const SunAtInstant sun = SunAtDate(command.sun);
+      julian_day = sun.julian_day_utc;
+      sun_azimuth_deg = sun.position.azimuth_deg;
+    }
+    if (const std::optional<MoonPosition> place = ResolveMoon(command.moon, command.sun, sun_azimuth_deg, julian_day)) {
+      moon = SampleMoon{place->elevation_deg, place->azimuth_deg - sun_azimuth_deg, place->phase_angle_deg,
+                        place->distance_km};
+    }
+  }
+
   std::string csv;
 #ifdef ATMO_HAVE_GL
   if (common.backend == "gl" && common.model == "hillaire") {
     const gl::Context context;
     gl::HillaireGl sky(context, parameters, GlHillaireSettings(common));
     sky.Precompute();
-    csv = EvaluatePoints(parameters, points, unit, command.night_sky, HillaireGlEvaluator(sky));
+    csv = EvaluatePoints(parameters, points, unit, command.night_sky, moon, HillaireGlEvaluator(sky));
   }
 #endif
   if (csv.empty()) {
     const std::unique_ptr<Model> model = CreateModelFor(common, parameters);
-    csv = EvaluatePoints(parameters, points, unit, command.night_sky, ModelEvaluator(*model));
+    csv = EvaluatePoints(parameters, points, unit, command.night_sky, moon, ModelEvaluator(*model));
   }
 
   if (command.out_path.empty()) {

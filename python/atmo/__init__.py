@@ -17,6 +17,7 @@ Errors in the input raise ValueError with atmo's one-line message.
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass
 from typing import Mapping, Optional, Sequence, Union
@@ -68,11 +69,19 @@ UNITS = ("relative", "radiance", "luminance")
 
 
 
-def _moon_arguments(elevation, azimuth, phase):
-    """The moon's three angles for the C++ side: NaN where not given."""
+# The moon's mean distance (km), the photometric model's reference (include/atmo/moon.h).
+MOON_REFERENCE_DISTANCE_KM = 384400.0
+
+
+def _moon_arguments(elevation, azimuth, phase, distance=None):
+    """The moon's three angles and its distance for the C++ side: NaN where an angle is not given,
+    the reference distance where the distance is not."""
     nan = float("nan")
+    if distance is not None and not (float(distance) > 0.0 and math.isfinite(float(distance))):
+        raise ValueError(f"moon_distance_km must be a positive number (got {distance!r})")
     return (nan if elevation is None else float(elevation), nan if azimuth is None else float(azimuth),
-            nan if phase is None else float(phase))
+            nan if phase is None else float(phase),
+            MOON_REFERENCE_DISTANCE_KM if distance is None else float(distance))
 
 def _option_text(key: str, value) -> str:
     """A model option as the KEY=VALUE text of `--option`: booleans as on/off, floats exactly."""
@@ -333,18 +342,20 @@ class Model:
 
     def illuminance(self, sun_elevation_deg: float, altitude_m: Optional[float] = None, night_sky: bool = True,
                     moon_elevation_deg: Optional[float] = None, moon_azimuth_deg: Optional[float] = None,
-                    moon_phase_deg: Optional[float] = None) -> dict:
+                    moon_phase_deg: Optional[float] = None, moon_distance_km: Optional[float] = None) -> dict:
         """What `atmo illuminance` prints for one sun elevation (include/atmo/illuminance.h): the sun's
         and the sky's light on a horizontal plane, direct_normal_lux, direct_horizontal_lux,
         diffuse_horizontal_lux, global_horizontal_lux, and direct_normal_w_m2 and
         diffuse_horizontal_w_m2 over 360-830 nm; night_sky_horizontal_lux and _w_m2, the night
         sky's own light (docs/night.md), part of the global unless night_sky=False; with a moon
         (moon_elevation_deg and moon_phase_deg; moon_azimuth_deg defaults to opposite the sun, which
-        is south), moon_direct_horizontal_lux and moon_diffuse_horizontal_lux, also in the global."""
+        is south; moon_distance_km defaults to the mean 384 400 km), moon_direct_horizontal_lux and
+        moon_diffuse_horizontal_lux, also in the global."""
         if altitude_m is None:
             altitude_m = self.observer_altitude_m
         return dict(self._model.illuminance(float(altitude_m), float(sun_elevation_deg), bool(night_sky),
-                                            *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg)))
+                                            *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg,
+                                                             moon_distance_km)))
 
     def render(self, width: int = 1280, height: Optional[int] = None, camera: Optional[str] = None, *,
                fov_deg: float = 90.0, yaw_deg: Optional[float] = None, pitch_deg: float = 10.0,
@@ -353,7 +364,7 @@ class Model:
                unit: str = "luminance", xyz: bool = False, spp: int = 0, full: bool = False,
                target: Optional[str] = None, night_sky: bool = True,
                moon_elevation_deg: Optional[float] = None, moon_azimuth_deg: Optional[float] = None,
-               moon_phase_deg: Optional[float] = None):
+               moon_phase_deg: Optional[float] = None, moon_distance_km: Optional[float] = None):
         """One frame as `atmo render` renders it (same defaults), as a float32 H x W x C array.
 
         camera: perspective (fov_deg, yaw_deg, pitch_deg), fisheye (all-sky; 0 outside the
@@ -368,8 +379,10 @@ class Model:
         night_sky: add the night sky's own light, airglow and zodiacal light (docs/night.md), as
         `atmo render` does; False is its --no-night-glow.
         moon_elevation_deg, moon_phase_deg (0 full, 180 new) and optionally moon_azimuth_deg
-        (default opposite the sun): a moon by hand, its disc and its light through the model, as
-        `atmo render --moon-elevation ...` (deterministic models).
+        (default opposite the sun), moon_distance_km (default the mean 384 400 km): a moon by hand,
+        its disc and its light through the model, as `atmo render --moon-elevation ...` (every
+        model; reference traces its light). The moon of a date and place: pass moon_position's
+        elevation_deg, azimuth_deg, phase_angle_deg and distance_km.
         """
         convention = None
         if target is not None:
@@ -405,7 +418,8 @@ class Model:
         image, alpha, names, colour_space, envmap, standard_error = self._model.render(
             camera, int(width), int(height), float(fov_deg), float(yaw_deg), float(pitch_deg), float(altitude_m),
             float(sun_elevation_deg), float(sun_azimuth_deg), bool(sun_disc), bool(ground), unit, bool(xyz),
-            int(spp), bool(night_sky), *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg))
+            int(spp), bool(night_sky),
+            *_moon_arguments(moon_elevation_deg, moon_azimuth_deg, moon_phase_deg, moon_distance_km))
         if not full:
             return image
         metadata = {
@@ -593,7 +607,8 @@ def moon_position(date: str, latitude_deg: float, longitude_deg: float) -> dict:
     longitude_deg (east positive), as `atmo render --date` places it (include/atmo/moon.h,
     libnova's lunar ephemeris with the observer's parallax): elevation_deg (geometric),
     azimuth_deg (compass), phase_angle_deg (0 full, 180 new), distance_km, julian_day_utc. Feed
-    them to Model.render(moon_elevation_deg=..., moon_azimuth_deg=..., moon_phase_deg=...)."""
+    them to Model.render or Model.illuminance (moon_elevation_deg=..., moon_azimuth_deg=...,
+    moon_phase_deg=..., moon_distance_km=...) for the moon of that instant."""
     return dict(_atmo.moon_position(str(date), float(latitude_deg), float(longitude_deg)))
 
 

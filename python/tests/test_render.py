@@ -211,6 +211,27 @@ def test_reference_traces_the_moon():
     assert float(traced.sum()) == pytest.approx(float(scattered.sum()), rel=0.05)
 
 
+def test_moon_of_a_date_is_the_clis(cli):
+    """The moon of a date through moon_position (its place, phase and distance) lights the ground as
+    `atmo illuminance --date` says; its distance enters as 1/d^2."""
+    from conftest import parse_csv
+    date, lat, lon = "2026-12-24T22:00+01:00", 46.5, 7.9
+    sun = atmo.sun_position(date, lat, lon)
+    moon = atmo.moon_position(date, lat, lon)
+    model = atmo.Model("hillaire", preset="earth")
+    kwargs = dict(moon_elevation_deg=moon["elevation_deg"], moon_azimuth_deg=moon["azimuth_deg"],
+                  moon_phase_deg=moon["phase_angle_deg"])
+    e = model.illuminance(sun["elevation_deg"], moon_distance_km=moon["distance_km"], **kwargs)
+    row = parse_csv(cli("illuminance", "--date", date, "--latitude", str(lat), "--longitude", str(lon)))[0]
+    assert e["moon_direct_horizontal_lux"] == pytest.approx(row["moon_direct_horizontal_lux"], rel=2e-3)
+    near = model.illuminance(sun["elevation_deg"], moon_distance_km=360000.0, **kwargs)
+    far = model.illuminance(sun["elevation_deg"], moon_distance_km=400000.0, **kwargs)
+    assert near["moon_direct_horizontal_lux"] / far["moon_direct_horizontal_lux"] == pytest.approx((400 / 360) ** 2,
+                                                                                                  rel=1e-6)
+    with pytest.raises(ValueError):
+        model.illuminance(-30.0, moon_distance_km=-1.0, **kwargs)
+
+
 def test_moon_position_is_the_one_render_date_uses(cli):
     """moon_position gives the moon `atmo illuminance --date` prints (its elevation and phase)."""
     from conftest import parse_csv
