@@ -26,6 +26,7 @@
 #include "atmo/colour.h"
 #include "atmo/error.h"
 #include "atmo/image.h"
+#include "atmo/moon.h"
 #include "atmo/night_sky.h"
 #include "atmo/parameters.h"
 #include "atmo/spectrum.h"
@@ -613,6 +614,12 @@ class Viewer {
   bool NightShown() const;
   // Adds the night sky to `sky`'s frame textures, just rendered through `camera`.
   void AddNight(const Sky& sky, const Camera& camera);
+  // The moon's light: RenderMoonlit renders `sky` for a sun in the moon's direction (no disc) into
+  // moon_frames_ and puts the sky's view back to the sun's; AddMoon adds those frames times the
+  // moon's relative irradiance and its disc to the frames just rendered.
+  void RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms);
+  void AddMoon(const Sky& sky, const Camera& camera);
+  void SetViewToMoon(Sky& sky);
 
   ViewerOptions options_;
   cli::RenderPlan plan_;               // from the flags, as `atmo render` plans them
@@ -700,6 +707,14 @@ class Viewer {
   std::unique_ptr<NightSky> night_;
   std::unique_ptr<gl::NightSkyGl> night_gl_;
   std::vector<double> night_key_;
+  // The moon of --moon-* or of --date (with the night sky; include/atmo/moon.h), shown with the
+  // night sky; its moonlit frames; its disc integrated over the pixels on the host (the patch
+  // of the frame that holds it, from moon_disc_origin_), for the camera and moon of moon_disc_key_.
+  std::optional<Moon> moon_;
+  std::vector<gl::GpuTexture> moon_frames_;
+  Image moon_disc_;
+  shared::ivec2 moon_disc_origin_{0, 0};
+  std::vector<double> moon_disc_key_;
   std::unique_ptr<OffscreenTarget> offscreen_;  // --offscreen: the window's stand-in (else null)
   Metering metering_ = Metering::kAdaptive;   // of the last metering queued
   int settings_generation_ = 0;          // counts the panel's hillaire option changes
@@ -943,6 +958,25 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   UpdateNight();
   if (night_ != nullptr && night_->active() && shown_model_ != "reference") {
     AddNightSky(night_->Scaled(plan.model_parameters.solar_irradiance), plan.settings.camera, image);
+    if (moon_) {
+      // The moonlit sky, as `atmo render --backend gl` adds it: the frame for a sun in the
+      // moon's direction without the disc, times the moon's irradiance, then the moon's disc.
+      SetViewToMoon(*sky_);
+      RenderSettings lit = plan.settings;
+      const glm::dvec3& d = moon_->direction();
+      lit.sun_elevation_deg = glm::degrees(std::asin(std::clamp(d.z, -1.0, 1.0)));
+      lit.sun_azimuth_deg = glm::degrees(std::atan2(d.x, d.y));
+      lit.terms.sun_disc = false;
+      const Image moonlit = sky_->Screenshot(lit, nullptr, nullptr);
+      sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, pass_timings_);
+      if (plan.settings.terms.sun_disc) {
+        AddMoonLight(*moon_, moonlit, *night_, plan.settings.camera, plan.model_parameters.solar_irradiance, image);
+      } else {
+        for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+          image.pixels[i] += moonlit.pixels[i] * static_cast<float>(moon_->relative_irradiance()[i % moonlit.channels]);
+        }
+      }
+    }
   }
   // Reference's estimate has its own (smaller) size.
   plan.settings.camera.width = image.width;
@@ -1199,19 +1233,99 @@ void Viewer::UpdateNight() {
   night_.reset();
   if (current_.geometry != Geometry::kSpherical) {
     night_gl_->Set(NightSky::Folded());
+    moon_.reset();
     return;
   }
   const glm::dvec3 sun = SunDirection(state_.sun_elevation_deg, state_.sun_azimuth_deg);
   const cli::SunOptions& place = options_.render.sun;
+  const cli::SunOptions& place_sun = place;
   const glm::dvec3 pole = dated ? EclipticPoleDirection(dated->julian_day_utc, *place.latitude_deg, *place.longitude_deg)
                                 : glm::dvec3(0.0);
   night_ = std::make_unique<NightSky>(current_, std::max(state_.altitude_m, 0.0), sun, pole);
+  moon_.reset();
+  moon_disc_key_.clear();
+  if (const std::optional<MoonPosition> place =
+          cli::ResolveMoon(options_.render.moon, place_sun, state_.sun_azimuth_deg,
+                           dated ? std::optional<double>(dated->julian_day_utc) : std::nullopt)) {
+    moon_.emplace(SunDirection(place->elevation_deg, place->azimuth_deg), place->phase_angle_deg, place->distance_km,
+                  current_.wavelengths_nm, sun);
+  }
   if (stars_ != nullptr) {
     night_->SetStars(*stars_, dated ? CelestialFrame::FromDate(dated->julian_day_utc, *place.latitude_deg,
                                                                *place.longitude_deg)
                                     : CelestialFrame::FromSun(sun));
   }
   night_gl_->Set(night_->Scaled(CurrentPlan().model_parameters.solar_irradiance));
+}
+
+void Viewer::SetViewToMoon(Sky& sky) {
+  const glm::dvec3& d = moon_->direction();
+  sky.SetView(state_.altitude_m, glm::degrees(std::asin(std::clamp(d.z, -1.0, 1.0))), glm::degrees(std::atan2(d.x, d.y)),
+              state_.ground, pass_timings_);
+}
+
+void Viewer::RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms) {
+  SetViewToMoon(sky);
+  RadianceTerms moon_terms = terms;
+  moon_terms.sun_disc = false;
+  sky.RenderFrame(camera, moon_terms, pass_timings_);
+  moon_frames_.resize(sky.batch_count());
+  for (std::size_t b = 0; b < sky.batch_count(); ++b) {
+    const gl::GpuTexture& frame = sky.frame_texture(b);
+    const shared::ivec2 size = frame.size2();
+    if (moon_frames_[b].empty() || moon_frames_[b].size2().x != size.x || moon_frames_[b].size2().y != size.y) {
+      moon_frames_[b] = gl::GpuTexture::Make2D(size);
+    }
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+    glCopyImageSubData(frame.id(), GL_TEXTURE_2D, 0, 0, 0, 0, moon_frames_[b].id(), GL_TEXTURE_2D, 0, 0, 0, 0, size.x,
+                       size.y, 1);
+  }
+  sky.SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, pass_timings_);
+}
+
+void Viewer::AddMoon(const Sky& sky, const Camera& camera) {
+  const std::vector<double>& solar = CurrentPlan().model_parameters.solar_irradiance;
+  const glm::dvec3& d = moon_->direction();
+  const std::vector<double> key = {static_cast<double>(camera.kind), static_cast<double>(camera.width),
+                                   static_cast<double>(camera.height), camera.fov_deg, camera.yaw_deg, camera.pitch_deg,
+                                   d.x, d.y, d.z, moon_->phase_angle_deg(), static_cast<double>(sky_generation_)};
+  if (key != moon_disc_key_) {
+    // The disc over the whole frame on the host, then only the patch that holds it.
+    moon_disc_key_ = key;
+    Image full(camera.width, camera.height, static_cast<int>(solar.size()));
+    AddMoonDiscLight(*moon_, *night_, camera, solar, full);
+    int x0 = camera.width, y0 = camera.height, x1 = -1, y1 = -1;
+    const std::size_t n = solar.size();
+    for (int y = 0; y < camera.height; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        const float* p = &full.pixels[(static_cast<std::size_t>(y) * camera.width + x) * n];
+        if (std::any_of(p, p + n, [](float v) { return v != 0.0f; })) {
+          x0 = std::min(x0, x);
+          y0 = std::min(y0, y);
+          x1 = std::max(x1, x);
+          y1 = std::max(y1, y);
+        }
+      }
+    }
+    moon_disc_ = x1 < 0 ? Image() : Image(x1 - x0 + 1, y1 - y0 + 1, static_cast<int>(n));
+    moon_disc_origin_ = {std::max(x0, 0), std::max(y0, 0)};
+    for (int y = 0; y < moon_disc_.height; ++y) {
+      for (int x = 0; x < moon_disc_.width; ++x) {
+        for (std::size_t c = 0; c < n; ++c) {
+          moon_disc_.pixels[(static_cast<std::size_t>(y) * moon_disc_.width + x) * n + c] =
+              full.pixels[(static_cast<std::size_t>(y0 + y) * camera.width + x0 + x) * n + c];
+        }
+      }
+    }
+  }
+  std::vector<const gl::GpuTexture*> frames, moonlit;
+  std::vector<shared::vec3> scale;
+  for (std::size_t b = 0; b < sky.batch_count(); ++b) {
+    frames.push_back(&sky.frame_texture(b));
+    moonlit.push_back(&moon_frames_.at(b));
+    scale.push_back(BatchValues(moon_->relative_irradiance(), b));
+  }
+  night_gl_->AddMoon(frames, moonlit, scale, moon_disc_, moon_disc_origin_, pass_timings_);
 }
 
 void Viewer::AddNight(const Sky& sky, const Camera& camera) {
@@ -1698,8 +1812,11 @@ int Viewer::Run() {
                                pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
       waiting_for_build_ = reuse_frame;
       if (fused == nullptr && !reuse_frame) {
+        const bool moon = night && moon_.has_value();
+        if (moon) RenderMoonlit(*sky_, camera, terms);
         sky_->RenderFrame(camera, terms, pass_timings_);
         if (night) AddNight(*sky_, camera);
+        if (moon) AddMoon(*sky_, camera);
         drawn_generation_ = sky_generation_;
         drawn_camera_ = camera;
         drawn_terms_ = terms;

@@ -88,6 +88,9 @@ void AddStars(const NightSky::Folded& night, const Camera& camera, Image& image)
 // mismatch.
 void AddMoonLight(const Moon& moon, const Image& moonlit, const NightSky& night, const Camera& camera,
                   std::span<const double> solar_irradiance, Image& image);
+// Only the moon's disc of AddMoonLight (atmo-viewer adds the moonlit sky on the GPU).
+void AddMoonDiscLight(const Moon& moon, const NightSky& night, const Camera& camera,
+                      std::span<const double> solar_irradiance, Image& image);
 
 // RenderView folded into three channels: pixel value k = sum over channels c of weights[c][k] L_c
 // (SkyView::RadianceBatchFolded), the pixel-integrated sun disc folded the same way. With the

@@ -263,6 +263,17 @@ void AddMoonLight(const Moon& moon, const Image& moonlit, const NightSky& night,
   for (std::size_t i = 0; i < image.pixels.size(); ++i) {
     image.pixels[i] += moonlit.pixels[i] * static_cast<float>(moon.relative_irradiance()[i % n]);
   }
+  AddMoonDiscLight(moon, night, camera, solar_irradiance, image);
+}
+
+void AddMoonDiscLight(const Moon& moon, const NightSky& night, const Camera& camera,
+                      std::span<const double> solar_irradiance, Image& image) {
+  ValidateCamera(camera);
+  const std::size_t n = moon.relative_irradiance().size();
+  if (image.width != camera.width || image.height != camera.height || static_cast<std::size_t>(image.channels) != n ||
+      solar_irradiance.size() != n || night.channel_count() != n) {
+    throw Error("AddMoonDiscLight: the image, the camera, the moon and the night sky do not match");
+  }
   AddSunDisc(
       camera, moon.direction(), moon.angular_radius_rad(),
       [&](const glm::dvec3& view, std::span<double> out) {

@@ -120,6 +120,28 @@ void main() {
 }
 )glsl";
 
+// The moon: frame += moonlit * scale, plus the disc's patch where it lies.
+constexpr const char* kMoonMain = R"glsl(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform image2D frame;
+layout(rgba32f, binding = 1) uniform readonly image2D moonlit;
+layout(std430, binding = 0) readonly buffer Disc { vec4 disc[]; };
+uniform vec3 scale;
+uniform ivec2 disc_origin;
+uniform ivec2 disc_size;
+
+void main() {
+  ivec2 size = imageSize(frame);
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(pixel, size))) return;
+  vec4 value = imageLoad(frame, pixel);
+  value.rgb += imageLoad(moonlit, pixel).rgb * scale;
+  ivec2 at = pixel - disc_origin;
+  if (all(greaterThanEqual(at, ivec2(0))) && all(lessThan(at, disc_size))) value.rgb += disc[at.y * disc_size.x + at.x].rgb;
+  imageStore(frame, pixel, value);
+}
+)glsl";
+
 constexpr const char* kStarsFragmentSource = R"glsl(#version 430 core
 flat in vec3 star_value;
 layout(location = 0) out vec4 colour;
@@ -295,6 +317,49 @@ void NightSkyGl::Add(const shared::CameraParameters& camera, std::span<const Gpu
     timer.Stop("night_stars");
   }
   CheckGlError("night sky pass");
+}
+
+void NightSkyGl::AddMoon(std::span<const GpuTexture* const> frames, std::span<const GpuTexture* const> moonlit,
+                         std::span<const shared::vec3> scale, const Image& disc, shared::ivec2 disc_origin,
+                         PassTimings* timings) const {
+  if (moonlit.size() != frames.size() || scale.size() != frames.size() ||
+      (disc.width > 0 && static_cast<std::size_t>(disc.channels) > 3 * frames.size())) {
+    throw Error("GL moon: the frames, the moonlit frames, the scales and the disc do not match");
+  }
+  for (std::size_t b = 0; b < frames.size(); ++b) {
+    if (frames[b] == nullptr || moonlit[b] == nullptr || frames[b]->size2().x != moonlit[b]->size2().x ||
+        frames[b]->size2().y != moonlit[b]->size2().y) {
+      throw Error("GL moon: a moonlit frame is not the frame's size");
+    }
+  }
+  context_.MakeCurrent();
+  GpuPassTimer timer(timings);
+  const ComputeProgram& program = context_.Program({}, kMoonMain, "moon");
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  const std::size_t texels = static_cast<std::size_t>(std::max(disc.width, 0)) * std::max(disc.height, 0);
+  const std::size_t channels = static_cast<std::size_t>(std::max(disc.channels, 0));
+  std::vector<float> patch(std::max<std::size_t>(texels, 1) * 4, 0.0f);
+  unsigned buffer = 0;
+  for (std::size_t b = 0; b < frames.size(); ++b) {
+    std::fill(patch.begin(), patch.end(), 0.0f);
+    for (std::size_t i = 0; i < texels; ++i) {
+      for (std::size_t k = 0; k < 3 && 3 * b + k < channels; ++k) patch[4 * i + k] = disc.pixels[i * channels + 3 * b + k];
+    }
+    DeleteBuffer(buffer);
+    buffer = MakeBuffer(patch.data(), patch.size() * sizeof(float));
+    program.SetVec3("scale", scale[b]);
+    glProgramUniform2i(program.id(), glGetUniformLocation(program.id(), "disc_origin"), disc_origin.x, disc_origin.y);
+    glProgramUniform2i(program.id(), glGetUniformLocation(program.id(), "disc_size"), texels > 0 ? disc.width : 0,
+                       texels > 0 ? disc.height : 0);
+    glBindImageTexture(0, frames[b]->id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    glBindImageTexture(1, moonlit[b]->id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffer);
+    DispatchCompute2D(program, frames[b]->size2());
+  }
+  glMemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  DeleteBuffer(buffer);
+  timer.Stop("moon");
+  CheckGlError("moon pass");
 }
 
 }  // namespace atmo::gl

@@ -28,6 +28,7 @@
 #include <span>
 #include <vector>
 
+#include "atmo/image.h"
 #include "atmo/night_sky.h"
 #include "atmo/timing.h"
 #include "gl/program.h"
@@ -52,6 +53,15 @@ class NightSkyGl {
   // Throws atmo::Error for more frames than the fold has batches or a frame of another size.
   void Add(const shared::CameraParameters& camera, std::span<const GpuTexture* const> frames,
            PassTimings* timings = nullptr) const;
+
+  // The moon (atmo-viewer): adds to frames[b] the moonlit frame moonlit[b] (the same renderer's
+  // frame for a sun in the moon's direction, without its disc) times scale[b] (the moon's
+  // irradiance relative to the sun's, per channel of the batch), and the disc's pixels `disc`
+  // (every channel of the fold, integrated over the pixels on the host: AddMoonDiscLight) placed
+  // with its pixel (0, 0) at `disc_origin` of the frames. Throws atmo::Error for sizes that differ.
+  void AddMoon(std::span<const GpuTexture* const> frames, std::span<const GpuTexture* const> moonlit,
+               std::span<const shared::vec3> scale, const Image& disc, shared::ivec2 disc_origin,
+               PassTimings* timings = nullptr) const;
 
   bool glow() const { return glow_; }
   std::size_t star_count() const { return star_count_; }
