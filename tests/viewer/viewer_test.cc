@@ -830,6 +830,7 @@ class ViewerOffscreen : public ViewerProgram {
     CliFixture::SetUp();
   }
   RunResult RunViewer(const std::string& args) const { return RunViewerWith("--offscreen", args); }
+  void ExpectWindowIsTheRender(const std::string& flags, const std::string& window, const std::string& pass) const;
 };
 
 // The mean and largest difference of two PNGs' 8-bit codes, of the same size.
@@ -894,6 +895,22 @@ TEST_F(ViewerOffscreen, GpuAutoExposureMatchesTheRendersMeter) {
   }
 }
 
+// The window of `flags` (3 frames, written to WINDOW) against `atmo render --backend gl`'s PNG of
+// the same flags: the window must show the pass named `pass` in its timings and the PNG's codes
+// (measured on llvmpipe: a mean of 1e-5 to 3e-4 codes, max 1, in the night and moon tests).
+void ViewerOffscreen::ExpectWindowIsTheRender(const std::string& flags, const std::string& window,
+                                              const std::string& pass) const {
+  const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot " + window);
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find(pass), std::string::npos) << v.out;
+  const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CodeDifference d = ComparePngs(dir_ / window, dir_ / "render.png");
+  std::printf("[ figures ] window vs PNG (%s): mean |difference| %.5f codes, max %d\n", flags.c_str(), d.mean, d.worst);
+  EXPECT_LT(d.mean, 0.05) << flags;
+  EXPECT_LE(d.worst, 2) << flags;
+}
+
 // At night the viewer adds the glow and the stars to its frames on the GPU (gl::NightSkyGl), as
 // `atmo render --backend gl` adds them on the host: the window shows what the PNG shows, and
 // without them (--no-night-glow --no-stars) the window at the same exposure is black.
@@ -901,21 +918,10 @@ TEST_F(ViewerOffscreen, NightSkyIsWhatAtmoRenderShows) {
   for (const std::string view : {"--camera fisheye --width 160 --height 160",
                                  "--camera perspective --pitch 30 --fov 100 --width 160 --height 90 --preset earth-spectral"}) {
     const std::string flags = view + " --sun-elevation -30 --sun-azimuth 200 --yaw 150 --no-dither --ev -9";
-    RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot night.png");
+    ExpectWindowIsTheRender(flags, "night.png", "night_stars");
+    const RunResult v = RunViewer(flags + " --no-night-glow --no-stars --frames 3 --no-panels --window-screenshot dark.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;
-    EXPECT_NE(v.out.find("night_stars"), std::string::npos) << v.out;
-    const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const CodeDifference d = ComparePngs(dir_ / "night.png", dir_ / "render.png");
-    std::printf("[ figures ] night window vs PNG (%s): mean |difference| %.4f codes, max %d\n", view.c_str(), d.mean,
-                d.worst);
-    // Measured on llvmpipe: mean 1.4e-4 codes (fisheye), max 1.
-    EXPECT_LT(d.mean, 0.05) << view;
-    EXPECT_LE(d.worst, 2) << view;
-    v = RunViewer(flags + " --no-night-glow --no-stars --frames 3 --no-panels --window-screenshot dark.png");
-    ASSERT_EQ(v.exit_code, 0) << v.err;
-    const CodeDifference lit = ComparePngs(dir_ / "night.png", dir_ / "dark.png");
-    EXPECT_GT(lit.mean, 20.0) << view << ": the night sky is what lights the window";
+    EXPECT_GT(ComparePngs(dir_ / "night.png", dir_ / "dark.png").mean, 20.0) << view << ": the night sky lights it";
   }
 }
 
@@ -923,23 +929,12 @@ TEST_F(ViewerOffscreen, NightSkyIsWhatAtmoRenderShows) {
 // added on the GPU; its disc integrated over the pixels on the host) is the moon of
 // `atmo render --backend gl`: the moonlit sky in a fisheye, and the disc through a narrow camera.
 TEST_F(ViewerOffscreen, MoonIsWhatAtmoRenderShows) {
-  const std::string moon = " --sun-elevation -30 --sun-azimuth 200 --moon-elevation 40 --moon-azimuth 100 --moon-phase 30";
+  const std::string moon = " --moon-elevation 40 --moon-azimuth 100 --moon-phase 30";
   for (const std::string view : {"--camera fisheye --width 160 --height 160 --ev -4",
                                  "--camera perspective --fov 8 --yaw 100 --pitch 40 --width 160 --height 90 --ev 2"}) {
-    const std::string flags = view + moon + " --no-dither";
-    RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot moon.png");
-    ASSERT_EQ(v.exit_code, 0) << v.err;
-    EXPECT_NE(v.out.find(" moon "), std::string::npos) << v.out;
-    const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const CodeDifference d = ComparePngs(dir_ / "moon.png", dir_ / "render.png");
-    std::printf("[ figures ] moonlit window vs PNG (%s): mean |difference| %.5f codes, max %d\n", view.c_str(), d.mean,
-                d.worst);
-    // Measured on llvmpipe: mean 1.3e-5 codes (fisheye) and 0 (the disc), max 1.
-    EXPECT_LT(d.mean, 0.05) << view;
-    EXPECT_LE(d.worst, 2) << view;
-    v = RunViewer(view + " --sun-elevation -30 --sun-azimuth 200 --no-dither --frames 3 --no-panels "
-                  "--window-screenshot moonless.png");
+    const std::string flags = view + " --sun-elevation -30 --sun-azimuth 200 --no-dither";
+    ExpectWindowIsTheRender(flags + moon, "moon.png", " moon ");
+    const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot moonless.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;
     EXPECT_GT(ComparePngs(dir_ / "moon.png", dir_ / "moonless.png").mean, 1.0) << view << ": the moon lights it";
   }
