@@ -35,7 +35,7 @@ void BM_NightFrame1280x720(benchmark::State& state) {
   const glm::dvec3 sun = atmo::SunDirection(kSunElevationDeg, 180.0);
   const std::unique_ptr<atmo::SkyView> view = model.View(0.0, sun);
   atmo::AtmosphereParameters p = model.parameters();
-  if (state.range(0) == 2) p.night_sky.zodiacal_scale = 0.0;
+  if (state.range(0) == 2) p.night_sky.zodiacal_scale = p.night_sky.starlight_scale = 0.0;
   const atmo::NightSky night(p, 0.0, sun);
   atmo::Camera camera;
   camera.width = 1280;

@@ -2,6 +2,8 @@
 // against published levels, their geometry, their spectra and their place in the renderers.
 #include <cmath>
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <numbers>
 #include <tuple>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/spectrum.h"
+#include "atmo/stars.h"
 #include "atmo/sun_position.h"
 #include "atmo/illuminance.h"
 #include "atmo/image.h"
@@ -57,6 +60,78 @@ TEST(NightSky, MoonlessZenithIsThePublishedDarkSky) {
     const double at_20 = Luminance(p, night, Elevated(20.0, 90.0));
     EXPECT_GT(at_20, zenith) << preset;
   }
+}
+
+// The integrated starlight (NightSky::StarlightS10, Leinert et al. 1998's Table 35 of Pioneer 10):
+// the table's nodes, its unmapped cells interpolated, and the sky placed by a frame: the north
+// galactic pole, the galactic plane and the Milky Way's brightest (Carina) where the frame puts them.
+// With the catalogue, the stars it draws (fainter than V 6.5) come out of it, their light kept.
+TEST(NightSky, IntegratedStarlightFollowsLeinertsTable35) {
+  EXPECT_DOUBLE_EQ(NightSky::StarlightS10(0.0, 80.0), 29.0);
+  EXPECT_DOUBLE_EQ(NightSky::StarlightS10(290.0, 0.0), 634.0);
+  EXPECT_DOUBLE_EQ(NightSky::StarlightS10(280.0, -30.0), 213.0);  // the Large Magellanic Cloud
+  // Unmapped from l 190 to 240 at b 30: 62 at l 180 to 61 at 250, so 62 - 2.5 / 7 at l 205.
+  EXPECT_NEAR(NightSky::StarlightS10(205.0, 30.0), 62.0 - 2.5 / 7.0, 1e-9);
+  EXPECT_NEAR(NightSky::StarlightS10(5.0, 2.0), 0.25 * (290 + 275 + 147 + 210), 1e-9);
+  const double equatorial_mean = [] {
+    double sum = 0.0;
+    for (int l = 0; l < 360; l += 10) sum += NightSky::StarlightS10(l, 0.0);
+    return sum / 36.0;
+  }();
+  EXPECT_NEAR(equatorial_mean, 243.0, 1.0);  // the plane's mean of Table 35
+
+  AtmosphereParameters p = Preset("earth");
+  const glm::dvec3 sun = Elevated(-30.0, 0.0);
+  NightSky night(p, 0.0, sun);
+  const CelestialFrame frame = CelestialFrame::FromDate(ParseIsoDateTime("2026-03-20T22:00Z"), -30.0, -70.0);
+  night.SetFrame(frame);
+  const auto local = [&](double ra_deg, double dec_deg) {
+    const double ra = glm::radians(ra_deg), dec = glm::radians(dec_deg);
+    return glm::normalize(frame.equatorial_to_local() *
+                          glm::dvec3(std::cos(dec) * std::cos(ra), std::cos(dec) * std::sin(ra), std::sin(dec)));
+  };
+  // In S10(sun) through 6.61e-12 per S10: the south galactic pole (the table's b = -80 row, 25-35,
+  // held to the pole; Table 34 gives 33 there) and Carina (l 290, b 0: RA 166.4, Dec -59.6 within a
+  // degree), where they are that night over Chile.
+  const double per_s10 = 6.61e-12;
+  const glm::dvec3 sgp = local(12.85948, -27.12825);
+  EXPECT_NEAR(night.StarlightValue(sgp) / per_s10, 30.0, 5.0);
+  const glm::dvec3 carina = local(166.4, -59.6);
+  EXPECT_GT(night.StarlightValue(carina) / per_s10, 400.0);
+  // Attenuated by the air: below the horizon nothing, at the zenith the transmittance.
+  std::vector<double> radiance(3), t(3);
+  night.StarlightRadiance(glm::dvec3(0, 0, -1), radiance);
+  for (double r : radiance) EXPECT_EQ(r, 0.0);
+  night.StarlightRadiance(glm::dvec3(0, 0, 1), radiance);
+  night.Transmittance(1.0, t);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(radiance[c], night.StarlightValue(glm::dvec3(0, 0, 1)) * t[c], 1e-20);
+
+  // The stars SetStars draws one by one come out of the table: the sky's mean falls by their light
+  // spread over the sphere (sum of 10^(-0.4 (V - 10)) S10 square degrees over 41 253 square degrees).
+  if (!std::filesystem::is_directory(StarCatalogue::DefaultFolder())) return;
+  const StarCatalogue& catalogue = StarCatalogue::Default();
+  NightSky with_stars(p, 0.0, sun);
+  with_stars.SetStars(catalogue, frame);
+  double drawn = 0.0;
+  for (const Star& star : catalogue.stars()) {
+    if (star.v_mag > 6.5) drawn += std::pow(10.0, -0.4 * (star.v_mag - 10.0));
+  }
+  drawn /= 41253.0;
+  double full = 0.0, less = 0.0, weight = 0.0;
+  for (int j = 0; j < 90; ++j) {
+    for (int i = 0; i < 180; ++i) {
+      const double mu = -1.0 + (j + 0.5) * 2.0 / 90.0;
+      const double phi = (i + 0.5) * 2.0 * std::numbers::pi / 180.0;
+      const double r = std::sqrt(1.0 - mu * mu);
+      const glm::dvec3 v(r * std::sin(phi), r * std::cos(phi), mu);
+      full += night.StarlightValue(v);
+      less += with_stars.StarlightValue(v);
+      weight += 1.0;
+    }
+  }
+  std::printf("[ figures ] starlight sky mean %.1f S10 (table), %.1f less the drawn stars; their light %.2f S10\n",
+              full / weight / per_s10, less / weight / per_s10, drawn);
+  EXPECT_NEAR((full - less) / weight / per_s10, drawn, 0.15 * drawn);
 }
 
 // The airglow's channels carry the spectrum's CIE XYZ exactly, for 3 channels as for 15 (the

@@ -54,11 +54,15 @@ int RunIlluminance(const CommonOptions& common, const IlluminanceCommand& comman
                                                                        *command.sun.longitude_deg)
                                                : glm::dvec3(0.0);
     NightSky night(parameters, std::max(altitude_m, 0.0), sun, pole);
-    if (catalogue != nullptr) {
-      night.SetStars(*catalogue, row.julian_day_utc ? CelestialFrame::FromDate(*row.julian_day_utc,
+    // The sky placed by the date and place (the stars, the Milky Way's starlight), else by the sun.
+    const CelestialFrame frame = row.julian_day_utc ? CelestialFrame::FromDate(*row.julian_day_utc,
                                                                                *command.sun.latitude_deg,
                                                                                *command.sun.longitude_deg)
-                                                    : CelestialFrame::FromSun(sun));
+                                                    : CelestialFrame::FromSun(sun);
+    if (catalogue != nullptr) {
+      night.SetStars(*catalogue, frame);
+    } else {
+      night.SetFrame(frame);
     }
     IlluminanceSettings settings;
     settings.night_sky = &night;

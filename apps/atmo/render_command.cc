@@ -424,10 +424,13 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
                                                           *command.sun.longitude_deg)
                                   : glm::dvec3(0.0);
     NightSky night(model_parameters, std::max(frame.altitude_m, 0.0), sun, pole);
+    const CelestialFrame sky = dated ? CelestialFrame::FromDate(dated->julian_day_utc, *command.sun.latitude_deg,
+                                                                *command.sun.longitude_deg)
+                                     : CelestialFrame::FromSun(sun);
     if (catalogue != nullptr) {
-      night.SetStars(*catalogue, dated ? CelestialFrame::FromDate(dated->julian_day_utc, *command.sun.latitude_deg,
-                                                                  *command.sun.longitude_deg)
-                                       : CelestialFrame::FromSun(sun));
+      night.SetStars(*catalogue, sky);
+    } else {
+      night.SetFrame(sky);  // the Milky Way's starlight
     }
     return night;
   };

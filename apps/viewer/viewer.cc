@@ -1250,10 +1250,13 @@ void Viewer::UpdateNight() {
     moon_.emplace(SunDirection(place->elevation_deg, place->azimuth_deg), place->phase_angle_deg, place->distance_km,
                   current_.wavelengths_nm, sun);
   }
+  const CelestialFrame frame = dated ? CelestialFrame::FromDate(dated->julian_day_utc, *place.latitude_deg,
+                                                                *place.longitude_deg)
+                                     : CelestialFrame::FromSun(sun);
   if (stars_ != nullptr) {
-    night_->SetStars(*stars_, dated ? CelestialFrame::FromDate(dated->julian_day_utc, *place.latitude_deg,
-                                                               *place.longitude_deg)
-                                    : CelestialFrame::FromSun(sun));
+    night_->SetStars(*stars_, frame);
+  } else {
+    night_->SetFrame(frame);
   }
   night_gl_->Set(night_->Scaled(CurrentPlan().model_parameters.solar_irradiance));
 }

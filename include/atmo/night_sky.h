@@ -79,6 +79,9 @@ class NightSky {
   NightSky(const AtmosphereParameters& parameters, double altitude_m, const glm::dvec3& sun_direction,
            const glm::dvec3& ecliptic_pole = glm::dvec3(0.0));
 
+  // Places the sky by `frame` (the ecliptic, and the Milky Way of the integrated starlight); the
+  // constructor's is CelestialFrame::FromSun. SetStars sets it too.
+  void SetFrame(const CelestialFrame& frame);
   // Adds the stars of `catalogue` (kept by reference: it must outlive this) placed by `frame`, and
   // takes the ecliptic from the frame. The renderers then share each star's irradiance
   // (StarRelativeIrradiance) times the transmittance bilinearly among the 2 x 2 pixels around its
@@ -94,16 +97,37 @@ class NightSky {
 
   bool active() const { return active_; }
   const glm::dvec3& sun_direction() const { return sun_direction_; }
-  // Whether the zodiacal light is there (its scale > 0 and the glow on).
+  // Whether the zodiacal light is there (its scale > 0 and the glow on), and its relative radiance
+  // per unit of the zodiacal grid.
   bool zodiacal() const { return zodiacal_relative_ > 0.0; }
+  double zodiacal_relative() const { return zodiacal_relative_; }
   bool glow() const { return active_ && glow_; }
   std::size_t channel_count() const { return channel_count_; }
   const glm::dvec3& ecliptic_pole() const { return ecliptic_pole_; }
 
-  // Airglow plus zodiacal light along `view` (unit), per channel, into `out` (channel_count()).
+  // Airglow, zodiacal light and integrated starlight along `view` (unit), per channel, into `out`
+  // (channel_count()).
   void Radiance(const glm::dvec3& view, std::span<double> out) const;
   void AirglowRadiance(const glm::dvec3& view, std::span<double> out) const;
   void ZodiacalRadiance(const glm::dvec3& view, std::span<double> out) const;
+  // The integrated starlight (Leinert et al. 1998, Table 35: the stars fainter than about V 6.5 and
+  // the diffuse galactic light, less the catalogue's stars fainter than V 6.5 that SetStars draws),
+  // attenuated: solar-coloured, so the same relative value in every channel times the transmittance.
+  void StarlightRadiance(const glm::dvec3& view, std::span<double> out) const;
+  // Its value outside the atmosphere along `view` (relative radiance, per unit solar irradiance):
+  // the local grid (starlight_grid) read bilinearly.
+  double StarlightValue(const glm::dvec3& view) const;
+  // Table 35 at galactic longitude and latitude (degrees), in S10(sun), before the catalogue's stars
+  // are taken out; the 28 unmapped cells interpolated along their latitude.
+  static double StarlightS10(double longitude_deg, double latitude_deg);
+  // The starlight resampled on the local frame, for the renderers' per-pixel pass:
+  // kStarlightMu rows uniform in the view's zenith cosine over [-1, 1], each of kStarlightAzimuth
+  // values uniform in compass azimuth atan2(x, y) over [0, 2 pi) (the last column is the first
+  // again), relative radiance outside the atmosphere.
+  static constexpr int kStarlightMu = 65;
+  static constexpr int kStarlightAzimuth = 129;
+  const std::vector<float>& starlight_grid() const { return starlight_grid_; }
+  bool starlight() const { return !starlight_grid_.empty(); }
 
   // The airglow's radiance per channel at the top of the atmosphere looking down the zenith of the
   // shell, unattenuated (the channels' projection of the ESO spectrum times airglow_scale).
@@ -124,10 +148,11 @@ class NightSky {
     // The fold: output k of channel c is weights()[c * outputs() + k].
     const std::vector<float>& weights() const { return weights_; }
     // The per-angle tables (kAngleSamples x outputs(); empty when the night sky is inactive): the
-    // attenuated airglow, and the transmittance times the zodiacal light per unit of ZodiacalGrid.
-    // A pixel adds, at x = (mu + 1) (kAngleSamples - 1) / 2, a = min(floor(x), kAngleSamples - 2),
-    // f = x - a: (1 - f) (airglow[a] + z transmitted[a]) + f (airglow[a + 1] + z transmitted[a + 1]),
-    // z the zodiacal grid's value (0 without the zodiacal light).
+    // attenuated airglow, and the folded transmittance. A pixel adds, at
+    // x = (mu + 1) (kAngleSamples - 1) / 2, a = min(floor(x), kAngleSamples - 2), f = x - a:
+    // (1 - f) (airglow[a] + z transmitted[a]) + f (airglow[a + 1] + z transmitted[a + 1]), z the
+    // light from outside the atmosphere: zodiacal_relative() times the zodiacal grid's value plus
+    // StarlightValue.
     const std::vector<float>& airglow() const { return airglow_; }
     const std::vector<float>& transmitted() const { return transmitted_; }
     // The stars above the horizon as the renderers add them: each star's direction (local frame)
@@ -163,6 +188,9 @@ class NightSky {
   glm::dvec3 ecliptic_pole_{1.0, 0.0, 0.0};
   std::vector<double> airglow_zenith_;
   double zodiacal_relative_ = 0.0;  // per unit of Table 17: relative radiance (grey)
+  double starlight_relative_ = 0.0;  // per S10(sun): relative radiance (grey); 0 without
+  std::vector<float> starlight_grid_;  // kStarlightMu x kStarlightAzimuth, relative radiance
+  void BuildStarlight();  // starlight_grid_ for frame_ and stars_
   // Per view zenith angle (kAngles samples, uniform in angle over [0, pi]) and channel.
   std::vector<double> airglow_path_;  // [angle][channel]: attenuated airglow, per unit zenith brightness
   std::vector<double> transmittance_;  // [angle][channel]: to the top of the atmosphere; 0 on the ground

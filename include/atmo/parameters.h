@@ -105,6 +105,10 @@ struct NightSkySettings {
   double airglow_thickness_m = 16e3;
   // Zodiacal light: `zodiacal_scale` times Leinert et al. 1998's Table 17.
   double zodiacal_scale = 1.0;
+  // Integrated starlight (the stars too faint to draw, and the diffuse galactic light):
+  // `starlight_scale` times Leinert et al. 1998's Table 35 (Pioneer 10), less the catalogue stars
+  // drawn one by one (docs/night.md).
+  double starlight_scale = 1.0;
 
   bool operator==(const NightSkySettings&) const = default;
 };

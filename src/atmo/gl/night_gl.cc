@@ -23,13 +23,34 @@ layout(rgba32f, binding = 0) uniform image2D frame;
 layout(std430, binding = 1) readonly buffer Airglow { vec4 airglow[]; };
 layout(std430, binding = 2) readonly buffer Transmitted { vec4 transmitted[]; };
 layout(std430, binding = 3) readonly buffer ZodiacalGrid { float zodiacal_grid[]; };
+layout(std430, binding = 4) readonly buffer StarlightGrid { float starlight_grid[]; };
 uniform CameraParameters camera;
 uniform vec3 ecliptic_pole;
 uniform vec3 sun_direction;
 uniform bool zodiacal;
+uniform float zodiacal_scale;
+uniform bool starlight;
 const int kAngles = 4097;
 const int kSinBeta = 129;
 const int kCosElongation = 513;
+const int kStarlightMu = 65;
+const int kStarlightAzimuth = 129;
+const float kTwoPi = 6.283185307179586;
+
+// NightSky's local starlight grid along v, bilinearly (StarlightGridValue).
+float StarlightValue(vec3 v) {
+  float x = (clamp(v.z, -1.0, 1.0) + 1.0) * (0.5 * float(kStarlightMu - 1));
+  float azimuth = atan(v.x, v.y);
+  if (azimuth < 0.0) azimuth += kTwoPi;
+  float y = azimuth / kTwoPi * float(kStarlightAzimuth - 1);
+  int j = min(int(x), kStarlightMu - 2);
+  int i = min(int(y), kStarlightAzimuth - 2);
+  float fx = x - float(j);
+  float fy = y - float(i);
+  int at = j * kStarlightAzimuth + i;
+  return (1.0 - fx) * ((1.0 - fy) * starlight_grid[at] + fy * starlight_grid[at + 1]) +
+         fx * ((1.0 - fy) * starlight_grid[at + kStarlightAzimuth] + fy * starlight_grid[at + kStarlightAzimuth + 1]);
+}
 
 // NightSky's zodiacal grid at |sin(beta)| and cos(elongation), bilinearly.
 float ZodiacalValue(float abs_sin_beta, float cos_elongation) {
@@ -53,7 +74,8 @@ void main() {
   float x = (clamp(v.z, -1.0, 1.0) + 1.0) * (0.5 * float(kAngles - 1));
   int a = min(int(x), kAngles - 2);
   float f = x - float(a);
-  float z = zodiacal ? ZodiacalValue(abs(dot(ecliptic_pole, v)), dot(sun_direction, v)) : 0.0;
+  float z = zodiacal ? zodiacal_scale * ZodiacalValue(abs(dot(ecliptic_pole, v)), dot(sun_direction, v)) : 0.0;
+  if (starlight) z += StarlightValue(v);
   vec3 add = (1.0 - f) * (airglow[a].rgb + z * transmitted[a].rgb) + f * (airglow[a + 1].rgb + z * transmitted[a + 1].rgb);
   vec4 value = imageLoad(frame, pixel);
   imageStore(frame, pixel, vec4(value.rgb + add, value.a));
@@ -201,6 +223,7 @@ void NightSkyGl::Release() {
   batches_.clear();
   DeleteBuffer(star_directions_);
   DeleteBuffer(star_places_);
+  DeleteBuffer(starlight_grid_);
   star_count_ = 0;
   glow_ = false;
 }
@@ -214,6 +237,10 @@ void NightSkyGl::Set(const NightSky::Folded& folded) {
   const std::size_t batches = (static_cast<std::size_t>(outputs) + 2) / 3;
   glow_ = night->glow() && !folded.airglow().empty();
   zodiacal_ = night->zodiacal();
+  zodiacal_scale_ = night->zodiacal_relative();
+  if (glow_ && night->starlight()) {
+    starlight_grid_ = MakeBuffer(night->starlight_grid().data(), night->starlight_grid().size() * sizeof(float));
+  }
   ecliptic_pole_ = night->ecliptic_pole();
   sun_direction_ = night->sun_direction();
   std::vector<glm::dvec3> directions;
@@ -264,7 +291,10 @@ void NightSkyGl::Add(const shared::CameraParameters& camera, std::span<const Gpu
     program.SetVec3("ecliptic_pole", ecliptic_pole_);
     program.SetVec3("sun_direction", sun_direction_);
     program.SetInt("zodiacal", zodiacal_ ? 1 : 0);
+    program.SetFloat("zodiacal_scale", zodiacal_scale_);
+    program.SetInt("starlight", starlight_grid_ != 0 ? 1 : 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, zodiacal_grid_);
+    if (starlight_grid_ != 0) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, starlight_grid_);
     for (std::size_t b = 0; b < frames.size(); ++b) {
       glBindImageTexture(0, frames[b]->id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, batches_[b].airglow);

@@ -2,9 +2,10 @@
 // (include/atmo/render.h) do on the host after a read-back, for frames that stay on the GPU
 // (atmo-viewer's). The sums are the host's, in float:
 //   the glow  one compute pass per frame texture: at each pixel the view's per-angle tables (the
-//             attenuated airglow and the transmittance times the zodiacal light) read as
-//             NightSky::Folded::Add reads them, with the zodiacal grid (NightSky::ZodiacalGrid)
-//             at the view's ecliptic latitude and elongation; added in place (alpha kept);
+//             attenuated airglow and the transmittance) read as NightSky::Folded::Add reads them,
+//             with the light from outside the atmosphere: the zodiacal grid
+//             (NightSky::ZodiacalGrid) at the view's ecliptic latitude and elongation and the
+//             integrated starlight's local grid (NightSky::starlight_grid); added in place (alpha kept);
 //   the stars each star of NightSky::Folded::Stars drawn as four points, one per pixel of the
 //             2 x 2 whose centres surround its direction, each carrying its bilinear share over
 //             the pixel's solid angle (the shares of pixels outside the image or outside a
@@ -85,6 +86,8 @@ class NightSkyGl {
   unsigned framebuffer_ = 0;
   bool glow_ = false;
   bool zodiacal_ = false;
+  double zodiacal_scale_ = 0.0;   // NightSky::zodiacal_relative
+  unsigned starlight_grid_ = 0;   // NightSky::starlight_grid, or 0 without the starlight
   std::size_t star_count_ = 0;
   shared::vec3 ecliptic_pole_{1.0, 0.0, 0.0};
   shared::vec3 sun_direction_{0.0, 0.0, 1.0};

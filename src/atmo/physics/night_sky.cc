@@ -16,6 +16,7 @@
 #include "atmo/gas_absorption.h"
 #include "atmo/spectrum.h"
 #include "physics/data/airglow_table.h"
+#include "physics/data/starlight_table.h"
 #include "physics/data/zodiacal_light_table.h"
 #include "physics/shared_parameters.h"
 #include "shared/shared.h"
@@ -188,6 +189,84 @@ const ZodiacalDotGrid& ZodiacalDots() {
   return grid;
 }
 
+// J2000 equatorial to galactic coordinates (galactic = M equatorial): the north galactic pole at
+// right ascension 192.85948, declination +27.12825 degrees and the galactic centre (l = b = 0) at
+// 266.40510, -28.93617 (the Hipparcos catalogue's definition, ESA 1997, vol. 1, section 1.5.3).
+glm::dmat3 EquatorialToGalactic() {
+  const auto direction = [](double ra_deg, double dec_deg) {
+    const double ra = ra_deg * kPi / 180.0, dec = dec_deg * kPi / 180.0;
+    return glm::dvec3(std::cos(dec) * std::cos(ra), std::cos(dec) * std::sin(ra), std::sin(dec));
+  };
+  const glm::dvec3 z = direction(192.85948, 27.12825);
+  glm::dvec3 x = direction(266.40510, -28.93617);
+  x = glm::normalize(x - glm::dot(x, z) * z);
+  const glm::dvec3 y = glm::cross(z, x);
+  return glm::transpose(glm::dmat3(x, y, z));  // rows x, y, z
+}
+
+// Table 35 with its unmapped cells (-1) filled by linear interpolation along their latitude
+// between the nearest mapped cells on either side.
+struct StarlightNodes {
+  std::array<std::array<double, data::kStarlightLongitudes>, data::kStarlightLatitudes> s10{};
+  StarlightNodes() {
+    constexpr int n = data::kStarlightLongitudes;
+    for (int k = 0; k < data::kStarlightLatitudes; ++k) {
+      for (int i = 0; i < n; ++i) {
+        const double value = data::kStarlightS10Sun[k][i];
+        if (value >= 0.0) {
+          s10[k][i] = value;
+          continue;
+        }
+        int left = 1, right = 1;
+        while (data::kStarlightS10Sun[k][(i - left + n) % n] < 0.0) ++left;
+        while (data::kStarlightS10Sun[k][(i + right) % n] < 0.0) ++right;
+        const double a = data::kStarlightS10Sun[k][(i - left + n) % n];
+        const double b = data::kStarlightS10Sun[k][(i + right) % n];
+        s10[k][i] = a + (b - a) * left / static_cast<double>(left + right);
+      }
+    }
+  }
+};
+
+const StarlightNodes& Starlight() {
+  static const StarlightNodes nodes;
+  return nodes;
+}
+
+// Bilinear in galactic longitude (periodic, 10 degree steps) and latitude (the table's nodes; held
+// beyond +-80 degrees) of a node table.
+template <typename Nodes>
+double GalacticBilinear(const Nodes& nodes, double longitude_deg, double latitude_deg) {
+  constexpr int n = data::kStarlightLongitudes;
+  const double l = longitude_deg - 360.0 * std::floor(longitude_deg / 360.0);
+  const int i = std::min(static_cast<int>(l / 10.0), n - 1);
+  const double fl = l / 10.0 - i;
+  const double* lat = data::kStarlightLatitudeDeg;
+  const double b = std::clamp(latitude_deg, lat[0], lat[data::kStarlightLatitudes - 1]);
+  int k = 0;
+  while (k < data::kStarlightLatitudes - 2 && b > lat[k + 1]) ++k;
+  const double fb = (b - lat[k]) / (lat[k + 1] - lat[k]);
+  const auto at = [&](int kk, int ii) { return nodes[kk][ii % n]; };
+  return (1 - fb) * ((1 - fl) * at(k, i) + fl * at(k, i + 1)) + fb * ((1 - fl) * at(k + 1, i) + fl * at(k + 1, i + 1));
+}
+
+// The local starlight grid (NightSky::starlight_grid) along `view`, bilinearly: the lookup of
+// StarlightValue and of the renderers' per-pixel pass.
+float StarlightGridValue(const float* grid, const glm::dvec3& view) {
+  constexpr int kMu = NightSky::kStarlightMu;
+  constexpr int kAzimuth = NightSky::kStarlightAzimuth;
+  const double x = (std::clamp(view.z, -1.0, 1.0) + 1.0) * (0.5 * (kMu - 1));
+  double azimuth = std::atan2(view.x, view.y);
+  if (azimuth < 0.0) azimuth += 2.0 * kPi;
+  const double y = azimuth / (2.0 * kPi) * (kAzimuth - 1);
+  const int j = std::min(static_cast<int>(x), kMu - 2);
+  const int i = std::min(static_cast<int>(y), kAzimuth - 2);
+  const float fx = static_cast<float>(x - j);
+  const float fy = static_cast<float>(y - i);
+  const float* row = grid + static_cast<std::size_t>(j) * kAzimuth + i;
+  return (1.0f - fx) * ((1.0f - fy) * row[0] + fy * row[1]) + fx * ((1.0f - fy) * row[kAzimuth] + fy * row[kAzimuth + 1]);
+}
+
 bool IsUnit(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::abs(glm::length(v) - 1.0) < 1e-6;
 }
@@ -241,6 +320,10 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
   // Table 17's unit (1e-8 W m^-2 sr^-1 um^-1 = 1e-11 W m^-2 sr^-1 nm^-1) over the solar spectral
   // irradiance at 500 nm: a solar-spectrum radiance per unit solar irradiance.
   zodiacal_relative_ = glow_ ? settings.zodiacal_scale * 1e-11 / SolarSpectralIrradiance(500.0) : 0.0;
+  // 1 S10(sun) is 6.61e-12 of the solar irradiance per steradian (Leinert et al. 1998, section 2):
+  // a solar-coloured radiance, the same relative value in every channel.
+  starlight_relative_ = glow_ ? settings.starlight_scale * 6.61e-12 : 0.0;
+  frame_ = CelestialFrame::FromSun(sun_direction);
 
   const std::size_t n = channel_count_;
   const std::size_t batches = ChannelBatchCount(n);
@@ -299,18 +382,94 @@ NightSky::NightSky(const AtmosphereParameters& parameters, double altitude_m, co
       }
     }
   });
+  BuildStarlight();
+}
+
+void NightSky::SetFrame(const CelestialFrame& frame) {
+  frame_ = frame;
+  if (!active_) return;
+  ecliptic_pole_ = glm::normalize(frame.EclipticPole() - glm::dot(frame.EclipticPole(), sun_direction_) * sun_direction_);
+  BuildStarlight();
 }
 
 void NightSky::SetStars(const StarCatalogue& catalogue, const CelestialFrame& frame) {
   frame_ = frame;
   if (!active_) return;
   stars_ = &catalogue;
-  ecliptic_pole_ = glm::normalize(frame.EclipticPole() - glm::dot(frame.EclipticPole(), sun_direction_) * sun_direction_);
   const std::size_t n = channel_count_;
   star_irradiance_.assign(catalogue.stars().size() * n, 0.0);
   for (std::size_t i = 0; i < catalogue.stars().size(); ++i) {
     StarRelativeIrradiance(catalogue.stars()[i], wavelengths_nm_, std::span<double>(&star_irradiance_[i * n], n));
   }
+  SetFrame(frame);
+}
+
+double NightSky::StarlightS10(double longitude_deg, double latitude_deg) {
+  return GalacticBilinear(Starlight().s10, longitude_deg, latitude_deg);
+}
+
+// Table 35 less the catalogue's stars that it holds and SetStars draws (fainter than V 6.5, the
+// Pioneer catalogue's limit): each such star's S10 (10^(-0.4 (V - 10)) per square degree) over the
+// cell of its nearest node (10 degrees of longitude, latitude half-way to the next nodes), at least
+// 0; then resampled on the local frame through frame_.
+void NightSky::BuildStarlight() {
+  starlight_grid_.clear();
+  if (!active_ || !(starlight_relative_ > 0.0)) return;
+  constexpr int kLat = data::kStarlightLatitudes;
+  constexpr int kLon = data::kStarlightLongitudes;
+  static const glm::dmat3 to_galactic = EquatorialToGalactic();
+  std::array<std::array<double, kLon>, kLat> nodes = Starlight().s10;
+  if (stars_ != nullptr) {
+    const double* lat = data::kStarlightLatitudeDeg;
+    std::array<std::array<double, kLon>, kLat> drawn{};
+    for (const Star& star : stars_->stars()) {
+      if (!(star.v_mag > 6.5)) continue;
+      const glm::dvec3 g = to_galactic * star.direction;
+      double l = std::atan2(g.y, g.x) * 180.0 / kPi;
+      if (l < 0.0) l += 360.0;
+      const double b = std::asin(std::clamp(g.z, -1.0, 1.0)) * 180.0 / kPi;
+      const int i = static_cast<int>(std::lround(l / 10.0)) % kLon;
+      int k = 0;
+      for (int kk = 1; kk < kLat; ++kk) {
+        if (std::abs(lat[kk] - b) < std::abs(lat[k] - b)) k = kk;
+      }
+      drawn[k][i] += std::pow(10.0, -0.4 * (star.v_mag - 10.0));
+    }
+    for (int k = 0; k < kLat; ++k) {
+      const double low = k == 0 ? -90.0 : 0.5 * (lat[k - 1] + lat[k]);
+      const double high = k == kLat - 1 ? 90.0 : 0.5 * (lat[k] + lat[k + 1]);
+      const double square_degrees =
+          (10.0 * kPi / 180.0) * (std::sin(high * kPi / 180.0) - std::sin(low * kPi / 180.0)) * (180.0 / kPi) * (180.0 / kPi);
+      for (int i = 0; i < kLon; ++i) nodes[k][i] = std::max(0.0, nodes[k][i] - drawn[k][i] / square_degrees);
+    }
+  }
+  const glm::dmat3 local_to_galactic = to_galactic * glm::transpose(frame_.equatorial_to_local());
+  starlight_grid_.assign(static_cast<std::size_t>(kStarlightMu) * kStarlightAzimuth, 0.0f);
+  for (int j = 0; j < kStarlightMu; ++j) {
+    const double mu = std::clamp(-1.0 + 2.0 * j / (kStarlightMu - 1), -1.0, 1.0);
+    const double sine = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+    for (int i = 0; i < kStarlightAzimuth; ++i) {
+      const double azimuth = 2.0 * kPi * i / (kStarlightAzimuth - 1);
+      const glm::dvec3 g = local_to_galactic * glm::dvec3(sine * std::sin(azimuth), sine * std::cos(azimuth), mu);
+      const double l = std::atan2(g.y, g.x) * 180.0 / kPi;
+      const double b = std::asin(std::clamp(g.z, -1.0, 1.0)) * 180.0 / kPi;
+      starlight_grid_[static_cast<std::size_t>(j) * kStarlightAzimuth + i] =
+          static_cast<float>(starlight_relative_ * GalacticBilinear(nodes, l, b));
+    }
+  }
+}
+
+double NightSky::StarlightValue(const glm::dvec3& view) const {
+  if (starlight_grid_.empty()) return 0.0;
+  return StarlightGridValue(starlight_grid_.data(), view);
+}
+
+void NightSky::StarlightRadiance(const glm::dvec3& view, std::span<double> out) const {
+  std::fill(out.begin(), out.end(), 0.0);
+  const double value = StarlightValue(view);
+  if (!(value > 0.0)) return;
+  Transmittance(view.z, out);
+  for (double& o : out) o *= value;
 }
 
 void NightSky::Transmittance(double mu, std::span<double> out) const {
@@ -365,10 +524,11 @@ void NightSky::ZodiacalRadiance(const glm::dvec3& view, std::span<double> out) c
 }
 
 void NightSky::Radiance(const glm::dvec3& view, std::span<double> out) const {
-  std::vector<double> zodiacal(channel_count_);
+  std::vector<double> zodiacal(channel_count_), starlight(channel_count_);
   AirglowRadiance(view, out);
   ZodiacalRadiance(view, zodiacal);
-  for (std::size_t c = 0; c < channel_count_; ++c) out[c] += zodiacal[c];
+  StarlightRadiance(view, starlight);
+  for (std::size_t c = 0; c < channel_count_; ++c) out[c] += zodiacal[c] + starlight[c];
 }
 
 std::span<const float> NightSky::ZodiacalGrid() { return ZodiacalDots().value; }
@@ -422,7 +582,7 @@ NightSky::Folded NightSky::Fold(std::span<const glm::vec3> weights, int outputs)
         transmitted += weights[c][k] * transmittance_[a * n + c];
       }
       folded.airglow_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(airglow);
-      folded.transmitted_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(transmitted * zodiacal_relative_);
+      folded.transmitted_[static_cast<std::size_t>(a) * outputs + k] = static_cast<float>(transmitted);
     }
     if (outputs == 3) {
       ClipToGamut(&folded.airglow_[static_cast<std::size_t>(a) * 3]);
@@ -445,7 +605,7 @@ NightSky::Folded NightSky::Scaled(std::span<const double> scale) const {
   folded.transmitted_.assign(static_cast<std::size_t>(kAngles) * n, 0.0f);
   for (std::size_t i = 0; i < static_cast<std::size_t>(kAngles) * n; ++i) {
     folded.airglow_[i] = static_cast<float>(scale[i % n] * airglow_path_[i]);
-    folded.transmitted_[i] = static_cast<float>(scale[i % n] * transmittance_[i] * zodiacal_relative_);
+    folded.transmitted_[i] = static_cast<float>(scale[i % n] * transmittance_[i]);
   }
   return folded;
 }
@@ -457,7 +617,8 @@ namespace {
 template <int kFixed>
 void AddNightSkyPixels(std::span<const glm::dvec3> views, std::span<float> out, std::size_t outputs,
                        const float* airglow, const float* transmitted, const glm::dvec3& pole,
-                       const glm::dvec3& sun, const ZodiacalDotGrid* dots) {
+                       const glm::dvec3& sun, const ZodiacalDotGrid* dots, float zodiacal_scale,
+                       const float* starlight) {
   const std::size_t m = kFixed > 0 ? static_cast<std::size_t>(kFixed) : outputs;
   constexpr double kScale = 0.5 * (kAngles - 1);
   float* o = out.data();
@@ -467,9 +628,10 @@ void AddNightSkyPixels(std::span<const glm::dvec3> views, std::span<float> out, 
     const double x = (std::clamp(v.z, -1.0, 1.0) + 1.0) * kScale;
     const int a = std::min(static_cast<int>(x), kAngles - 2);
     const float f = static_cast<float>(x - a);
-    const float z = dots != nullptr ? dots->At(std::abs(pole.x * v.x + pole.y * v.y + pole.z * v.z),
-                                               sun.x * v.x + sun.y * v.y + sun.z * v.z)
-                                    : 0.0f;
+    float z = dots != nullptr ? zodiacal_scale * dots->At(std::abs(pole.x * v.x + pole.y * v.y + pole.z * v.z),
+                                                          sun.x * v.x + sun.y * v.y + sun.z * v.z)
+                              : 0.0f;
+    if (starlight != nullptr) z += StarlightGridValue(starlight, v);
     const float* a0 = airglow + a * m;
     const float* t0 = transmitted + a * m;
     for (std::size_t k = 0; k < m; ++k) {
@@ -484,12 +646,14 @@ void NightSky::Folded::Add(std::span<const glm::dvec3> views, std::span<float> o
   if (night_ == nullptr || !night_->active_ || !night_->glow_) return;
   const ZodiacalDotGrid* dots = night_->zodiacal_relative_ > 0.0 ? &ZodiacalDots() : nullptr;
   const std::size_t m = static_cast<std::size_t>(outputs_);
+  const float zodiacal_scale = static_cast<float>(night_->zodiacal_relative_);
+  const float* starlight = night_->starlight_grid_.empty() ? nullptr : night_->starlight_grid_.data();
   if (m == 3) {
     AddNightSkyPixels<3>(views, out, m, airglow_.data(), transmitted_.data(), night_->ecliptic_pole_,
-                         night_->sun_direction_, dots);
+                         night_->sun_direction_, dots, zodiacal_scale, starlight);
   } else {
     AddNightSkyPixels<0>(views, out, m, airglow_.data(), transmitted_.data(), night_->ecliptic_pole_,
-                         night_->sun_direction_, dots);
+                         night_->sun_direction_, dots, zodiacal_scale, starlight);
   }
 }
 

@@ -286,6 +286,7 @@ void Validate(const AtmosphereParameters& p) {
   const NightSkySettings& night = p.night_sky;
   CheckRange("night_sky.airglow_scale", night.airglow_scale, 0.0, 1e3, "");
   CheckRange("night_sky.zodiacal_scale", night.zodiacal_scale, 0.0, 1e3, "");
+  CheckRange("night_sky.starlight_scale", night.starlight_scale, 0.0, 1e3, "");
   CheckRange("night_sky.airglow_thickness_m", night.airglow_thickness_m, 1.0, 1e6, "m");
   CheckRange("night_sky.airglow_altitude_m", night.airglow_altitude_m, 0.0, kMaxLength_m, "m");
   if (!(night.airglow_altitude_m - 0.5 * night.airglow_thickness_m >= 0.0)) {

@@ -262,6 +262,7 @@ std::string ToJson(const AtmosphereParameters& p) {
     night["airglow_altitude_m"] = p.night_sky.airglow_altitude_m;
     night["airglow_thickness_m"] = p.night_sky.airglow_thickness_m;
     night["zodiacal_scale"] = p.night_sky.zodiacal_scale;
+    night["starlight_scale"] = p.night_sky.starlight_scale;
     j["night_sky"] = night;
   }
   return j.dump(2) + "\n";
@@ -338,7 +339,8 @@ AtmosphereParameters FromJson(std::string_view json_text) {
   if (const auto it = root.find("night_sky"); it != root.end()) {
     CheckObject(*it, "night_sky");
     CheckKeys(*it, "night_sky",
-              {"enabled", "airglow_scale", "airglow_altitude_m", "airglow_thickness_m", "zodiacal_scale"});
+              {"enabled", "airglow_scale", "airglow_altitude_m", "airglow_thickness_m", "zodiacal_scale",
+               "starlight_scale"});
     if (const auto enabled = it->find("enabled"); enabled != it->end()) {
       if (!enabled->is_boolean()) Fail("night_sky.enabled must be true or false");
       p.night_sky.enabled = enabled->get<bool>();
@@ -347,6 +349,7 @@ AtmosphereParameters FromJson(std::string_view json_text) {
     ReadNumber(*it, "night_sky", "airglow_altitude_m", p.night_sky.airglow_altitude_m);
     ReadNumber(*it, "night_sky", "airglow_thickness_m", p.night_sky.airglow_thickness_m);
     ReadNumber(*it, "night_sky", "zodiacal_scale", p.night_sky.zodiacal_scale);
+    ReadNumber(*it, "night_sky", "starlight_scale", p.night_sky.starlight_scale);
   }
   // "aerosol" replaces the Mie medium by an OPAC aerosol (docs/aerosols.md), after the other keys.
   if (const auto it = root.find("aerosol"); it != root.end()) ApplyAerosolRequest(p, ReadAerosol(*it));
