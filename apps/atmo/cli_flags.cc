@@ -274,7 +274,7 @@ void AddRenderFlags(CLI::App* app, RenderCommand& render, RenderFlags& flags) {
   app->add_flag("--no-ground", render.no_ground,
                        "leave the light reflected by the ground out (rays that meet it show only the air in front)");
   app->add_flag("--no-night-glow", render.no_night_glow,
-                "leave the night sky's own light out: airglow and zodiacal light (docs/night.md)");
+                "leave the night sky's own light out: airglow, zodiacal light, integrated starlight (docs/night.md)");
   CLI::Option* exr_flag =
       app->add_option("--exr", render.exr_path, "linear EXR output, F.exr (empty: none)")->capture_default_str();
   CLI::Option* png_flag = app->add_option("--png", render.png_path, "tone-mapped PNG output, F.png (empty: none)")

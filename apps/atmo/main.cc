@@ -184,7 +184,7 @@ int main(int argc, char** argv) {
       "--grid", sample.grid_path, "CSV with header altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg");
   sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
   sample_app->add_flag("--night-sky", sample.night_sky,
-                       "add the night sky's own light (airglow, zodiacal light; docs/night.md) to the radiance, as images show it");
+                       "add the night sky's own light (airglow, zodiacal light, integrated starlight; docs/night.md) to the radiance, as images show it");
   sample_app->add_option("--unit", sample.unit,
                          "relative (sr^-1 per unit solar irradiance), radiance (W m^-2 sr^-1 nm^-1) or luminance "
                          "(cd/m^2, one row per point)")
