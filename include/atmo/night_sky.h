@@ -120,12 +120,14 @@ class NightSky {
   // Table 35 at galactic longitude and latitude (degrees), in S10(sun), before the catalogue's stars
   // are taken out; the 28 unmapped cells interpolated along their latitude.
   static double StarlightS10(double longitude_deg, double latitude_deg);
-  // The starlight resampled on the local frame, for the renderers' per-pixel pass:
-  // kStarlightMu rows uniform in the view's zenith cosine over [-1, 1], each of kStarlightAzimuth
-  // values uniform in compass azimuth atan2(x, y) over [0, 2 pi) (the last column is the first
-  // again), relative radiance outside the atmosphere.
-  static constexpr int kStarlightMu = 65;
-  static constexpr int kStarlightAzimuth = 129;
+  // The starlight resampled on the local frame, for the renderers' per-pixel pass (no
+  // trigonometry per pixel): two kStarlightSide x kStarlightSide grids, the upper hemisphere
+  // (z >= 0) then the lower, each a hemi-octahedral map. A direction v maps to u = v.x / n,
+  // w = v.y / n with n = |v.x| + |v.y| + |v.z|, and to the grid coordinates s = u + w, t = u - w
+  // in [-1, 1] (column (s + 1) (side - 1) / 2, row (t + 1) (side - 1) / 2), read bilinearly; the
+  // two maps meet on the horizon. About 1.4 degrees per cell there; relative radiance outside the
+  // atmosphere.
+  static constexpr int kStarlightSide = 65;
   const std::vector<float>& starlight_grid() const { return starlight_grid_; }
   bool starlight() const { return !starlight_grid_.empty(); }
 
@@ -189,7 +191,7 @@ class NightSky {
   std::vector<double> airglow_zenith_;
   double zodiacal_relative_ = 0.0;  // per unit of Table 17: relative radiance (grey)
   double starlight_relative_ = 0.0;  // per S10(sun): relative radiance (grey); 0 without
-  std::vector<float> starlight_grid_;  // kStarlightMu x kStarlightAzimuth, relative radiance
+  std::vector<float> starlight_grid_;  // 2 x kStarlightSide^2 (StarlightValue), relative radiance
   void BuildStarlight();  // starlight_grid_ for frame_ and stars_
   // Per view zenith angle (kAngles samples, uniform in angle over [0, pi]) and channel.
   std::vector<double> airglow_path_;  // [angle][channel]: attenuated airglow, per unit zenith brightness

@@ -33,24 +33,7 @@ uniform bool starlight;
 const int kAngles = 4097;
 const int kSinBeta = 129;
 const int kCosElongation = 513;
-const int kStarlightMu = 65;
-const int kStarlightAzimuth = 129;
-const float kTwoPi = 6.283185307179586;
-
-// NightSky's local starlight grid along v, bilinearly (StarlightGridValue).
-float StarlightValue(vec3 v) {
-  float x = (clamp(v.z, -1.0, 1.0) + 1.0) * (0.5 * float(kStarlightMu - 1));
-  float azimuth = atan(v.x, v.y);
-  if (azimuth < 0.0) azimuth += kTwoPi;
-  float y = azimuth / kTwoPi * float(kStarlightAzimuth - 1);
-  int j = min(int(x), kStarlightMu - 2);
-  int i = min(int(y), kStarlightAzimuth - 2);
-  float fx = x - float(j);
-  float fy = y - float(i);
-  int at = j * kStarlightAzimuth + i;
-  return (1.0 - fx) * ((1.0 - fy) * starlight_grid[at] + fy * starlight_grid[at + 1]) +
-         fx * ((1.0 - fy) * starlight_grid[at + kStarlightAzimuth] + fy * starlight_grid[at + kStarlightAzimuth + 1]);
-}
+const int kStarlightSide = 65;
 
 // NightSky's zodiacal grid at |sin(beta)| and cos(elongation), bilinearly.
 float ZodiacalValue(float abs_sin_beta, float cos_elongation) {
@@ -63,6 +46,23 @@ float ZodiacalValue(float abs_sin_beta, float cos_elongation) {
   int at = i * kCosElongation + j;
   return (1.0 - fx) * ((1.0 - fy) * zodiacal_grid[at] + fy * zodiacal_grid[at + 1]) +
          fx * ((1.0 - fy) * zodiacal_grid[at + kCosElongation] + fy * zodiacal_grid[at + kCosElongation + 1]);
+}
+
+// NightSky's hemi-octahedral starlight grids along v, bilinearly (StarlightGridValue).
+float StarlightValue(vec3 v) {
+  float n = abs(v.x) + abs(v.y) + abs(v.z);
+  if (!(n > 0.0)) return 0.0;
+  float u = v.x / n;
+  float w = v.y / n;
+  float x = clamp(u + w + 1.0, 0.0, 2.0) * (0.5 * float(kStarlightSide - 1));
+  float y = clamp(u - w + 1.0, 0.0, 2.0) * (0.5 * float(kStarlightSide - 1));
+  int i = min(int(x), kStarlightSide - 2);
+  int j = min(int(y), kStarlightSide - 2);
+  float fx = x - float(i);
+  float fy = y - float(j);
+  int at = (v.z < 0.0 ? kStarlightSide * kStarlightSide : 0) + j * kStarlightSide + i;
+  return (1.0 - fy) * ((1.0 - fx) * starlight_grid[at] + fx * starlight_grid[at + 1]) +
+         fy * ((1.0 - fx) * starlight_grid[at + kStarlightSide] + fx * starlight_grid[at + kStarlightSide + 1]);
 }
 
 void main() {

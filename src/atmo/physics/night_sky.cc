@@ -253,18 +253,18 @@ double GalacticBilinear(const Nodes& nodes, double longitude_deg, double latitud
 // The local starlight grid (NightSky::starlight_grid) along `view`, bilinearly: the lookup of
 // StarlightValue and of the renderers' per-pixel pass.
 float StarlightGridValue(const float* grid, const glm::dvec3& view) {
-  constexpr int kMu = NightSky::kStarlightMu;
-  constexpr int kAzimuth = NightSky::kStarlightAzimuth;
-  const double x = (std::clamp(view.z, -1.0, 1.0) + 1.0) * (0.5 * (kMu - 1));
-  double azimuth = std::atan2(view.x, view.y);
-  if (azimuth < 0.0) azimuth += 2.0 * kPi;
-  const double y = azimuth / (2.0 * kPi) * (kAzimuth - 1);
-  const int j = std::min(static_cast<int>(x), kMu - 2);
-  const int i = std::min(static_cast<int>(y), kAzimuth - 2);
-  const float fx = static_cast<float>(x - j);
-  const float fy = static_cast<float>(y - i);
-  const float* row = grid + static_cast<std::size_t>(j) * kAzimuth + i;
-  return (1.0f - fx) * ((1.0f - fy) * row[0] + fy * row[1]) + fx * ((1.0f - fy) * row[kAzimuth] + fy * row[kAzimuth + 1]);
+  constexpr int kSide = NightSky::kStarlightSide;
+  const double n = std::abs(view.x) + std::abs(view.y) + std::abs(view.z);
+  if (!(n > 0.0)) return 0.0f;
+  const double u = view.x / n, w = view.y / n;
+  const double x = std::clamp(u + w + 1.0, 0.0, 2.0) * (0.5 * (kSide - 1));
+  const double y = std::clamp(u - w + 1.0, 0.0, 2.0) * (0.5 * (kSide - 1));
+  const int i = std::min(static_cast<int>(x), kSide - 2);
+  const int j = std::min(static_cast<int>(y), kSide - 2);
+  const float fx = static_cast<float>(x - i);
+  const float fy = static_cast<float>(y - j);
+  const float* row = grid + (view.z < 0.0 ? kSide * kSide : 0) + static_cast<std::size_t>(j) * kSide + i;
+  return (1.0f - fy) * ((1.0f - fx) * row[0] + fx * row[1]) + fy * ((1.0f - fx) * row[kSide] + fx * row[kSide + 1]);
 }
 
 bool IsUnit(const glm::dvec3& v) {
@@ -444,17 +444,22 @@ void NightSky::BuildStarlight() {
     }
   }
   const glm::dmat3 local_to_galactic = to_galactic * glm::transpose(frame_.equatorial_to_local());
-  starlight_grid_.assign(static_cast<std::size_t>(kStarlightMu) * kStarlightAzimuth, 0.0f);
-  for (int j = 0; j < kStarlightMu; ++j) {
-    const double mu = std::clamp(-1.0 + 2.0 * j / (kStarlightMu - 1), -1.0, 1.0);
-    const double sine = std::sqrt(std::max(0.0, 1.0 - mu * mu));
-    for (int i = 0; i < kStarlightAzimuth; ++i) {
-      const double azimuth = 2.0 * kPi * i / (kStarlightAzimuth - 1);
-      const glm::dvec3 g = local_to_galactic * glm::dvec3(sine * std::sin(azimuth), sine * std::cos(azimuth), mu);
-      const double l = std::atan2(g.y, g.x) * 180.0 / kPi;
-      const double b = std::asin(std::clamp(g.z, -1.0, 1.0)) * 180.0 / kPi;
-      starlight_grid_[static_cast<std::size_t>(j) * kStarlightAzimuth + i] =
-          static_cast<float>(starlight_relative_ * GalacticBilinear(nodes, l, b));
+  constexpr int kSide = kStarlightSide;
+  starlight_grid_.assign(2 * static_cast<std::size_t>(kSide) * kSide, 0.0f);
+  for (int hemisphere = 0; hemisphere < 2; ++hemisphere) {
+    for (int j = 0; j < kSide; ++j) {
+      for (int i = 0; i < kSide; ++i) {
+        // The cell's direction: s = u + w, t = u - w, |u| + |w| + |z| = 1.
+        const double s_coord = -1.0 + 2.0 * i / (kSide - 1);
+        const double t_coord = -1.0 + 2.0 * j / (kSide - 1);
+        const double u = 0.5 * (s_coord + t_coord), w = 0.5 * (s_coord - t_coord);
+        const double z = std::max(0.0, 1.0 - std::abs(u) - std::abs(w)) * (hemisphere == 0 ? 1.0 : -1.0);
+        const glm::dvec3 g = local_to_galactic * glm::normalize(glm::dvec3(u, w, z));
+        const double l = std::atan2(g.y, g.x) * 180.0 / kPi;
+        const double b = std::asin(std::clamp(g.z, -1.0, 1.0)) * 180.0 / kPi;
+        starlight_grid_[(static_cast<std::size_t>(hemisphere) * kSide + j) * kSide + i] =
+            static_cast<float>(starlight_relative_ * GalacticBilinear(nodes, l, b));
+      }
     }
   }
 }
