@@ -128,7 +128,7 @@ TEST_P(GlNightSky, MatchesTheHostPasses) {
   }
   // The glow, per pixel (pixels without stars): within 1e-5 of the glow's peak (float lookups of
   // the same tables; llvmpipe 2026-12-04: at most 1.9e-6). The stars: their light in total per
-  // channel within 2e-5 (measured 3.5e-6), and per pixel within 2 % of the brightest star pixel
+  // channel within 2e-5 (measured up to 7.6e-6), and per pixel within 2 % of the brightest star pixel
   // (measured 0.75 %: a star on a pixel boundary splits its shares a little differently in float).
   const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
   for (int k = 0; k < channels; ++k) {
@@ -145,8 +145,8 @@ TEST_P(GlNightSky, MatchesTheHostPasses) {
       star_peak = std::max(star_peak, star);
     }
     ASSERT_GT(glow_peak, 0.0) << "channel " << k;
-    double worst_glow = 0.0;
-    double worst_star = 0.0;
+    double glow_error = 0.0;
+    double star_error = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t at = i * channels + k;
       // The GPU's star light in this pixel: its total less the host's glow.
@@ -154,15 +154,15 @@ TEST_P(GlNightSky, MatchesTheHostPasses) {
       host_stars += stars_only.host.pixels[at];
       gpu_stars += gpu_star;
       if (stars_only.host.pixels[at] == 0.0f && std::abs(gpu_star) < 1e-3 * glow_peak) {
-        worst_glow = std::max(worst_glow, std::abs(gpu.pixels[at] - glow.host.pixels[at]) / glow_peak);
+        glow_error = std::max(glow_error, std::abs(gpu.pixels[at] - glow.host.pixels[at]) / glow_peak);
       }
-      if (star_peak > 0.0) worst_star = std::max(worst_star, std::abs(gpu_star - stars_only.host.pixels[at]) / star_peak);
+      if (star_peak > 0.0) star_error = std::max(star_error, std::abs(gpu_star - stars_only.host.pixels[at]) / star_peak);
     }
-    EXPECT_LT(worst_glow, 1e-5 * testing::SamplerSlack(context)) << c.preset << " channel " << k;
+    EXPECT_LT(glow_error, 1e-5 * testing::SamplerSlack(context)) << c.preset << " channel " << k;
     if (catalogue != nullptr) {
       ASSERT_GT(host_stars, 0.0);
       EXPECT_NEAR(gpu_stars / host_stars, 1.0, 2e-5 * testing::SamplerSlack(context)) << c.preset << " channel " << k;
-      EXPECT_LT(worst_star, 0.02) << c.preset << " channel " << k;
+      EXPECT_LT(star_error, 0.02) << c.preset << " channel " << k;
     }
   }
 }
