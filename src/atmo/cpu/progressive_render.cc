@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -135,14 +136,36 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
     }
   }
 
-  std::vector<double> sum(pixel_count * nc, 0.0);
-  std::vector<double> sum_sq(pixel_count * nc, 0.0);
-  std::vector<double> moon_sum(moon_sky != nullptr ? pixel_count * nc : 0, 0.0);
-  std::vector<double> moon_sum_sq(moon_sum.size(), 0.0);
-  std::vector<double> glow_sum(glow ? pixel_count * nc : 0, 0.0);
-  std::vector<double> glow_sum_sq(glow_sum.size(), 0.0);
-  const std::uint64_t lights = 1 + (moon_sky != nullptr ? 1 : 0) + (glow ? 1 : 0);  // the sun's, moon's, glow's paths
-  const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count) * lights;
+  // The lights traced per pixel, each with paths of its own: the sun, then the moon and the glow
+  // when there. Their means add, and so do their variances (independent paths).
+  struct TracedLight {
+    std::function<void(const glm::dvec3& view, std::uint64_t first, std::uint64_t count, cpu::PathTally& tally)> add;
+    std::vector<double> scale;  // per channel: the estimate's factor in the image
+    std::vector<double> sum, sum_sq;
+  };
+  std::vector<TracedLight> lights;
+  const bool ground = settings.terms.ground;
+  lights.push_back({[&](const glm::dvec3& v, std::uint64_t first, std::uint64_t count, cpu::PathTally& t) {
+                      sky.AddPaths(v, ground, first, count, t);
+                    },
+                    irradiance, {}, {}});
+  if (moon_sky != nullptr) {
+    lights.push_back({[&](const glm::dvec3& v, std::uint64_t first, std::uint64_t count, cpu::PathTally& t) {
+                        moon_sky->AddPaths(v, ground, kMoonPaths + first, count, t);
+                      },
+                      moon_scale, {}, {}});
+  }
+  if (glow) {
+    lights.push_back({[&](const glm::dvec3& v, std::uint64_t first, std::uint64_t count, cpu::PathTally& t) {
+                        sky.AddGlowPaths(v, ground, *glow, kGlowPaths + first, count, t);
+                      },
+                      irradiance, {}, {}});
+  }
+  for (TracedLight& light : lights) {
+    light.sum.assign(pixel_count * nc, 0.0);
+    light.sum_sq.assign(pixel_count * nc, 0.0);
+  }
+  const double paths_in_all = static_cast<double>(total) * static_cast<double>(pixel_count) * lights.size();
   std::atomic<std::uint64_t> rows_done{0};  // rows of all passes, times their path count
   std::mutex progress_mutex;
 
@@ -158,30 +181,17 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
         for (int x = 0; x < width; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * width + x;
           if (IsZero(views[i])) continue;
-          tally.Reset();
-          sky.AddPaths(views[i], settings.terms.ground, done, count, tally);
-          for (std::size_t c = 0; c < nc; ++c) {
-            sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
-            sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
-          }
-          if (moon_sky != nullptr) {
+          for (TracedLight& light : lights) {
             tally.Reset();
-            moon_sky->AddPaths(views[i], settings.terms.ground, kMoonPaths + done, count, tally);
+            light.add(views[i], done, count, tally);
             for (std::size_t c = 0; c < nc; ++c) {
-              moon_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
-              moon_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
-            }
-          }
-          if (glow) {
-            tally.Reset();
-            sky.AddGlowPaths(views[i], settings.terms.ground, *glow, kGlowPaths + done, count, tally);
-            for (std::size_t c = 0; c < nc; ++c) {
-              glow_sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
-              glow_sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
+              light.sum[nc * i + c] += tally.sum[c * cpu::kTallySlots];
+              light.sum_sq[nc * i + c] += tally.sum_sq[c * cpu::kTallySlots];
             }
           }
         }
-        const std::uint64_t paths_done = rows_done.fetch_add(lights * count) + lights * count;
+        const std::uint64_t paths = lights.size() * count;
+        const std::uint64_t paths_done = rows_done.fetch_add(paths) + paths;
         if (progressive.on_progress && progress_mutex.try_lock()) {
           progressive.on_progress(static_cast<double>(paths_done) * width, paths_in_all);
           progress_mutex.unlock();
@@ -202,21 +212,13 @@ ProgressiveImage RenderProgressive(const Model& model, const RenderSettings& set
     const double n = static_cast<double>(done);
     for (std::size_t i = 0; i < pixel_count; ++i) {
       for (std::size_t c = 0; c < nc; ++c) {
-        const double mean = sum[nc * i + c] / n;
-        const double variance = std::max(0.0, (sum_sq[nc * i + c] - n * mean * mean) / (n - 1.0));
-        double radiance = mean * irradiance[c];
-        double error_sq = variance / n * irradiance[c] * irradiance[c];
-        if (moon_sky != nullptr) {
-          const double moon_mean = moon_sum[nc * i + c] / n;
-          const double moon_variance = std::max(0.0, (moon_sum_sq[nc * i + c] - n * moon_mean * moon_mean) / (n - 1.0));
-          radiance += moon_mean * moon_scale[c];
-          error_sq += moon_variance / n * moon_scale[c] * moon_scale[c];
-        }
-        if (glow) {
-          const double glow_mean = glow_sum[nc * i + c] / n;
-          const double glow_variance = std::max(0.0, (glow_sum_sq[nc * i + c] - n * glow_mean * glow_mean) / (n - 1.0));
-          radiance += glow_mean * irradiance[c];
-          error_sq += glow_variance / n * irradiance[c] * irradiance[c];
+        double radiance = 0.0;
+        double error_sq = 0.0;
+        for (const TracedLight& light : lights) {
+          const double mean = light.sum[nc * i + c] / n;
+          const double variance = std::max(0.0, (light.sum_sq[nc * i + c] - n * mean * mean) / (n - 1.0));
+          radiance += mean * light.scale[c];
+          error_sq += variance / n * light.scale[c] * light.scale[c];
         }
         result.radiance.pixels[nc * i + c] = static_cast<float>(radiance + disc.pixels[nc * i + c]);
         result.standard_error.pixels[nc * i + c] = static_cast<float>(std::sqrt(error_sq));
