@@ -711,6 +711,7 @@ class Viewer {
   // night sky; its moonlit frames; its disc integrated over the pixels on the host (the patch
   // of the frame that holds it, from moon_disc_origin_), for the camera and moon of moon_disc_key_.
   std::optional<Moon> moon_;
+  MoonPosition moon_place_;  // of moon_: its elevation and azimuth, the "sun" of its moonlit frames
   std::vector<gl::GpuTexture> moon_frames_;
   Image moon_disc_;
   shared::ivec2 moon_disc_origin_{0, 0};
@@ -963,9 +964,8 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
       // moon's direction without the disc, times the moon's irradiance, then the moon's disc.
       SetViewToMoon(*sky_);
       RenderSettings lit = plan.settings;
-      const glm::dvec3& d = moon_->direction();
-      lit.sun_elevation_deg = glm::degrees(std::asin(std::clamp(d.z, -1.0, 1.0)));
-      lit.sun_azimuth_deg = glm::degrees(std::atan2(d.x, d.y));
+      lit.sun_elevation_deg = moon_place_.elevation_deg;
+      lit.sun_azimuth_deg = moon_place_.azimuth_deg;
       lit.terms.sun_disc = false;
       const Image moonlit = sky_->Screenshot(lit, nullptr, nullptr);
       sky_->SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, pass_timings_);
@@ -1247,6 +1247,7 @@ void Viewer::UpdateNight() {
   if (const std::optional<MoonPosition> place =
           cli::ResolveMoon(options_.render.moon, place_sun, state_.sun_azimuth_deg,
                            dated ? std::optional<double>(dated->julian_day_utc) : std::nullopt)) {
+    moon_place_ = *place;
     moon_.emplace(SunDirection(place->elevation_deg, place->azimuth_deg), place->phase_angle_deg, place->distance_km,
                   current_.wavelengths_nm, sun);
   }
@@ -1262,9 +1263,7 @@ void Viewer::UpdateNight() {
 }
 
 void Viewer::SetViewToMoon(Sky& sky) {
-  const glm::dvec3& d = moon_->direction();
-  sky.SetView(state_.altitude_m, glm::degrees(std::asin(std::clamp(d.z, -1.0, 1.0))), glm::degrees(std::atan2(d.x, d.y)),
-              state_.ground, pass_timings_);
+  sky.SetView(state_.altitude_m, moon_place_.elevation_deg, moon_place_.azimuth_deg, state_.ground, pass_timings_);
 }
 
 void Viewer::RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms) {
