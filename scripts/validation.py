@@ -12,8 +12,8 @@ and this script knows, for every ID, the `atmo` commands that produce it and the
 it compares with (docs/data/validation/*.csv, each with its citation). Everything else on the page
 is left alone. Only the Python standard library is used.
 
-    scripts/validation.py                  # every table: about 5 minutes on 2 cores (measured:
-                                           # 145 s for validation.md's tables, 148 s for
+    scripts/validation.py                  # every table: about 6 minutes on 2 cores (measured:
+                                           # 145 + 73 s (moon) for validation.md's tables, 148 s for
                                            # real-sky-solvers, which goes to docs/accuracy.md)
     scripts/validation.py --only illuminance twilight
     scripts/validation.py --list
@@ -173,6 +173,104 @@ def night_table(atmo):
                      "%.2f" % (z85 / zenith)])
     return table(["preset", "zenith (cd/m²)", "≈ V (mag/″²)", "in 21.4–22.3", "60° from zenith ÷ zenith",
                   "80° ÷ zenith", "85° ÷ zenith"], rows)
+
+
+# The moon: its light on the ground (full moon 60 degrees up: 0.17-0.33 lx from Janiczek and DeYoung
+# 1987 at the zenith and Krisciunas and Schaefer 1991 outside the air; a quarter moon 0.06-0.13 of
+# the full one), with the sun 30 degrees down.
+def moon_table(atmo):
+    rows = []
+    for preset in ["us-standard", "earth-spectral"]:
+        def lux(phase):
+            r = atmo.csv(["illuminance", "--model", atmo.model, "--preset", preset, "--sun-elevation", "-30",
+                          "--moon-elevation", "60", "--moon-phase", "%g" % phase])[0]
+            return float(r["moon_direct_horizontal_lux"]), float(r["moon_diffuse_horizontal_lux"])
+        direct, diffuse = lux(0)
+        q_direct, q_diffuse = lux(90)
+        full, quarter = direct + diffuse, (q_direct + q_diffuse) / (direct + diffuse)
+        rows.append([preset, "%.3f" % direct, "%.3f" % diffuse, "**%.3f**" % full,
+                     "yes" if 0.17 <= full <= 0.33 else "no", "**%.3f**" % quarter,
+                     "yes" if 0.06 <= quarter <= 0.13 else "no"])
+    return table(["preset", "full moon 60° up: direct (lx)", "diffuse (lx)", "total (lx)", "in 0.17–0.33",
+                  "quarter ÷ full", "in 0.06–0.13"], rows)
+
+
+def krisciunas_schaefer(zm, z, rho, alpha, k):
+    """Krisciunas and Schaefer 1991 (PASP 103, 1033), eqs. 1, 3, 8, 9, 15 and 21: the V-band brightness
+    of the moonlit sky in cd/m^2 (angles in degrees, k in mag per air mass)."""
+    airmass = lambda zenith: 1.0 / math.sqrt(1.0 - 0.96 * math.sin(math.radians(zenith)) ** 2)
+    v_moon = -12.73 + 0.026 * abs(alpha) + 4e-9 * alpha ** 4
+    illuminance = 10 ** (-0.4 * (v_moon + 16.57))
+    c = math.cos(math.radians(rho))
+    f = 10 ** 5.36 * (1.06 + c * c) + 10 ** (6.15 - rho / 40.0)
+    nanolambert = f * illuminance * 10 ** (-0.4 * k * airmass(zm)) * (1 - 10 ** (-0.4 * k * airmass(z)))
+    return nanolambert * 1e-9 * 1e4 / math.pi
+
+
+KS_SITE_M = 2800.0  # K&S's data: the 2800 m level of Mauna Kea, k = 0.172 mag per air mass in V
+KS_K = 0.172
+
+
+def moonlit_table(atmo):
+    """us-standard with its aerosol scaled until the model's k at 2800 m is K&S's 0.172."""
+    base = json.loads(atmo.run(["presets", "--dump", "us-standard"]))
+
+    def config(scale):
+        p = json.loads(json.dumps(base))
+        for key in ("scattering_per_m", "absorption_per_m"):
+            p["mie"][key] = [scale * x for x in p["mie"][key]]
+        path = os.path.join(CONFIGS["folder"], "moonlit%g.json" % scale)
+        with open(path, "w") as f:
+            json.dump(p, f)
+        return path
+
+    def extinction(path):
+        r = atmo.csv(["sample", "--model", "hillaire", "--config", path, "--unit", "luminance", "--altitude",
+                      "%g" % KS_SITE_M, "--sun-zenith", "0", "--view-zenith", "0", "--azimuth", "0"])[0]
+        return -2.5 * math.log10(float(r["luminous_transmittance"]))
+
+    k1, k2 = extinction(config(1.0)), extinction(config(2.0))
+    scale = 1.0 + (KS_K - k1) / (k2 - k1)
+    path = config(round(scale, 3))
+    k = extinction(path)
+    targets = [(e, a) for e in range(15, 90, 15) for a in range(0, 360, 30)] + [(90, 0)]
+    bands = [(10, 25), (25, 40), (40, 70), (70, 110), (110, 181)]
+    ratios = {b: [] for b in bands}
+    everything, clear = [], []
+    for moon_elevation in (15, 30, 45, 60, 75):
+        moon = (math.radians(90 - moon_elevation), math.radians(180))
+        points = []
+        for e, a in targets:
+            z, az = math.radians(90 - e), math.radians(a)
+            cos_rho = (math.cos(z) * math.cos(moon[0]) +
+                       math.sin(z) * math.sin(moon[0]) * math.cos(az - moon[1]))
+            rho = math.degrees(math.acos(max(-1.0, min(1.0, cos_rho))))
+            if rho >= 10:
+                points.append((e, rho, (KS_SITE_M, 130.0, 90.0 - e, a)))
+        for alpha in (0, 40, 90):
+            values = atmo.luminance_grid(["--config", path], [p[2] for p in points],
+                                         ["--moon-elevation", "%g" % moon_elevation, "--moon-phase", "%g" % alpha])
+            for (e, rho, _), value in zip(points, values):
+                ratio = value / krisciunas_schaefer(90 - moon_elevation, 90 - e, rho, alpha, k)
+                everything.append(ratio)
+                if e >= 30 and rho >= 20:
+                    clear.append(ratio)
+                for b in bands:
+                    if b[0] <= rho < b[1]:
+                        ratios[b].append(ratio)
+
+    def row(name, values):
+        v = sorted(values)
+        n = len(v)
+        within = sum(1 for x in v if abs(x - 1) <= 0.23) / n
+        return [name, str(n), "**%.2f**" % v[n // 2], "%.2f–%.2f" % (v[n // 20], v[(19 * n) // 20]),
+                "%.2f–%.2f" % (v[0], v[-1]), "**%.0f %%**" % (100 * within)]
+    rows = [row("ρ %d–%d°" % (b[0], min(b[1], 180)), ratios[b]) for b in bands]
+    rows.append(row("all", everything))
+    rows.append(row("30° or more up, 20° or more from the moon", clear))
+    caption = ("k at %g m: %.3f mag per air mass (aerosol × %.3g); model `%s`\n\n" %
+               (KS_SITE_M, k, round(scale, 3), atmo.model))
+    return caption + table(["targets", "positions", "median atmo ÷ K&S", "p5–p95", "range", "within 23 %"], rows)
 
 
 def cie_relative(a, b, c, d, e, sun_zenith, zenith, azimuth):
@@ -424,6 +522,8 @@ TABLES = {
     "illuminance-effects": illuminance_effects_table,
     "twilight": twilight_table,
     "night": night_table,
+    "moon": moon_table,
+    "moonlit": moonlit_table,
     "cie": cie_table,
     "cie-effects": cie_effects_table,
     "cie-ring": cie_ring_table,
@@ -455,6 +555,7 @@ def write_configs(folder, atmo):
         with open(path, "w") as f:
             json.dump(p, f)
         CONFIGS[name] = path
+    CONFIGS["folder"] = folder
 
 
 def replace_table(text, table_id, body):

@@ -376,6 +376,50 @@ double KrisciunasSchaefer(double zm, double z, double rho, double alpha, double 
   return nanolambert * 1e-9 * 1e4 / kPi;  // 1 L = 1e4 / pi cd/m^2
 }
 
+// K&S's extinction coefficient k as the model gives it: -2.5 log10 of the zenith transmittance
+// from altitude_m, weighted by the luminous efficiency, in magnitudes per air mass.
+double VExtinction(const Model& model, double altitude_m) {
+  const AtmosphereParameters& p = model.parameters();
+  const SpectralConversion convert(p.wavelengths_nm);
+  std::vector<double> zenith_t(p.channel_count());
+  model.View(altitude_m, glm::dvec3(0, 0, 1))->Transmittance(glm::dvec3(0, 0, 1), zenith_t);
+  double w = 0.0, t = 0.0;
+  for (std::size_t c = 0; c < p.channel_count(); ++c) {
+    w += convert.xyz_weights()[c].y;
+    t += convert.xyz_weights()[c].y * zenith_t[c];
+  }
+  return -2.5 * std::log10(t / w);
+}
+
+// The moonlit sky's luminance over K&S's for one moon, at each target that is rho_min degrees or
+// more from it (targets every 15 degrees of elevation from 15 to 90, every 30 of azimuth).
+struct MoonlitTarget {
+  double elevation, rho, ratio;
+};
+std::vector<MoonlitTarget> MoonlitAgainstKrisciunasSchaefer(const Model& model, double altitude_m, double k,
+                                                            double moon_elevation, double alpha, double rho_min) {
+  const AtmosphereParameters& p = model.parameters();
+  const SpectralConversion convert(p.wavelengths_nm);
+  const glm::dvec3 direction = Elevated(moon_elevation, 180.0);
+  const Moon moon(direction, alpha, kMoonReferenceDistanceKm, p.wavelengths_nm, Elevated(-40.0, 0.0));
+  const auto moon_sky = model.View(altitude_m, direction);
+  std::vector<MoonlitTarget> targets;
+  std::vector<double> radiance(p.channel_count());
+  for (double elevation = 15.0; elevation <= 90.0; elevation += 15.0) {
+    for (double azimuth = 0.0; azimuth < (elevation == 90.0 ? 1.0 : 360.0); azimuth += 30.0) {
+      const glm::dvec3 view = Elevated(elevation, azimuth);
+      const double rho = glm::degrees(std::acos(std::clamp(glm::dot(view, direction), -1.0, 1.0)));
+      if (rho < rho_min) continue;
+      moon_sky->Radiance(view, radiance);
+      for (std::size_t c = 0; c < radiance.size(); ++c) radiance[c] *= moon.relative_irradiance()[c];
+      targets.push_back({elevation, rho,
+                         convert.Luminance(radiance) /
+                             KrisciunasSchaefer(90.0 - moon_elevation, 90.0 - elevation, rho, alpha, k)});
+    }
+  }
+  return targets;
+}
+
 // The moonlit sky against Krisciunas and Schaefer's empirical model, at sea level under us-standard
 // with K&S's extinction k taken from the model's own zenith transmittance (0.28 mag per air mass):
 // K&S state an accuracy of 8-23 %. From 25 degrees off the moon hillaire is within 0.89-1.26 of it
@@ -388,14 +432,7 @@ TEST(Moon, MoonlitSkyAgainstKrisciunasAndSchaefer) {
   const AtmosphereParameters p = UnitIrradiance("us-standard");
   const auto model = CreateModel("hillaire", p);
   const SpectralConversion convert(p.wavelengths_nm);
-  std::vector<double> zenith_t(p.channel_count());
-  model->View(0.0, glm::dvec3(0, 0, 1))->Transmittance(glm::dvec3(0, 0, 1), zenith_t);
-  double w = 0.0, t = 0.0;  // luminance-weighted zenith transmittance
-  for (std::size_t c = 0; c < p.channel_count(); ++c) {
-    w += convert.xyz_weights()[c].y;
-    t += convert.xyz_weights()[c].y * zenith_t[c];
-  }
-  const double k = -2.5 * std::log10(t / w);
+  const double k = VExtinction(*model, 0.0);
   EXPECT_NEAR(k, 0.28, 0.02);
   const glm::dvec3 sun = Elevated(-40.0, 0.0);
   int compared = 0;
@@ -424,6 +461,60 @@ TEST(Moon, MoonlitSkyAgainstKrisciunasAndSchaefer) {
     }
   }
   EXPECT_EQ(compared, 24);
+}
+
+// The moonlit sky where K&S measured it: the 2800 m level of Mauna Kea, with the extinction of
+// their data (k = 0.172 mag per air mass in V; us-standard with its aerosol's extinction scaled,
+// 3.45 times, until the model's own k at 2800 m is that), over moons 15-75 degrees up at phases
+// 0-90 degrees and targets 15-90 degrees up, 10 degrees or more from the moon (K&S's aerosol term
+// holds from there; 894 positions). K&S state an accuracy of 8-23 %. source4d, the accurate
+// solver: median 0.97, 91 % of the positions within 23 %, 99 % of the 669 that are 30 degrees or
+// more up and 20 or more from the moon (p5-p95 0.80-1.10 there). hillaire, 9 % brighter than
+// source4d in this hazier air: median 1.09, 79 % and 91 % (0.89-1.28). The rest lie near the moon
+// (rho 10-25: up to 1.8, the Henyey-Greenstein forward peak against K&S's exponential) and 15
+// degrees above the horizon (1.3-1.4, where K&S's single-scattering factor 1 - 10^(-0.4 k X)
+// misses the multiple scattering).
+TEST(Moon, MoonlitSkyAtKrisciunasAndSchaefersSite) {
+  constexpr double kSite = 2800.0, kTarget = 0.172;
+  const auto with_aerosol = [](double scale) {
+    AtmosphereParameters p = UnitIrradiance("us-standard");
+    for (double& v : p.mie.scattering_per_m) v *= scale;
+    for (double& v : p.mie.absorption_per_m) v *= scale;
+    return p;
+  };
+  // k is nearly linear in the aerosol's amount: two models fix the scale.
+  const double k1 = VExtinction(*CreateModel("hillaire", with_aerosol(1.0)), kSite);
+  const double k2 = VExtinction(*CreateModel("hillaire", with_aerosol(2.0)), kSite);
+  ASSERT_GT(k2, k1);
+  const double scale = 1.0 + (kTarget - k1) / (k2 - k1);
+  const AtmosphereParameters p = with_aerosol(scale);
+  for (const char* name : {"hillaire", "source4d"}) {
+    const auto model = CreateModel(name, p);
+    EXPECT_NEAR(VExtinction(*model, kSite), kTarget, 0.003) << name;
+    std::vector<double> all, clear;  // clear: 30 degrees or more up, 20 or more from the moon
+    for (double moon_elevation : {15.0, 30.0, 45.0, 60.0, 75.0}) {
+      for (double alpha : {0.0, 40.0, 90.0}) {
+        for (const MoonlitTarget& t :
+             MoonlitAgainstKrisciunasSchaefer(*model, kSite, kTarget, moon_elevation, alpha, 10.0)) {
+          all.push_back(t.ratio);
+          if (t.elevation >= 30.0 && t.rho >= 20.0) clear.push_back(t.ratio);
+          EXPECT_GT(t.ratio, 0.7) << name << " moon " << moon_elevation << " target " << t.elevation;
+          EXPECT_LT(t.ratio, 2.0) << name << " moon " << moon_elevation << " target " << t.elevation;
+        }
+      }
+    }
+    const auto share_within = [](const std::vector<double>& ratios, double tolerance) {
+      return static_cast<double>(std::count_if(ratios.begin(), ratios.end(),
+                                               [&](double r) { return std::abs(r - 1.0) <= tolerance; })) /
+             static_cast<double>(ratios.size());
+    };
+    const bool accurate = std::string(name) == "source4d";
+    std::sort(all.begin(), all.end());
+    EXPECT_NEAR(all[all.size() / 2], 1.0, accurate ? 0.06 : 0.12) << name << ": the median";
+    EXPECT_GE(share_within(all, 0.23), accurate ? 0.85 : 0.75) << name;
+    EXPECT_GE(share_within(clear, 0.23), accurate ? 0.95 : 0.85) << name;
+    EXPECT_GT(clear.size(), 600u);
+  }
 }
 
 }  // namespace
