@@ -825,9 +825,11 @@ PYBIND11_MODULE(_atmo, m) {
                        const std::optional<std::string>& config_path, const std::optional<std::string>& config_json,
                        int spectral, const ModelOptions& options, const std::optional<std::string>& aerosol,
                        std::optional<double> aod, std::optional<double> angstrom, std::optional<double> visibility,
-                       std::optional<double> turbidity, const std::vector<double>& wavelengths) {
+                       std::optional<double> turbidity, const std::vector<double>& wavelengths,
+                       const std::optional<std::string>& aerosol_phase) {
              AerosolRequest request;
              request.type = aerosol;
+             request.phase = aerosol_phase;
              request.aod_550 = aod;
              request.angstrom_exponent = angstrom;
              request.visibility_km = visibility;
@@ -838,7 +840,7 @@ PYBIND11_MODULE(_atmo, m) {
            py::arg("name"), py::arg("preset"), py::arg("config_path"), py::arg("config_json"), py::arg("spectral"),
            py::arg("options"), py::arg("aerosol") = py::none(), py::arg("aod") = py::none(),
            py::arg("angstrom") = py::none(), py::arg("visibility") = py::none(), py::arg("turbidity") = py::none(),
-           py::arg("wavelengths") = std::vector<double>{})
+           py::arg("wavelengths") = std::vector<double>{}, py::arg("aerosol_phase") = py::none())
       .def_property_readonly("name", [](const PyModel& s) { return std::string(s.model().name()); })
       .def_property_readonly("preset", [](const PyModel& s) { return s.parameters().name; })
       .def_property_readonly("channel_count", [](const PyModel& s) { return s.parameters().channel_count(); })

@@ -333,6 +333,7 @@ def cie_effects_table(atmo):
         ("maritime-clean aerosol (τ 0.13)", ["--preset", "us-standard", "--aerosol", "maritime-clean", "--aod", "0.13"]),
         ("desert aerosol, layer to 6 km (τ 0.13)", ["--preset", "us-standard", "--aerosol", "desert", "--aod", "0.13"]),
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
+        ("OPAC's tabulated phase function (`--aerosol-phase opac`)", ["--preset", "us-standard", "--aerosol-phase", "opac"]),
         ("earth-spectral (textbook air)", ["--preset", "earth-spectral"]),
     ]
     p12 = cie_params(12)
@@ -394,6 +395,7 @@ def illuminance_effects_table(atmo):
         ("aerosol τ550 0.05", ["--preset", "us-standard", "--aod", "0.05"]),
         ("aerosol τ550 0.3", ["--preset", "us-standard", "--aod", "0.3"]),
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
+        ("OPAC's tabulated phase function (`--aerosol-phase opac`)", ["--preset", "us-standard", "--aerosol-phase", "opac"]),
         ("ground albedo 0", ["--config", CONFIGS["albedo0"]]),
         ("ozone × 1.3", ["--config", CONFIGS["ozone13"]]),
         ("no O₂, O₂–O₂ or water vapour", ["--config", CONFIGS["nogases"]]),

@@ -1,6 +1,7 @@
 // Standard atmospheres (include/atmo/standard_atmosphere.h), aerosol types and knobs
 // (include/atmo/aerosol.h), and the presets built on them.
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <string>
 #include <vector>
@@ -119,6 +120,11 @@ TEST(Aerosols, ColumnOpticalDepthIsTheOneAskedFor) {
       if (aod > 0.0) {
         EXPECT_TRUE(p.mie.density.tabulated());
         EXPECT_EQ(p.mie.phase, PhaseFunction::kHenyeyGreenstein);
+        AtmosphereParameters opac = base;
+        ApplyAerosol(opac, {type, aod, std::numeric_limits<double>::quiet_NaN(), "opac"});
+        EXPECT_EQ(opac.mie.phase, PhaseFunction::kTabulated);
+        EXPECT_EQ(opac.mie.phase_g, p.mie.phase_g);
+        EXPECT_EQ(opac.mie.scattering_per_m, p.mie.scattering_per_m);
         EXPECT_GT(p.mie.phase_g, 0.5);
         EXPECT_LT(p.mie.phase_g, 0.85);
       }

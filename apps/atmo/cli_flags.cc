@@ -165,6 +165,10 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option_function<double>(
       "--turbidity", [&common](const double& v) { common.aerosol.linke_turbidity = v; },
       "Linke turbidity factor (air mass 2, Ineichen 2008): sets the aerosol optical depth");
+  app->add_option_function<std::string>(
+      "--aerosol-phase", [&common](const std::string& v) { common.aerosol.phase = v; },
+      "the aerosol's phase function: henyey-greenstein (its asymmetry g) or opac (OPAC's own, tabulated) "
+      "[default: henyey-greenstein]");
 }
 
 // --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.

@@ -77,6 +77,7 @@ void GroupFlags(CLI::App* app) {
       {"--option", "Model and atmosphere"}, {"--spectral", "Model and atmosphere"}, {"--wavelengths", "Model and atmosphere"}, {"--table", "Model and atmosphere"},
       {"--aerosol", "Model and atmosphere"}, {"--aod", "Model and atmosphere"}, {"--angstrom", "Model and atmosphere"},
       {"--visibility", "Model and atmosphere"}, {"--turbidity", "Model and atmosphere"},
+      {"--aerosol-phase", "Model and atmosphere"},
       {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
       {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
       {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},

@@ -435,7 +435,14 @@ AtmosphereParameters ApplyAtmosphereKnobs(const AtmosphereParameters& base, cons
   scale(p.rayleigh, state.rayleigh_density);
   scale(p.mie, state.mie_density);
   scale(p.ozone, state.ozone_density);
-  if (state.mie_g != loaded.mie_g) p.mie.phase_g = state.mie_g;
+  if (state.mie_g != loaded.mie_g) {
+    p.mie.phase_g = state.mie_g;
+    // A tabulated phase function has no g to change: the slider gives a Henyey-Greenstein one.
+    if (p.mie.phase == PhaseFunction::kTabulated) {
+      p.mie.phase = PhaseFunction::kHenyeyGreenstein;
+      p.mie.phase_table.clear();
+    }
+  }
   if (state.ground_albedo != loaded.ground_albedo) p.ground_albedo.assign(p.channel_count(), state.ground_albedo);
   if (state.ground_radius_m != loaded.ground_radius_m) {
     p.top_radius_m = state.ground_radius_m + (base.top_radius_m - base.ground_radius_m);

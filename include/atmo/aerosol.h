@@ -46,9 +46,15 @@ struct AerosolSettings {
   // NaN: the type's own spectral extinction; else tau(lambda) = aod_550 (lambda / 550 nm)^-alpha
   // with alpha in [-1, 4] (the type's albedo and asymmetry stay).
   double angstrom_exponent = std::numeric_limits<double>::quiet_NaN();
+  // The Mie medium's phase function: "henyey-greenstein" with the column's asymmetry at 550 nm, or
+  // "opac", OPAC's own phase functions at 550 nm as a table (docs/aerosols.md, "Phase").
+  std::string phase = "henyey-greenstein";
 };
 
-// Throws atmo::Error with a one-line message for an unknown type, an optical depth outside
+// The names of `AerosolSettings::phase` ("henyey-greenstein", "opac").
+std::vector<std::string> AerosolPhaseNames();
+
+// Throws atmo::Error with a one-line message for an unknown type or phase, an optical depth outside
 // [0, 10] (or not finite), an Angstrom exponent outside [-1, 4].
 void ValidateAerosol(const AerosolSettings& settings);
 
@@ -82,8 +88,9 @@ struct AerosolRequest {
   std::optional<double> angstrom_exponent;
   std::optional<double> visibility_km;
   std::optional<double> linke_turbidity;
+  std::optional<std::string> phase;
   bool empty() const {
-    return !type && !aod_550 && !angstrom_exponent && !visibility_km && !linke_turbidity;
+    return !type && !aod_550 && !angstrom_exponent && !visibility_km && !linke_turbidity && !phase;
   }
 };
 

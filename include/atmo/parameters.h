@@ -25,6 +25,16 @@ enum class PhaseFunction {
   kModifiedRayleigh,  // Atmosphere Plus: (1.4 + 0.5 nu^2), normalised
   kCornetteShanks,    // Cornette-Shanks with asymmetry g
   kHenyeyGreenstein,  // Henyey-Greenstein with asymmetry g
+  kTabulated,         // Medium::phase_table (the Mie medium only)
+};
+
+// One sample of a tabulated phase function: its value (any positive scale; atmo normalises the
+// table to 1 over the sphere) at a scattering angle.
+struct PhaseSample {
+  double angle_deg = 0.0;
+  double value = 0.0;
+
+  bool operator==(const PhaseSample&) const = default;
 };
 
 enum class Geometry {
@@ -83,6 +93,10 @@ struct Medium {
   DensityProfile density;
   PhaseFunction phase = PhaseFunction::kIsotropic;
   double phase_g = 0.0;  // asymmetry, for Cornette-Shanks and Henyey-Greenstein; |g| < 1
+  // For kTabulated: samples at strictly increasing angles from 0 to 180 degrees, values > 0,
+  // interpolated linearly in angle in the logarithm of the value (docs/parameters.md, "Phase
+  // functions"). phase_g then only describes the table (its asymmetry; the viewer's slider).
+  std::vector<PhaseSample> phase_table;
 
   bool present() const;
   double extinction_per_m(std::size_t channel) const {

@@ -154,8 +154,9 @@ class Model:
     Model("source4d", preset="us-standard", aerosol="urban", aod=0.4)   # `--aerosol urban --aod 0.4`
 
     The aerosol keywords are the command line's knobs (docs/aerosols.md), applied after `spectral`:
-    aerosol (an OPAC type, atmo.aerosol_types()), aod (tau at 550 nm), angstrom, visibility (km)
-    and turbidity (Linke); at most one of aod, visibility and turbidity.
+    aerosol (an OPAC type, atmo.aerosol_types()), aod (tau at 550 nm), angstrom, visibility (km),
+    turbidity (Linke) and aerosol_phase ("henyey-greenstein" or "opac", `--aerosol-phase`); at most
+    one of aod, visibility and turbidity.
     """
 
     def __init__(self, name: str = "hillaire", preset: Optional[str] = None,
@@ -163,7 +164,8 @@ class Model:
                  options: Optional[Mapping[str, object]] = None, spectral: int = 0,
                  seed: Optional[int] = None, aerosol: Optional[str] = None, aod: Optional[float] = None,
                  angstrom: Optional[float] = None, visibility: Optional[float] = None,
-                 turbidity: Optional[float] = None, wavelengths: Optional[Sequence[float]] = None):
+                 turbidity: Optional[float] = None, wavelengths: Optional[Sequence[float]] = None,
+                 aerosol_phase: Optional[str] = None):
         if preset is not None and config is not None:
             raise ValueError("give preset or config, not both")
         config_path = config_json = None
@@ -203,8 +205,10 @@ class Model:
                 knobs[key] = float(value)
         if aerosol is not None and not isinstance(aerosol, str):
             raise ValueError(f"aerosol must be a type name (got {aerosol!r})")
+        if aerosol_phase is not None and not isinstance(aerosol_phase, str):
+            raise ValueError(f"aerosol_phase must be 'henyey-greenstein' or 'opac' (got {aerosol_phase!r})")
         self._model = _atmo.Model(name, preset, config_path, config_json, int(spectral), texts, aerosol=aerosol,
-                                  wavelengths=wavelength_list, **knobs)
+                                  wavelengths=wavelength_list, aerosol_phase=aerosol_phase, **knobs)
         self._options = dict(texts)
 
     # --- what the model is ---------------------------------------------------------------------

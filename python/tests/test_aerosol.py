@@ -18,6 +18,7 @@ def test_aerosol_types_are_listed():
     ({"visibility": 15.0}, ["--visibility", "15"]),
     ({"aerosol": "desert", "angstrom": 0.5}, ["--aerosol", "desert", "--angstrom", "0.5"]),
     ({"turbidity": 3.5}, ["--turbidity", "3.5"]),
+    ({"aerosol": "maritime-clean", "aerosol_phase": "opac"}, ["--aerosol", "maritime-clean", "--aerosol-phase", "opac"]),
 ])
 def test_keywords_match_atmo_sample_with_the_flags(cli, keywords, flags):
     model = atmo.Model("hillaire", preset="us-standard", spectral=5, **keywords)

@@ -206,8 +206,8 @@ std::vector<glm::dvec2> ComputeElekGatherMatrix(const shared::AtmosphereParamete
         const double w = shared::GetElekGaussWeight(point_count, q) * dv * shared::GetElekMuDerivative(mapping, v);
         const double mu_w = shared::GetElekMuFromV(mapping, v);
         const glm::dvec2 k(
-            shared::GetElekAzimuthIntegratedPhase(atmosphere.rayleigh_phase, 0.0, mu_v, mu_w, azimuth_count),
-            shared::GetElekAzimuthIntegratedPhase(atmosphere.mie_phase, atmosphere.mie_g, mu_v, mu_w, azimuth_count));
+            shared::GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.rayleigh_phase, 0.0, mu_v, mu_w, azimuth_count),
+            shared::GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.mie_phase, atmosphere.mie_g, mu_v, mu_w, azimuth_count));
         row[first] += (w * (1.0 - s)) * k;
         row[first + 1] += (w * s) * k;
       }

@@ -219,6 +219,43 @@ Estimate PathTally::Get(std::size_t channel, int slot) const {
   return e;
 }
 
+TabulatedPhaseSampler::TabulatedPhaseSampler(const shared::AtmosphereParameters& atmosphere) {
+  constexpr int kN = shared::kPhaseTableSize;
+  for (int i = 0; i < kN; ++i) logs_[i] = atmosphere.mie_phase_table[i / 4][i % 4];
+  const std::size_t pieces = static_cast<std::size_t>(kN - 1) * kPiecesPerKnot;
+  bound_.resize(pieces);
+  cumulative_.resize(pieces);
+  constexpr double kM = kN - 1;
+  const double pi = std::numbers::pi;
+  double total = 0.0;
+  for (std::size_t j = 0; j < pieces; ++j) {
+    const double u0 = static_cast<double>(j) / kPiecesPerKnot;
+    const double u1 = static_cast<double>(j + 1) / kPiecesPerKnot;
+    const int i = static_cast<int>(j / kPiecesPerKnot);
+    const double f0 = static_cast<double>(j % kPiecesPerKnot) / kPiecesPerKnot;
+    const double f1 = f0 + 1.0 / kPiecesPerKnot;
+    // exp of a linear function: its largest value is at an end of the piece.
+    const double phase = std::exp(std::max(logs_[i] + f0 * (logs_[i + 1] - logs_[i]),
+                                           logs_[i] + f1 * (logs_[i + 1] - logs_[i])));
+    const double theta0 = pi * (u0 / kM) * (u0 / kM);
+    const double theta1 = pi * (u1 / kM) * (u1 / kM);
+    const double sine = theta0 <= 0.5 * pi && theta1 >= 0.5 * pi ? 1.0
+                                                                 : std::max(std::sin(theta0), std::sin(theta1));
+    // 1e-12 relative: the rounding of the density at the piece's ends cannot exceed the bound.
+    bound_[j] = phase * 2.0 * pi * sine * (2.0 * pi * u1 / (kM * kM)) * (1.0 + 1e-12);
+    total += bound_[j] * (u1 - u0);
+    cumulative_[j] = total;
+  }
+}
+
+double TabulatedPhaseSampler::Density(double u) const {
+  constexpr double kM = shared::kPhaseTableSize - 1;
+  const int i = std::min(static_cast<int>(u), shared::kPhaseTableSize - 2);
+  const double theta = std::numbers::pi * (u / kM) * (u / kM);
+  return std::exp(logs_[i] + (u - i) * (logs_[i + 1] - logs_[i])) * 2.0 * std::numbers::pi * std::sin(theta) *
+         (2.0 * std::numbers::pi * u / (kM * kM));
+}
+
 PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerSettings& settings)
     : settings_(settings) {
   Validate(parameters);
@@ -228,6 +265,7 @@ PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerS
   mie_phase_ = atmosphere_.mie_phase;
   rayleigh_g_ = parameters.rayleigh.phase_g;
   mie_g_ = parameters.mie.phase_g;
+  if (mie_phase_ == shared::kPhaseTabulated) tabulated_phase_ = TabulatedPhaseSampler(atmosphere_);
   max_extinction_ = glm::dvec4(0.0);
   for (std::size_t c = 0; c < parameters.channel_count(); ++c) {
     Channel ch;
@@ -647,7 +685,7 @@ void PathTracer::PlanSegmentSunlight(const glm::dvec3& p, const glm::dvec3& d, d
   if (!(length > 0.0)) return;
   const double nu = glm::dot(d, sun);
   const double rayleigh = c.rayleigh_scattering * shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
-  const double mie = c.mie_scattering * shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  const double mie = c.mie_scattering * shared::GetMiePhase(atmosphere_, nu);
   if (!(rayleigh + mie > 0.0)) return;
   plan.rayleigh = rayleigh;
   plan.mie = mie;
@@ -1000,7 +1038,7 @@ void PathTracer::RayRadianceProxy(const glm::dvec3& x, const glm::dvec3& w, cons
   const int n = SegmentNodes(x, w, length, shadow_begin, shadow_end, ts.data());
   const double nu = glm::dot(w, sun);
   const double p_rayleigh = shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
-  const double p_mie = shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  const double p_mie = shared::GetMiePhase(atmosphere_, nu);
   // Per channel: optical depth so far, the previous node's extinction and integrand.
   std::array<double, 16> tau_small{}, sigma_small{}, g_small{};
   std::vector<double> tau_big, sigma_big, g_big;
@@ -1320,10 +1358,10 @@ glm::dvec3 PathTracer::GuidedDirection(const glm::dvec3& x, const glm::dvec3& d,
     next = glm::normalize(std::cos(elevation) * (std::cos(azimuth) * towards + std::sin(azimuth) * across) +
                           std::sin(elevation) * up);
   } else {
-    const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+    const double nu = SampleMediumPhaseCosine(kind, g, [&] { return rng.Uniform(); });
     next = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
   }
-  const double phase = shared::EvaluatePhaseFunction(kind, g, glm::dot(d, next));
+  const double phase = shared::GetMediumPhase(atmosphere_, kind, g, glm::dot(d, next));
   double mixture = (1.0 - guide) * phase;
   if (table) mixture += table_share * GuidePdf(*table, at, channel, next);
   if (sun_lobe > 0.0) {
@@ -1478,7 +1516,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
         const double sun_transmittance =
             segment_nee || glow != nullptr ? 0.0 : SunTransmittance(p, query.sun, c, rng);
         if (sun_transmittance != 0.0) {
-          add(weight * shared::EvaluatePhaseFunction(kind, g, glm::dot(d, query.sun)) * sun_transmittance);
+          add(weight * shared::GetMediumPhase(atmosphere_, kind, g, glm::dot(d, query.sun)) * sun_transmittance);
         }
         const bool shadowed = glow == nullptr && !half_space_ && InShadow(p, query.sun);
         // Splitting at the path's first shadowed vertex, where the next segment's estimate is taken
@@ -1495,7 +1533,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
             return GuidedDirection(p, d, query.sun, kind, g, channel, rng, direction_weight);
           }
           direction_weight = 1.0;
-          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          const double nu = SampleMediumPhaseCosine(kind, g, [&] { return rng.Uniform(); });
           return DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
         };
         if (do_split) {
@@ -1549,7 +1587,7 @@ void PathTracer::TracePath(const TraceQuery& query, const Channel& c, const View
           weight *= w;
           if (!(weight > 0.0)) return;
         } else {
-          const double nu = SamplePhaseCosine(kind, g, [&] { return rng.Uniform(); });
+          const double nu = SampleMediumPhaseCosine(kind, g, [&] { return rng.Uniform(); });
           d = DirectionAbout(d, nu, 2.0 * kPi * rng.Uniform());
         }
         // The glow arriving along the new direction, scattered here (phase-sampled: the weight
@@ -1862,7 +1900,7 @@ void PathTracer::SingleScattering(const glm::dvec3& origin, const glm::dvec3& vi
 
   const double nu = glm::dot(view, sun);
   const double rayleigh_phase = shared::EvaluatePhaseFunction(rayleigh_phase_, rayleigh_g_, nu);
-  const double mie_phase = shared::EvaluatePhaseFunction(mie_phase_, mie_g_, nu);
+  const double mie_phase = shared::GetMiePhase(atmosphere_, nu);
   const std::size_t n = channels_.size();
 
   const auto integrate = [&](int panels) {

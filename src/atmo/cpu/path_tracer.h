@@ -69,6 +69,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <numbers>
 #include <span>
 #include <vector>
 
@@ -202,6 +203,39 @@ struct TraceQuery {
   const GlowSource* glow = nullptr;
 };
 
+// Draws the cosine of the scattering angle from an atmosphere's tabulated Mie phase function
+// (shared::TabulatedMiePhaseFunction) exactly: the density in the table's knot coordinate u,
+// f(u) = p(theta(u)) 2 pi sin(theta) dtheta/du with theta = pi (u / M)^2, is bounded on each of
+// kPiecesPerKnot pieces per knot interval (p is monotone between knots, sin(theta) and u are
+// bounded by the piece's ends), a piece is drawn by its bound's mass and u uniformly in it, and u is
+// kept with probability f(u) / bound (about 97 % of the draws are kept).
+class TabulatedPhaseSampler {
+ public:
+  TabulatedPhaseSampler() = default;
+  explicit TabulatedPhaseSampler(const shared::AtmosphereParameters& atmosphere);
+  // The phase function's density in u (per unit u, over the sphere).
+  double Density(double u) const;
+  template <typename Uniform>
+  double Sample(Uniform&& uniform) const {
+    while (true) {
+      const double mass = uniform() * cumulative_.back();
+      const std::size_t piece = static_cast<std::size_t>(
+          std::upper_bound(cumulative_.begin(), cumulative_.end() - 1, mass) - cumulative_.begin());
+      const double u = (static_cast<double>(piece) + uniform()) / kPiecesPerKnot;
+      if (uniform() * bound_[piece] <= Density(u)) {
+        const double t = u / (shared::kPhaseTableSize - 1);
+        return std::cos(std::numbers::pi * t * t);
+      }
+    }
+  }
+
+ private:
+  static constexpr int kPiecesPerKnot = 16;
+  std::array<double, shared::kPhaseTableSize> logs_{};
+  std::vector<double> bound_;       // the density's bound on each piece
+  std::vector<double> cumulative_;  // the bound's mass up to the end of each piece
+};
+
 class PathTracer {
  public:
   // Throws atmo::Error for invalid parameters.
@@ -276,6 +310,11 @@ class PathTracer {
   // source of more for rejection.
   template <typename Uniform>
   static double SamplePhaseCosine(int kind, double g, Uniform&& uniform);
+  // The same for this atmosphere's media: also the tabulated Mie phase function (shared::kPhaseTabulated).
+  template <typename Uniform>
+  double SampleMediumPhaseCosine(int kind, double g, Uniform&& uniform) const {
+    return kind == shared::kPhaseTabulated ? tabulated_phase_.Sample(uniform) : SamplePhaseCosine(kind, g, uniform);
+  }
 
  private:
   struct Channel {
@@ -413,6 +452,7 @@ class PathTracer {
   }
 
   shared::AtmosphereParameters atmosphere_;  // profiles and radii (channels come from channels_)
+  TabulatedPhaseSampler tabulated_phase_;     // the Mie phase function, when tabulated
   std::vector<Channel> channels_;
   int rayleigh_phase_, mie_phase_;
   double rayleigh_g_, mie_g_;

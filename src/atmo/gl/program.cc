@@ -142,6 +142,9 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   program.SetVec3(p + "mie_extinction", a.mie_extinction);
   program.SetInt(p + "mie_phase", a.mie_phase);
   program.SetFloat(p + "mie_g", a.mie_g);
+  if (a.mie_phase == shared::kPhaseTabulated) {
+    program.SetVec4Array(p + "mie_phase_table[0]", a.mie_phase_table, shared::kPhaseTableSize / 4);
+  }
   SetDensityProfile(program, p + "absorption_density", a.absorption_density);
   program.SetVec3(p + "absorption_extinction", a.absorption_extinction);
   program.SetVec3(p + "water_vapor_extinction", a.water_vapor_extinction);

@@ -66,6 +66,10 @@ SimpleModel::SimpleModel(const AtmosphereParameters& parameters, const ModelOpti
     batch.sun = ToSharedParameters(parameters, b);
     for (const auto& [medium, key] : media) {
       if (!medium->present()) continue;
+      if (medium->phase == PhaseFunction::kTabulated) {
+        throw Error(std::string("model simple takes the analytic phase functions only; ") + key +
+                    ".phase_function is \"tabulated\": use model hillaire or source4d for it");
+      }
       const double density = ConstantDensityBelowPlane(medium->density, key);
       const shared::vec3 scattering = density * BatchOf(medium->scattering_per_m, 3 * b);
       batch.extinction += scattering + density * BatchOf(medium->absorption_per_m, 3 * b);

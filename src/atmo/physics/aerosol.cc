@@ -9,6 +9,7 @@
 #include "atmo/error.h"
 #include "atmo/standard_atmosphere.h"
 #include "physics/density_interpolation.h"
+#include "physics/data/aerosol_phase.h"
 #include "physics/data/aerosol_types.h"
 #include "printable.h"
 
@@ -61,6 +62,13 @@ struct Layer {
            (std::exp(-bottom_m / scale_height_m) - std::exp(-top_m / scale_height_m));
   }
 };
+
+const data::AerosolPhaseTable& PhaseTable(std::string_view name) {
+  for (const data::AerosolPhaseTable& table : data::kAerosolPhaseTables) {
+    if (name == table.name) return table;
+  }
+  throw Error("no phase function for aerosol '" + std::string(name) + "'");  // a data error, not the user's
+}
 
 // OPAC's column for a type (opac.cfg): the mixing layer from the ground to the type's top, the
 // free troposphere from there to 12 km, the stratospheric background from 12 to 35 km.
@@ -175,6 +183,8 @@ std::vector<std::string> AerosolTypeNames() {
   return names;
 }
 
+std::vector<std::string> AerosolPhaseNames() { return {"henyey-greenstein", "opac"}; }
+
 std::string AerosolTypeDescription(std::string_view type) { return FindType(type).description; }
 
 double AerosolTypicalOpticalDepth(std::string_view type) {
@@ -185,6 +195,10 @@ double AerosolTypicalOpticalDepth(std::string_view type) {
 
 void ValidateAerosol(const AerosolSettings& s) {
   FindType(s.type);
+  const std::vector<std::string> phases = AerosolPhaseNames();
+  if (std::find(phases.begin(), phases.end(), s.phase) == phases.end()) {
+    throw Error("unknown aerosol phase '" + Printable(s.phase) + "' (known: henyey-greenstein, opac)");
+  }
   if (!std::isnan(s.aod_550) && !(s.aod_550 >= 0.0 && s.aod_550 <= kMaxAerosolOpticalDepth)) {
     throw Error("aerosol optical depth " + Format(s.aod_550) + " at 550 nm is outside [0, 10]");
   }
@@ -204,6 +218,7 @@ void ApplyAerosol(AtmosphereParameters& p, const AerosolSettings& s) {
   p.mie.scattering_per_m.assign(n, 0.0);
   p.mie.absorption_per_m.assign(n, 0.0);
   p.mie.phase = PhaseFunction::kHenyeyGreenstein;
+  p.mie.phase_table.clear();
 
   const AerosolProfile profile = BuildProfile(layers, p.top_radius_m - p.ground_radius_m);
   if (profile.knots.empty()) {
@@ -225,6 +240,19 @@ void ApplyAerosol(AtmosphereParameters& p, const AerosolSettings& s) {
   }
   const double total = tau[0] + tau[1] + tau[2];
   p.mie.phase_g = scattering_550 > 0.0 ? scattering_g_550 / scattering_550 : 0.0;
+  if (scattering_550 > 0.0 && s.phase == "opac") {
+    // The column's phase function at 550 nm: each layer's OPAC phase function (aerosol_phase.h)
+    // weighted by its scattering optical depth; phase_g above is its asymmetry.
+    const char* names[] = {type.name, data::kFreeTroposphere.name, data::kStratosphere.name};
+    p.mie.phase = PhaseFunction::kTabulated;
+    p.mie.phase_table.assign(data::kAerosolPhaseAngleCount, PhaseSample{});
+    for (int k = 0; k < data::kAerosolPhaseAngleCount; ++k) p.mie.phase_table[k].angle_deg = data::kAerosolPhaseAnglesDeg[k];
+    for (std::size_t l = 0; l < layers.size(); ++l) {
+      const double weight = tau[l] * AtWavelength(layers[l].spectrum, 550.0).single_scattering_albedo / scattering_550;
+      const data::AerosolPhaseTable& table = PhaseTable(names[l]);
+      for (int k = 0; k < data::kAerosolPhaseAngleCount; ++k) p.mie.phase_table[k].value += weight * table.values[k];
+    }
+  }
   for (std::size_t c = 0; c < n; ++c) {
     const double lambda = p.wavelengths_nm[c];
     double extinction = 0.0, scattering = 0.0;  // column optical depths at lambda
@@ -300,6 +328,7 @@ void ApplyAerosolRequest(AtmosphereParameters& p, const AerosolRequest& r) {
   AerosolSettings settings;
   if (r.type) settings.type = *r.type;
   FindType(settings.type);
+  if (r.phase) settings.phase = *r.phase;
   if (r.angstrom_exponent) {
     if (std::isnan(*r.angstrom_exponent)) throw Error("Angstrom exponent nan is outside [-1, 4]");
     settings.angstrom_exponent = *r.angstrom_exponent;

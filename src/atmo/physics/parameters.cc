@@ -123,6 +123,38 @@ void ValidateTable(const std::string& key, const std::vector<DensityKnot>& table
   }
 }
 
+// A tabulated phase function: the Mie medium only (the shared code carries one table), samples
+// from 0 to 180 degrees at strictly increasing angles, values positive and finite.
+void ValidatePhaseTable(const std::string& key, const Medium& medium) {
+  const std::vector<PhaseSample>& table = medium.phase_table;
+  if (medium.phase != PhaseFunction::kTabulated) {
+    if (!table.empty()) Fail(key + ".phase_table is only read with phase_function \"tabulated\"");
+    return;
+  }
+  if (key != "mie") Fail(key + ".phase_function \"tabulated\" is only supported for the mie medium");
+  const std::string name = key + ".phase_table";
+  if (table.size() < 2) Fail(name + " needs at least 2 samples (got " + std::to_string(table.size()) + ")");
+  if (table.size() > kMaxTableKnots) {
+    Fail(name + " has " + std::to_string(table.size()) + " samples, more than the " +
+         std::to_string(kMaxTableKnots) + " allowed");
+  }
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const std::string sample = Indexed(name, i);
+    CheckRange(sample + ".angle_deg", table[i].angle_deg, 0.0, 180.0, "degrees");
+    if (!(table[i].value > 0.0 && table[i].value <= 1e12)) {  // also NaN
+      Fail(sample + ".value must be in (0, 1e12] (got " + FormatNumber(table[i].value) + ")");
+    }
+    if (i > 0 && !(table[i].angle_deg > table[i - 1].angle_deg)) {
+      Fail(name + " angles must increase strictly: sample " + std::to_string(i) + " is at " +
+           FormatNumber(table[i].angle_deg) + " degrees after " + FormatNumber(table[i - 1].angle_deg));
+    }
+  }
+  if (table.front().angle_deg != 0.0 || table.back().angle_deg != 180.0) {
+    Fail(name + " must run from 0 to 180 degrees (got " + FormatNumber(table.front().angle_deg) + " to " +
+         FormatNumber(table.back().angle_deg) + ")");
+  }
+}
+
 void ValidateMedium(const std::string& key, const Medium& medium, std::size_t channel_count) {
   CheckRangePerChannel(key + ".scattering_per_m", medium.scattering_per_m, channel_count, 0.0,
                        kMaxCoefficient_per_m, "per m");
@@ -132,6 +164,7 @@ void ValidateMedium(const std::string& key, const Medium& medium, std::size_t ch
     Fail(key + ".phase_g must satisfy |g| < 1 (got " + FormatNumber(medium.phase_g) + ")");
   }
   CheckRange(key + ".phase_g", medium.phase_g, -kMaxPhaseG, kMaxPhaseG, "");
+  ValidatePhaseTable(key, medium);
   if (medium.density.tabulated()) {
     ValidateTable(key + ".density.table", medium.density.table);
   } else {
@@ -325,6 +358,7 @@ std::string_view ToString(PhaseFunction phase) {
     case PhaseFunction::kModifiedRayleigh: return "modified_rayleigh";
     case PhaseFunction::kCornetteShanks: return "cornette_shanks";
     case PhaseFunction::kHenyeyGreenstein: return "henyey_greenstein";
+    case PhaseFunction::kTabulated: return "tabulated";
   }
   return "unknown";
 }

@@ -32,7 +32,7 @@ constexpr std::string_view kDefaultPreset = "earth";
 
 constexpr PhaseFunction kPhaseFunctions[] = {
     PhaseFunction::kIsotropic, PhaseFunction::kRayleigh, PhaseFunction::kModifiedRayleigh,
-    PhaseFunction::kCornetteShanks, PhaseFunction::kHenyeyGreenstein};
+    PhaseFunction::kCornetteShanks, PhaseFunction::kHenyeyGreenstein, PhaseFunction::kTabulated};
 constexpr Geometry kGeometries[] = {Geometry::kSpherical, Geometry::kHalfSpace};
 
 // ---------------------------------------------------------------------------------------------
@@ -54,6 +54,11 @@ OrderedJson MediumToJson(const Medium& medium) {
   j["absorption_per_m"] = medium.absorption_per_m;
   j["phase_function"] = std::string(ToString(medium.phase));
   j["phase_g"] = medium.phase_g;
+  if (medium.phase == PhaseFunction::kTabulated) {
+    OrderedJson table = OrderedJson::array();
+    for (const PhaseSample& sample : medium.phase_table) table.push_back({sample.angle_deg, sample.value});
+    j["phase_table"] = std::move(table);
+  }
   if (medium.density.tabulated()) {
     OrderedJson table = OrderedJson::array();
     for (const DensityKnot& knot : medium.density.table) table.push_back({knot.altitude_m, knot.density});
@@ -140,6 +145,19 @@ std::vector<DensityKnot> ReadTable(const Json& value, const std::string& path) {
   return knots;
 }
 
+// [[angle_deg, value], ...]: at least one sample (Validate checks the rest).
+std::vector<PhaseSample> ReadPhaseTable(const Json& value, const std::string& path) {
+  const std::string type_error = path + " must be an array of [angle_deg, value] pairs";
+  if (!value.is_array() || value.empty()) Fail(type_error);
+  std::vector<PhaseSample> samples;
+  samples.reserve(value.size());
+  for (const Json& pair : value) {
+    if (!pair.is_array() || pair.size() != 2 || !pair[0].is_number() || !pair[1].is_number()) Fail(type_error);
+    samples.push_back(PhaseSample{pair[0].get<double>(), pair[1].get<double>()});
+  }
+  return samples;
+}
+
 PhaseFunction ParsePhaseFunction(const Json& value, const std::string& key) {
   if (!value.is_string()) Fail(key + " must be a string");
   const std::string name = value.get<std::string>();
@@ -166,13 +184,18 @@ void ReadMedium(const Json& object, const std::string& path, std::size_t channel
                 Medium& medium) {
   CheckObject(object, path);
   CheckKeys(object, path,
-            {"scattering_per_m", "absorption_per_m", "phase_function", "phase_g", "density"});
+            {"scattering_per_m", "absorption_per_m", "phase_function", "phase_g", "phase_table", "density"});
   ReadPerChannel(object, path, "scattering_per_m", channel_count, medium.scattering_per_m);
   ReadPerChannel(object, path, "absorption_per_m", channel_count, medium.absorption_per_m);
   if (const auto it = object.find("phase_function"); it != object.end()) {
     medium.phase = ParsePhaseFunction(*it, Join(path, "phase_function"));
+    // An analytic phase function given for a medium whose phase was tabulated replaces the table.
+    if (medium.phase != PhaseFunction::kTabulated) medium.phase_table.clear();
   }
   ReadNumber(object, path, "phase_g", medium.phase_g);
+  if (const auto it = object.find("phase_table"); it != object.end()) {
+    medium.phase_table = ReadPhaseTable(*it, Join(path, "phase_table"));
+  }
   if (const auto it = object.find("density"); it != object.end()) {
     const std::string density_path = Join(path, "density");
     CheckObject(*it, density_path);
@@ -196,15 +219,19 @@ void ReadMedium(const Json& object, const std::string& path, std::size_t channel
 }
 
 // {"type": "urban", "aod_550": 0.3, "angstrom_exponent": 1.2, "visibility_km": 20,
-//  "linke_turbidity": 3}: every key optional.
+//  "linke_turbidity": 3, "phase": "opac"}: every key optional.
 AerosolRequest ReadAerosol(const Json& object) {
   const std::string path = "aerosol";
   CheckObject(object, path);
-  CheckKeys(object, path, {"type", "aod_550", "angstrom_exponent", "visibility_km", "linke_turbidity"});
+  CheckKeys(object, path, {"type", "aod_550", "angstrom_exponent", "visibility_km", "linke_turbidity", "phase"});
   AerosolRequest request;
   if (const auto it = object.find("type"); it != object.end()) {
     if (!it->is_string()) Fail("aerosol.type must be a string");
     request.type = it->get<std::string>();
+  }
+  if (const auto it = object.find("phase"); it != object.end()) {
+    if (!it->is_string()) Fail("aerosol.phase must be a string");
+    request.phase = it->get<std::string>();
   }
   const auto read = [&](const char* key, std::optional<double>& out) {
     if (object.contains(key)) {

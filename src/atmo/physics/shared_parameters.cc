@@ -1,7 +1,9 @@
 #include "physics/shared_parameters.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numbers>
 
 #include "atmo/error.h"
 
@@ -34,6 +36,55 @@ glm::dvec3 Batch(const std::vector<double>& values, std::size_t first, double sc
 // The log density of the shared table, floored at kDensityTableLogZero.
 double TableLogDensity(double density) {
   return density > 0.0 ? std::max(std::log(density), shared::kDensityTableLogZero) : shared::kDensityTableLogZero;
+}
+
+// The logarithm of a tabulated phase function's samples at an angle: linear in the angle between
+// samples (the public table's interpolation, docs/parameters.md).
+double SampledLogPhase(const std::vector<PhaseSample>& table, double angle_deg) {
+  const auto upper = std::upper_bound(table.begin(), table.end(), angle_deg,
+                                      [](double a, const PhaseSample& s) { return a < s.angle_deg; });
+  if (upper == table.begin()) return std::log(table.front().value);
+  if (upper == table.end()) return std::log(table.back().value);
+  const PhaseSample& a = *(upper - 1);
+  const PhaseSample& b = *upper;
+  const double f = (angle_deg - a.angle_deg) / (b.angle_deg - a.angle_deg);
+  return std::log(a.value) + f * (std::log(b.value) - std::log(a.value));
+}
+
+// Fills mie_phase_table of `a` for a tabulated Mie phase function: the samples' log phase at the
+// shared knots (angle pi (i / (N - 1))^2), shifted so that the shared interpolant (linear in the
+// knot coordinate) integrates to exactly 1 over the sphere. The integral: over each knot interval,
+// f(u) = exp(l(u)) 2 pi sin(theta(u)) dtheta/du with theta = pi (u / M)^2, M = N - 1, by 16-point
+// Gauss-Legendre in u (the integrand is smooth there), the whole within 1e-12.
+void SetPhaseTable(const Medium& mie, shared::AtmosphereParameters& a) {
+  constexpr int kN = shared::kPhaseTableSize;
+  constexpr double kM = kN - 1;
+  std::array<double, kN> logs{};
+  if (mie.phase != PhaseFunction::kTabulated) {
+    for (int i = 0; i < kN / 4; ++i) a.mie_phase_table[i] = shared::vec4(0.0);
+    return;
+  }
+  for (int i = 0; i < kN; ++i) logs[i] = SampledLogPhase(mie.phase_table, 180.0 * (i / kM) * (i / kM));
+  // 16-point Gauss-Legendre nodes and weights on [-1, 1] (the positive half).
+  static constexpr double kX[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274, 0.6178762444026438,
+                                   0.7554044083550030, 0.8656312023878318, 0.9445750230732326, 0.9894009349916499};
+  static constexpr double kW[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025, 0.1495959888165767,
+                                   0.1246289712555339, 0.0951585116824928, 0.0622535239386479, 0.0271524594117541};
+  const double pi = std::numbers::pi;
+  double integral = 0.0;
+  for (int i = 0; i + 1 < kN; ++i) {
+    for (int k = 0; k < 16; ++k) {
+      const double x = (k < 8 ? -kX[7 - k] : kX[k - 8]);
+      const double w = (k < 8 ? kW[7 - k] : kW[k - 8]);
+      const double t = 0.5 * (x + 1.0);  // in [0, 1]
+      const double u = i + t;
+      const double theta = pi * (u / kM) * (u / kM);
+      integral += 0.5 * w * std::exp(logs[i] + t * (logs[i + 1] - logs[i])) * 2.0 * pi * std::sin(theta) *
+                  (2.0 * pi * u / (kM * kM));
+    }
+  }
+  const double shift = std::log(integral);
+  for (int i = 0; i < kN; ++i) a.mie_phase_table[i / 4][i % 4] = logs[i] - shift;
 }
 
 // Fills the density table of `a` (density_table_enabled, _top, density_table) from the profiles
@@ -78,6 +129,7 @@ int ToSharedPhase(PhaseFunction phase) {
     case PhaseFunction::kModifiedRayleigh: return shared::kPhaseModifiedRayleigh;
     case PhaseFunction::kCornetteShanks: return shared::kPhaseCornetteShanks;
     case PhaseFunction::kHenyeyGreenstein: return shared::kPhaseHenyeyGreenstein;
+    case PhaseFunction::kTabulated: return shared::kPhaseTabulated;
   }
   return shared::kPhaseIsotropic;
 }
@@ -100,6 +152,7 @@ shared::AtmosphereParameters ToSharedParameters(const AtmosphereParameters& p, s
   a.mie_extinction = a.mie_scattering + Batch(p.mie.absorption_per_m, first, unit);
   a.mie_phase = ToSharedPhase(p.mie.phase);
   a.mie_g = p.mie.phase_g;
+  SetPhaseTable(p.mie, a);
   a.absorption_density = ToSharedProfile(p.ozone.density, unit);
   a.absorption_extinction = Batch(p.ozone.absorption_per_m, first, unit);
   a.water_vapor_extinction =

@@ -13,6 +13,14 @@ const int kPhaseRayleigh = 1;           // 3/(16 pi) (1 + nu^2)
 const int kPhaseModifiedRayleigh = 2;   // Atmosphere Plus: (1.4 + 0.5 nu^2) / (47/30 * 4 pi), see phase.glsl
 const int kPhaseCornetteShanks = 3;     // 3/(8 pi) (1-g^2)(1+nu^2) / ((2+g^2)(1+g^2-2 g nu)^1.5)
 const int kPhaseHenyeyGreenstein = 4;   // (1-g^2) / (4 pi (1+g^2-2 g nu)^1.5)
+const int kPhaseTabulated = 5;          // the Mie medium's table, mie_phase_table (phase.glsl)
+
+// Knots of a tabulated phase function: knot i sits at the scattering angle
+// pi (i / (kPhaseTableSize - 1))^2, dense near 0 where aerosols' forward peaks are (0.011 degrees
+// apart there, 2.8 degrees at 180); the table holds the natural logarithm of the phase function
+// (per steradian, normalised to 1 over the sphere) at each, four knots to a vec4: 128 uniform
+// components.
+const int kPhaseTableSize = 128;
 
 // One layer of a density profile, after Bruneton 2017: at altitude h the density is
 // exp_term * exp(exp_scale * h) + linear_term * h + constant_term, clamped to [0, 1].
@@ -47,8 +55,11 @@ struct AtmosphereParameters {
   DensityProfile mie_density;
   vec3 mie_scattering;            // per length, at density 1
   vec3 mie_extinction;            // per length, at density 1 (scattering + absorption)
-  int mie_phase;                  // kPhaseCornetteShanks or kPhaseHenyeyGreenstein
+  int mie_phase;                  // kPhaseCornetteShanks, kPhaseHenyeyGreenstein or kPhaseTabulated
   Number mie_g;                   // asymmetry, g > 0: forward peak towards the sun
+  // kPhaseTabulated: ln of the Mie phase function at the knots above, knot i in component i % 4 of
+  // element i / 4; unused (and not uploaded on the GPU) for the analytic phase functions.
+  vec4 mie_phase_table[kPhaseTableSize / 4];
   DensityProfile absorption_density;
   vec3 absorption_extinction;     // ozone absorption per length, at density 1
   // Water vapour absorption per length, at density 1: its density exists only in the table (w), so

@@ -252,7 +252,8 @@ Number GetElekMuFromV(int mapping, Number v) {
 // Rayleigh-like phases A + B nu^2 have the closed form 2 pi (A + B (a^2 + b^2 / 2)); the others use
 // the periodic trapezoidal rule with 2 * azimuth_count intervals (folded onto [0, pi] by symmetry),
 // which converges geometrically for these smooth periodic integrands.
-Number GetElekAzimuthIntegratedPhase(int kind, Number g, Number mu_v, Number mu_w, int azimuth_count) {
+Number GetElekAzimuthIntegratedPhase(IN(AtmosphereParameters) atmosphere, int kind, Number g, Number mu_v, Number mu_w,
+    int azimuth_count) {
   Number a = mu_v * mu_w;
   Number b = SafeSqrt(1.0 - mu_v * mu_v) * SafeSqrt(1.0 - mu_w * mu_w);
   Number mean_square = a * a + 0.5 * b * b;
@@ -263,7 +264,7 @@ Number GetElekAzimuthIntegratedPhase(int kind, Number g, Number mu_v, Number mu_
   for (int i = 0; i <= azimuth_count; ++i) {
     Number phi = kPi * Number(i) / Number(azimuth_count);
     Number weight = (i == 0 || i == azimuth_count) ? 0.5 : 1.0;
-    sum += weight * EvaluatePhaseFunction(kind, g, a + b * cos(phi));
+    sum += weight * GetMediumPhase(atmosphere, kind, g, a + b * cos(phi));
   }
   return sum * 2.0 * kPi / Number(azimuth_count);
 }
@@ -289,8 +290,8 @@ vec2 ComputeElekGatherWeightTexel(IN(AtmosphereParameters) atmosphere, int mappi
       Number hat = side == 0 ? s : 1.0 - s;
       Number w = GetElekGaussWeight(point_count, q) * dv * hat * GetElekMuDerivative(mapping, v);
       Number mu_w = GetElekMuFromV(mapping, v);
-      weight.x += w * GetElekAzimuthIntegratedPhase(atmosphere.rayleigh_phase, 0.0, mu_v, mu_w, azimuth_count);
-      weight.y += w * GetElekAzimuthIntegratedPhase(atmosphere.mie_phase, atmosphere.mie_g, mu_v, mu_w, azimuth_count);
+      weight.x += w * GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.rayleigh_phase, 0.0, mu_v, mu_w, azimuth_count);
+      weight.y += w * GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.mie_phase, atmosphere.mie_g, mu_v, mu_w, azimuth_count);
     }
   }
   return weight;
@@ -324,9 +325,9 @@ vec4 ComputeElekPhaseGatherWeightTexel(IN(AtmosphereParameters) atmosphere, int 
         Number nu_v = mu_v * mu_w + sin_v * sin_w * c;
         Number nu_s = mu_s * mu_w + sin_s * sin_w * c;
         Number p_r_v = EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu_v);
-        Number p_m_v = EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu_v);
+        Number p_m_v = GetMiePhase(atmosphere, nu_v);
         Number p_r_s = EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu_s);
-        Number p_m_s = EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu_s);
+        Number p_m_s = GetMiePhase(atmosphere, nu_s);
         Number e = (i == 0 || i == azimuth_count) ? 0.5 : 1.0;
         sum += e * vec4(p_r_v * p_r_s, p_r_v * p_m_s, p_m_v * p_r_s, p_m_v * p_m_s);
       }
@@ -370,8 +371,8 @@ vec3 ComputeElekGroundSkyIrradiance(IN(AtmosphereParameters) atmosphere, IN(Text
       Number weight = GetElekGaussWeight(4, q) / Number(interval_count) * mu_w;
       vec3 i_r = GetElekTableValue(atmosphere, rayleigh_table, mapping, 0.0, mu_w, mu_s);
       vec3 i_m = GetElekTableValue(atmosphere, mie_table, mapping, 0.0, mu_w, mu_s);
-      Number k_r = GetElekAzimuthIntegratedPhase(atmosphere.rayleigh_phase, 0.0, mu_s, mu_w, azimuth_count);
-      Number k_m = GetElekAzimuthIntegratedPhase(atmosphere.mie_phase, atmosphere.mie_g, mu_s, mu_w, azimuth_count);
+      Number k_r = GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.rayleigh_phase, 0.0, mu_s, mu_w, azimuth_count);
+      Number k_m = GetElekAzimuthIntegratedPhase(atmosphere, atmosphere.mie_phase, atmosphere.mie_g, mu_s, mu_w, azimuth_count);
       sum += weight * (k_r * i_r + k_m * i_m);
     }
   }

@@ -36,11 +36,36 @@ Number EvaluatePhaseFunction(int kind, Number g, Number nu) {
   return IsotropicPhaseFunction();
 }
 
+// The knot coordinate of a scattering angle's cosine in the phase table (0 forward,
+// kPhaseTableSize - 1 backward): knot i is at the angle pi (i / (kPhaseTableSize - 1))^2.
+Number GetPhaseTableCoord(Number nu) {
+  return sqrt(acos(ClampToRange(nu, -1.0, 1.0)) / kPi) * Number(kPhaseTableSize - 1);
+}
+
+Number GetPhaseTableKnot(IN(AtmosphereParameters) atmosphere, int i) {
+  return atmosphere.mie_phase_table[i / 4][i % 4];
+}
+
+// The tabulated Mie phase function: its logarithm linear in the knot coordinate between knots.
+Number TabulatedMiePhaseFunction(IN(AtmosphereParameters) atmosphere, Number nu) {
+  Number u = GetPhaseTableCoord(nu);
+  Number lower = min(floor(u), Number(kPhaseTableSize - 2));
+  int i = int(lower);
+  return exp(mix(GetPhaseTableKnot(atmosphere, i), GetPhaseTableKnot(atmosphere, i + 1), u - lower));
+}
+
 // The phase functions of an atmosphere's two scattering media.
 Number GetRayleighPhase(IN(AtmosphereParameters) atmosphere, Number nu) {
   return EvaluatePhaseFunction(atmosphere.rayleigh_phase, 0.0, nu);
 }
 
 Number GetMiePhase(IN(AtmosphereParameters) atmosphere, Number nu) {
+  if (atmosphere.mie_phase == kPhaseTabulated) return TabulatedMiePhaseFunction(atmosphere, nu);
   return EvaluatePhaseFunction(atmosphere.mie_phase, atmosphere.mie_g, nu);
+}
+
+// A medium's phase function by its identifier, the tabulated one from the atmosphere's table.
+Number GetMediumPhase(IN(AtmosphereParameters) atmosphere, int kind, Number g, Number nu) {
+  if (kind == kPhaseTabulated) return TabulatedMiePhaseFunction(atmosphere, nu);
+  return EvaluatePhaseFunction(kind, g, nu);
 }
