@@ -9,6 +9,7 @@ The commands of a file run in order in one fresh folder, as the test runs them.
     scripts/doc_transcripts.py                 # rewrite the outputs in README.md and docs/**/*.md
     scripts/doc_transcripts.py --check         # print the lines that drifted; exit 1 if any did
     scripts/doc_transcripts.py --doc docs/cli.md --atmo build/apps/atmo/atmo
+    scripts/doc_transcripts.py --doc docs/performance.md --measured-only 'aerosol-phase|us-standard'
 
 Timings (a number followed by ` s` or ` ms`) are rewritten with what this run measured; the test
 accepts any number there. The machine, its cores and its load are printed first.
@@ -61,8 +62,9 @@ def layout(line):
     return re.sub(" +", " ", NUMBER.sub("N", line))
 
 
-def measured(lines, atmo, check, path):
-    """Reruns the measured blocks of `lines`; the new lines and the number of blocks whose layout drifted."""
+def measured(lines, atmo, check, path, only=None):
+    """Reruns the measured blocks of `lines` (those whose command `only`, a regular expression, finds
+    when it is given); the new lines and the number of blocks whose layout drifted."""
     out = []
     drift = 0
     i = 0
@@ -78,6 +80,10 @@ def measured(lines, atmo, check, path):
         if end == len(lines):
             sys.exit(f"{path}: `{lines[i].strip()}` has no `<!-- end measured -->`")
         body = lines[i + 1:end]
+        if only is not None and not re.search(only, match.group(1)):
+            out.extend(lines[i:end + 1])
+            i = end + 1
+            continue
         old = body[body.index("```text") + 1:body.index("```")] if "```text" in body and "```" in body else []
         stamp = machine()
         with tempfile.TemporaryDirectory(prefix="atmo-measured-") as folder:
@@ -123,13 +129,13 @@ def same_but_timings(old, new):
     return TIMING.sub("T", old) == TIMING.sub("T", new)
 
 
-def rewrite(path, atmo, check, with_measured):
+def rewrite(path, atmo, check, with_measured, only=None):
     with open(path, encoding="utf-8") as f:
         lines = f.read().split("\n")
     out = []
     drift = 0
     if with_measured:
-        lines, drift = measured(lines, atmo, check, path)
+        lines, drift = measured(lines, atmo, check, path, only)
     cursor = 0
     with tempfile.TemporaryDirectory(prefix="atmo-transcripts-") as folder:
         for start, end in transcripts(lines):
@@ -180,6 +186,8 @@ def main():
                         help="a Markdown file (repeatable; default README.md and every page under docs/)")
     parser.add_argument("--check", action="store_true", help="only report drift; exit 1 if any")
     parser.add_argument("--no-measured", action="store_true", help="leave the measured blocks alone")
+    parser.add_argument("--measured-only", metavar="REGEX",
+                        help="rerun only the measured blocks whose command matches REGEX")
     args = parser.parse_args()
     atmo = os.path.abspath(args.atmo)
     if not os.access(atmo, os.X_OK):
@@ -187,7 +195,7 @@ def main():
     print(f"doc_transcripts: {machine()}")
     docs = args.doc or ["README.md"] + sorted(
         os.path.join(root, name) for root, _, names in os.walk("docs") for name in names if name.endswith(".md"))
-    drift = sum(rewrite(doc, atmo, args.check, not args.no_measured) for doc in docs)
+    drift = sum(rewrite(doc, atmo, args.check, not args.no_measured, args.measured_only) for doc in docs)
     print(f"doc_transcripts: {drift} drifted line(s)" + ("" if args.check else ", rewritten"))
     sys.exit(1 if args.check and drift else 0)
 
