@@ -493,6 +493,7 @@ def solvers_table(atmo):
     """source4d and hillaire against the path tracer on the real-sky media (docs/accuracy.md)."""
     grid = os.path.join(ROOT, "docs", "data", "real_sky_grid.csv")
     skies = [("us-standard", ["--preset", "us-standard", "--spectral", "3"]),
+             ("us-standard, OPAC phase", ["--preset", "us-standard", "--spectral", "3", "--aerosol-phase", "opac"]),
              ("haze τ550 0.6", ["--preset", "us-standard", "--spectral", "3", "--aerosol", "continental-polluted",
                                 "--aod", "0.6"])]
     models = [("source4d", []), ("source4d", ["--option", "table=64x24x48x8"]), ("hillaire", [])]

@@ -80,6 +80,7 @@ GatherField GatherRadiance(const Grid& grid, const shared::Texture2D& transmitta
         glm::dvec3 L = shared::IntegrateSource4dRadianceInside(
             atmosphere, transmittance, rayleigh, mie, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
             std::numeric_limits<double>::infinity(), s.gather_samples, order == 1 ? 1.0 : 0.0, order == 1 ? 0.0 : 1.0,
+            shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu),
             path_transmittance);
         if (hits_ground && ground) {
           const double t = shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
@@ -442,12 +443,15 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
         w.path_transmittance[p] = ray_transmittance;
         if (w.shared_steps[p]) {
           w.rayleigh_phase[p] = shared::GetRayleighPhase(atmosphere, nu);
-          w.mie_phase[p] = shared::GetMiePhase(atmosphere, nu);
+          w.mie_phase[p] =
+              shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu);
           w.sum[p] = glm::dvec3(0.0);
         } else {
           w.sum[p] = shared::IntegrateSource4dRadianceInside(
               atmosphere, transmittance_table, no_table, no_table, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
-              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0, w.path_transmittance[p]);
+              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0,
+              shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu),
+              w.path_transmittance[p]);
         }
       }
     }

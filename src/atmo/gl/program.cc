@@ -145,6 +145,8 @@ void SetAtmosphereUniforms(const ComputeProgram& program, const std::string& nam
   if (a.mie_phase == shared::kPhaseTabulated) {
     program.SetVec4Array(p + "mie_phase_table[0]", a.mie_phase_table, shared::kPhaseTableSize / 4);
   }
+  program.SetFloat(p + "mie_phase_peak_cap", a.mie_phase_peak_cap);
+  program.SetFloat(p + "mie_phase_peak_mass", a.mie_phase_peak_mass);
   SetDensityProfile(program, p + "absorption_density", a.absorption_density);
   program.SetVec3(p + "absorption_extinction", a.absorption_extinction);
   program.SetVec3(p + "water_vapor_extinction", a.water_vapor_extinction);

@@ -343,7 +343,7 @@ void main() {
   vec3 path_transmittance;
   vec3 radiance = IntegrateSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
       mu_s_size, r, mu, mu_s, nu, hits_ground, 1e30, gather_samples, order == 1 ? 1.0 : 0.0, order == 1 ? 0.0 : 1.0,
-      path_transmittance);
+      GetSource4dGatherMiePhase(atmosphere, a, b, gather_zeniths, gather_azimuths, mu_s, nu), path_transmittance);
   if (hits_ground && any(notEqual(atmosphere.ground_albedo, vec3(0.0)))) {
     float t = DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
     float mu_s_ground = ClampCosine((r * mu_s + t * nu) / atmosphere.bottom_radius);

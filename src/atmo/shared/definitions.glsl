@@ -21,6 +21,9 @@ const int kPhaseTabulated = 5;          // the Mie medium's table, mie_phase_tab
 // (per steradian, normalised to 1 over the sphere) at each, four knots to a vec4: 128 uniform
 // components.
 const int kPhaseTableSize = 128;
+// The half-angle of a tabulated phase function's forward peak, which source4d's gathering grid
+// cannot resolve (source4d.glsl, GetSource4dGatherMiePhase): 3 degrees.
+const Number kPhasePeakAngle = 0.05235987755982989;
 
 // One layer of a density profile, after Bruneton 2017: at altitude h the density is
 // exp_term * exp(exp_scale * h) + linear_term * h + constant_term, clamped to [0, 1].
@@ -60,6 +63,10 @@ struct AtmosphereParameters {
   // kPhaseTabulated: ln of the Mie phase function at the knots above, knot i in component i % 4 of
   // element i / 4; unused (and not uploaded on the GPU) for the analytic phase functions.
   vec4 mie_phase_table[kPhaseTableSize / 4];
+  // kPhaseTabulated: the table's value kPhasePeakAngle from forward, and the mass of its forward
+  // peak above that value inside that angle (source4d's gathering, source4d.glsl); 0 otherwise.
+  Number mie_phase_peak_cap;
+  Number mie_phase_peak_mass;
   DensityProfile absorption_density;
   vec3 absorption_extinction;     // ozone absorption per length, at density 1
   // Water vapour absorption per length, at density 1: its density exists only in the table (w), so

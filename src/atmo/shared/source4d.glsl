@@ -243,6 +243,33 @@ Number GetSource4dStep(Number t_a, Number t_b, bool dense_at_a, int i, int n) {
   return dense_at_a ? t_a + (t_b - t_a) * x * x : t_b - (t_b - t_a) * (1.0 - x) * (1.0 - x);
 }
 
+// The Mie phase function of the first order at a node of source4d's gathering grid (zenith node
+// a of `zeniths` over [0, pi], azimuth node b of `azimuths` over [0, pi] from the sun's, each
+// standing for a hat, a tent one node wide on either side), for the sun at cosine mu_s and the
+// node's nu. A tabulated phase function's forward peak inside kPhasePeakAngle is far narrower than
+// the grid (22.5 degrees of azimuth by default): sampled at the node next to the sun, the hats
+// would spread the aureole over their cells. So the phase is capped at its value at
+// kPhasePeakAngle, and the peak's mass above the cap goes where the hats put the sun's direction:
+// the node's hat at the sun over the hat's solid angle (exact on the sphere), which keeps the
+// peak's energy and puts it in the sun's direction (delta-M, on the grid). Other phase
+// functions are broad against the grid and are returned as they are.
+Number GetSource4dGatherMiePhase(IN(AtmosphereParameters) atmosphere, int a, int b, int zeniths, int azimuths,
+    Number mu_s, Number nu) {
+  Number phase = GetMiePhase(atmosphere, nu);
+  if (atmosphere.mie_phase != kPhaseTabulated) return phase;
+  phase = min(phase, atmosphere.mie_phase_peak_cap);
+  if (b != 0) return phase;  // the sun is at azimuth 0: only the b = 0 hats reach it
+  Number h = kPi / Number(zeniths - 1);
+  Number theta = kPi * Number(a) / Number(zeniths - 1);
+  Number hat = max(1.0 - abs(theta - acos(ClampCosine(mu_s))) / h, 0.0);
+  if (!(hat > 0.0)) return phase;
+  // The hat's solid angle: dphi times the integral of the zenith tent times sin(theta), whose
+  // closed forms are 2 sin(theta_a) (1 - cos h) / h inside and 1 - sin(h) / h at either pole.
+  Number d_phi = kPi / Number(azimuths - 1);
+  Number zenith_part = (a == 0 || a == zeniths - 1) ? 1.0 - sin(h) / h : 2.0 * sin(theta) * (1.0 - cos(h)) / h;
+  return phase + atmosphere.mie_phase_peak_mass * hat / (d_phi * zenith_part);
+}
+
 // Radiance scattered towards the observer at radius r (inside the atmosphere) along (mu, nu),
 // up to the ground, the top or t_limit: `single_weight` times single scattering plus
 // `multiple_weight` times the orders >= 2 of the table (weights 0 or 1: the gathering passes
@@ -253,7 +280,7 @@ vec3 IntegrateSource4dRadianceInside(IN(AtmosphereParameters) atmosphere,
     IN(TransmittanceTexture) transmittance_texture, IN(Source4dTexture) rayleigh_texture,
     IN(Source4dTexture) mie_texture, int mu_s_size, Number r, Number mu, Number mu_s, Number nu,
     bool ray_r_mu_intersects_ground, Number t_limit, int sample_count, Number single_weight,
-    Number multiple_weight, OUT(vec3) transmittance) {
+    Number multiple_weight, Number mie_phase_value, OUT(vec3) transmittance) {
   transmittance = vec3(1.0);
   Number t_max = min(DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground), t_limit);
   vec3 radiance = vec3(0.0);
@@ -289,7 +316,8 @@ vec3 IntegrateSource4dRadianceInside(IN(AtmosphereParameters) atmosphere,
     }
   }
   Number rayleigh_phase = GetRayleighPhase(atmosphere, nu);
-  Number mie_phase = GetMiePhase(atmosphere, nu);
+  // mie_phase_value < 0: the atmosphere's own (the gathering passes GetSource4dGatherMiePhase's).
+  Number mie_phase = mie_phase_value < 0.0 ? GetMiePhase(atmosphere, nu) : mie_phase_value;
   int steps_per_segment = max(2, (sample_count + break_count - 1) / break_count);
   Number t_a = 0.0;
   for (int k = 0; k < break_count; ++k) {
@@ -335,7 +363,7 @@ vec3 IntegrateSource4dRadiance(IN(AtmosphereParameters) atmosphere, IN(Transmitt
     return vec3(0.0);
   }
   return IntegrateSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture, mu_s_size,
-      r, mu, mu_s, nu, RayIntersectsGround(atmosphere, r, mu), t_limit, sample_count, 1.0, 1.0, transmittance);
+      r, mu, mu_s, nu, RayIntersectsGround(atmosphere, r, mu), t_limit, sample_count, 1.0, 1.0, -1.0, transmittance);
 }
 
 // Radiance scattered towards an observer inside the atmosphere along (mu, nu) with all orders,
@@ -349,7 +377,7 @@ vec3 GetSource4dRadianceInside(IN(AtmosphereParameters) atmosphere, IN(Transmitt
   ground_radiance = vec3(0.0);
   vec3 transmittance;
   vec3 radiance = IntegrateSource4dRadianceInside(atmosphere, transmittance_texture, rayleigh_texture, mie_texture,
-      mu_s_size, r, mu, mu_s, nu, hits_ground, t_limit, sample_count, 1.0, 1.0, transmittance);
+      mu_s_size, r, mu, mu_s, nu, hits_ground, t_limit, sample_count, 1.0, 1.0, -1.0, transmittance);
   if (hits_ground) {
     Number t = DistanceToBottomAtmosphereBoundary(atmosphere, r, mu);
     Number mu_s_ground = ClampCosine((r * mu_s + t * nu) / atmosphere.bottom_radius);
