@@ -333,7 +333,8 @@ def cie_effects_table(atmo):
         ("maritime-clean aerosol (τ 0.13)", ["--preset", "us-standard", "--aerosol", "maritime-clean", "--aod", "0.13"]),
         ("desert aerosol, layer to 6 km (τ 0.13)", ["--preset", "us-standard", "--aerosol", "desert", "--aod", "0.13"]),
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
-        ("OPAC's tabulated phase function (`--aerosol-phase opac`)", ["--preset", "us-standard", "--aerosol-phase", "opac"]),
+        ("Henyey–Greenstein phase with OPAC's g (`--aerosol-phase henyey-greenstein`)",
+         ["--preset", "us-standard", "--aerosol-phase", "henyey-greenstein"]),
         ("earth-spectral (textbook air)", ["--preset", "earth-spectral"]),
     ]
     p12 = cie_params(12)
@@ -395,7 +396,8 @@ def illuminance_effects_table(atmo):
         ("aerosol τ550 0.05", ["--preset", "us-standard", "--aod", "0.05"]),
         ("aerosol τ550 0.3", ["--preset", "us-standard", "--aod", "0.3"]),
         ("no aerosol", ["--preset", "us-standard", "--aod", "0"]),
-        ("OPAC's tabulated phase function (`--aerosol-phase opac`)", ["--preset", "us-standard", "--aerosol-phase", "opac"]),
+        ("Henyey–Greenstein phase with OPAC's g (`--aerosol-phase henyey-greenstein`)",
+         ["--preset", "us-standard", "--aerosol-phase", "henyey-greenstein"]),
         ("ground albedo 0", ["--config", CONFIGS["albedo0"]]),
         ("ozone × 1.3", ["--config", CONFIGS["ozone13"]]),
         ("no O₂, O₂–O₂ or water vapour", ["--config", CONFIGS["nogases"]]),
@@ -493,7 +495,8 @@ def solvers_table(atmo):
     """source4d and hillaire against the path tracer on the real-sky media (docs/accuracy.md)."""
     grid = os.path.join(ROOT, "docs", "data", "real_sky_grid.csv")
     skies = [("us-standard", ["--preset", "us-standard", "--spectral", "3"]),
-             ("us-standard, OPAC phase", ["--preset", "us-standard", "--spectral", "3", "--aerosol-phase", "opac"]),
+             ("us-standard, Henyey–Greenstein phase",
+              ["--preset", "us-standard", "--spectral", "3", "--aerosol-phase", "henyey-greenstein"]),
              ("haze τ550 0.6", ["--preset", "us-standard", "--spectral", "3", "--aerosol", "continental-polluted",
                                 "--aod", "0.6"])]
     models = [("source4d", []), ("source4d", ["--option", "table=64x24x48x8"]), ("hillaire", [])]

@@ -422,12 +422,12 @@ std::vector<MoonlitTarget> MoonlitAgainstKrisciunasSchaefer(const Model& model, 
 
 // The moonlit sky against Krisciunas and Schaefer's empirical model, at sea level under us-standard
 // with K&S's extinction k taken from the model's own zenith transmittance (0.28 mag per air mass):
-// K&S state an accuracy of 8-23 %. From 25 degrees off the moon hillaire is within 0.89-1.26 of it
-// over moon elevations 20-70 degrees and phases 10 and 60 degrees (asserted: 0.8-1.3); source4d,
-// the accurate solver, gives 0.88-1.24, and hillaire with Hillaire 2020's series alone
-// (multiple_scattering_orders=1) 0.87-1.23. Closer to
-// the moon the aerosol's forward peak sets the brightness: atmo's sea-level continental aerosol
-// gives 1.4-1.6 times K&S's Mauna Kea fit there (docs/night.md).
+// K&S state an accuracy of 8-23 %. From 25 degrees off the moon hillaire is within 0.89-1.24 of it
+// over moon elevations 20-70 degrees and phases 10 and 60 degrees (asserted: 0.8-1.3). With the
+// Henyey-Greenstein phase of before 2026-12-05 it was 0.89-1.26, source4d 0.88-1.24, and hillaire
+// with Hillaire 2020's series alone (multiple_scattering_orders=1) 0.87-1.23. Closer to the moon the
+// aerosol's forward peak sets the brightness: atmo's sea-level continental aerosol gives 1.34-1.45
+// times K&S's Mauna Kea fit there (1.4-1.6 with Henyey-Greenstein; docs/night.md).
 TEST(Moon, MoonlitSkyAgainstKrisciunasAndSchaefer) {
   const AtmosphereParameters p = UnitIrradiance("us-standard");
   const auto model = CreateModel("hillaire", p);
@@ -468,12 +468,13 @@ TEST(Moon, MoonlitSkyAgainstKrisciunasAndSchaefer) {
 // 3.45 times, until the model's own k at 2800 m is that), over moons 15-75 degrees up at phases
 // 0-90 degrees and targets 15-90 degrees up, 10 degrees or more from the moon (K&S's aerosol term
 // holds from there; 894 positions). K&S state an accuracy of 8-23 %. source4d, the accurate
-// solver: median 0.97, 91 % of the positions within 23 %, 99 % of the 669 that are 30 degrees or
-// more up and 20 or more from the moon (p5-p95 0.80-1.10 there). hillaire, 9 % brighter than
-// source4d in this hazier air: median 1.09, 79 % and 91 % (0.89-1.28). The rest lie near the moon
-// (rho 10-25: up to 1.8, the Henyey-Greenstein forward peak against K&S's exponential) and 15
-// degrees above the horizon (1.3-1.4, where K&S's single-scattering factor 1 - 10^(-0.4 k X)
-// misses the multiple scattering).
+// solver: median 0.98, 91 % of the positions within 23 %, 98 % of the 669 that are 30 degrees or
+// more up and 20 or more from the moon (p5-p95 0.80-1.14 there). hillaire, 10 % brighter than
+// source4d in this hazier air: median 1.08, 78 % and 88 % (0.90-1.28). The rest lie near the moon
+// (rho 10-25: up to 1.6, the aerosol's forward peak against K&S's exponential) and 15 degrees
+// above the horizon (1.3-1.4, where K&S's single-scattering factor 1 - 10^(-0.4 k X) misses the
+// multiple scattering). (With the Henyey-Greenstein phase of before 2026-12-05: source4d 0.97,
+// 91 %, 99 %; hillaire 1.09, 79 %, 91 %; near the moon up to 1.8.)
 TEST(Moon, MoonlitSkyAtKrisciunasAndSchaefersSite) {
   constexpr double kSite = 2800.0, kTarget = 0.172;
   const auto with_aerosol = [](double scale) {

@@ -119,12 +119,12 @@ TEST(Aerosols, ColumnOpticalDepthIsTheOneAskedFor) {
       EXPECT_NEAR(MieColumn(p, 1), aod, 2e-3 * aod + 1e-9) << aod;
       if (aod > 0.0) {
         EXPECT_TRUE(p.mie.density.tabulated());
-        EXPECT_EQ(p.mie.phase, PhaseFunction::kHenyeyGreenstein);
-        AtmosphereParameters opac = base;
-        ApplyAerosol(opac, {type, aod, std::numeric_limits<double>::quiet_NaN(), "opac"});
-        EXPECT_EQ(opac.mie.phase, PhaseFunction::kTabulated);
-        EXPECT_EQ(opac.mie.phase_g, p.mie.phase_g);
-        EXPECT_EQ(opac.mie.scattering_per_m, p.mie.scattering_per_m);
+        EXPECT_EQ(p.mie.phase, PhaseFunction::kTabulated);
+        AtmosphereParameters hg = base;
+        ApplyAerosol(hg, {type, aod, std::numeric_limits<double>::quiet_NaN(), "henyey-greenstein"});
+        EXPECT_EQ(hg.mie.phase, PhaseFunction::kHenyeyGreenstein);
+        EXPECT_EQ(hg.mie.phase_g, p.mie.phase_g);
+        EXPECT_EQ(hg.mie.scattering_per_m, p.mie.scattering_per_m);
         EXPECT_GT(p.mie.phase_g, 0.5);
         EXPECT_LT(p.mie.phase_g, 0.85);
       }

@@ -167,8 +167,8 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
       "Linke turbidity factor (air mass 2, Ineichen 2008): sets the aerosol optical depth");
   app->add_option_function<std::string>(
       "--aerosol-phase", [&common](const std::string& v) { common.aerosol.phase = v; },
-      "the aerosol's phase function: henyey-greenstein (its asymmetry g) or opac (OPAC's own, tabulated) "
-      "[default: henyey-greenstein]");
+      "the aerosol's phase function: opac (OPAC's own, tabulated) or henyey-greenstein (its asymmetry g) "
+      "[default: opac]");
 }
 
 // --date, --latitude, --longitude, --refraction (sun_options.h): the sun from a date and a place.

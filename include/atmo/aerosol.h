@@ -46,9 +46,9 @@ struct AerosolSettings {
   // NaN: the type's own spectral extinction; else tau(lambda) = aod_550 (lambda / 550 nm)^-alpha
   // with alpha in [-1, 4] (the type's albedo and asymmetry stay).
   double angstrom_exponent = std::numeric_limits<double>::quiet_NaN();
-  // The Mie medium's phase function: "henyey-greenstein" with the column's asymmetry at 550 nm, or
-  // "opac", OPAC's own phase functions at 550 nm as a table (docs/aerosols.md, "Phase").
-  std::string phase = "henyey-greenstein";
+  // The Mie medium's phase function: "opac", OPAC's own phase functions at 550 nm as a table, or
+  // "henyey-greenstein" with the column's asymmetry at 550 nm (docs/aerosols.md, "Phase").
+  std::string phase = "opac";
 };
 
 // The names of `AerosolSettings::phase` ("henyey-greenstein", "opac").

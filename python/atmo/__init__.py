@@ -155,7 +155,7 @@ class Model:
 
     The aerosol keywords are the command line's knobs (docs/aerosols.md), applied after `spectral`:
     aerosol (an OPAC type, atmo.aerosol_types()), aod (tau at 550 nm), angstrom, visibility (km),
-    turbidity (Linke) and aerosol_phase ("henyey-greenstein" or "opac", `--aerosol-phase`); at most
+    turbidity (Linke) and aerosol_phase ("opac", the default, or "henyey-greenstein", `--aerosol-phase`); at most
     one of aod, visibility and turbidity.
     """
 
