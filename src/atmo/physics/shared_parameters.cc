@@ -54,8 +54,8 @@ double SampledLogPhase(const std::vector<PhaseSample>& table, double angle_deg) 
 // Fills mie_phase_table of `a` for a tabulated Mie phase function: the samples' log phase at the
 // shared knots (angle pi (i / (N - 1))^2), shifted so that the shared interpolant (linear in the
 // knot coordinate) integrates to exactly 1 over the sphere. The integral: over each knot interval,
-// f(u) = exp(l(u)) 2 pi sin(theta(u)) dtheta/du with theta = pi (u / M)^2, M = N - 1, by 16-point
-// Gauss-Legendre in u (the integrand is smooth there), the whole within 1e-12.
+// exp(l(u)) times shared::GetPhaseTableSolidAnglePerKnot(u), by 16-point Gauss-Legendre in u (the
+// integrand is smooth there), the whole within 1e-12.
 void SetPhaseTable(const Medium& mie, shared::AtmosphereParameters& a) {
   constexpr int kN = shared::kPhaseTableSize;
   constexpr double kM = kN - 1;
@@ -79,10 +79,8 @@ void SetPhaseTable(const Medium& mie, shared::AtmosphereParameters& a) {
       const double x = (k < 8 ? -kX[7 - k] : kX[k - 8]);
       const double w = (k < 8 ? kW[7 - k] : kW[k - 8]);
       const double t = 0.5 * (x + 1.0);  // in [0, 1]
-      const double u = i + t;
-      const double theta = pi * (u / kM) * (u / kM);
-      integral += 0.5 * w * std::exp(logs[i] + t * (logs[i + 1] - logs[i])) * 2.0 * pi * std::sin(theta) *
-                  (2.0 * pi * u / (kM * kM));
+      integral += 0.5 * w * std::exp(logs[i] + t * (logs[i + 1] - logs[i])) *
+                  shared::GetPhaseTableSolidAnglePerKnot(i + t);
     }
   }
   const double shift = std::log(integral);

@@ -42,6 +42,13 @@ Number GetPhaseTableCoord(Number nu) {
   return sqrt(acos(ClampToRange(nu, -1.0, 1.0)) / kPi) * Number(kPhaseTableSize - 1);
 }
 
+// The solid angle per unit of the knot coordinate u: 2 pi sin(theta) dtheta/du, with
+// theta = pi (u / (kPhaseTableSize - 1))^2 (the measure that normalises and samples the table).
+Number GetPhaseTableSolidAnglePerKnot(Number u) {
+  Number m = Number(kPhaseTableSize - 1);
+  return 2.0 * kPi * sin(kPi * (u / m) * (u / m)) * (2.0 * kPi * u / (m * m));
+}
+
 Number GetPhaseTableKnot(IN(AtmosphereParameters) atmosphere, int i) {
   return atmosphere.mie_phase_table[i / 4][i % 4];
 }
