@@ -675,6 +675,10 @@ class ReferenceSky final : public Sky {
     wanted.altitude_m = altitude_m_;
     wanted.sun_elevation_deg = elevation_deg_;
     wanted.sun_azimuth_deg = azimuth_deg_;
+    // The night sky and the moon of SetNight (a new one of either restarts the render).
+    wanted.terms.night_sky = night_.get();
+    wanted.terms.moon = moon_.get();
+    wanted.terms.moon_sky = nullptr;
     if (!running_ || !SameRender(wanted, running_settings_)) Restart(wanted);
     Upload();
     if (timings != nullptr) timings->Add("reference_upload", MillisecondsSince(start));
@@ -713,6 +717,14 @@ class ReferenceSky final : public Sky {
     return shown_.samples_per_pixel >= spp_ || !error_.empty();
   }
   bool SameInputsSameFrame() const override { return false; }
+  bool DrawsNight() const override { return true; }
+  void SetNight(std::shared_ptr<const NightSky> night, std::shared_ptr<const Moon> moon) override {
+    if (night != nullptr && night->channel_count() != parameters_.channel_count()) {
+      throw Error("atmo-viewer: the night sky's channels do not match the reference sky's");
+    }
+    night_ = std::move(night);
+    moon_ = std::move(moon);
+  }
 
  private:
   static bool SameRender(const RenderSettings& a, const RenderSettings& b) {
@@ -721,7 +733,8 @@ class ReferenceSky final : public Sky {
     return p.kind == q.kind && p.width == q.width && p.height == q.height && p.fov_deg == q.fov_deg &&
            p.yaw_deg == q.yaw_deg && p.pitch_deg == q.pitch_deg && a.terms.sun_disc == b.terms.sun_disc &&
            a.terms.ground == b.terms.ground && a.altitude_m == b.altitude_m &&
-           a.sun_elevation_deg == b.sun_elevation_deg && a.sun_azimuth_deg == b.sun_azimuth_deg;
+           a.sun_elevation_deg == b.sun_elevation_deg && a.sun_azimuth_deg == b.sun_azimuth_deg &&
+           a.terms.night_sky == b.terms.night_sky && a.terms.moon == b.terms.moon;
   }
   void Stop() {
     cancel_ = true;
@@ -747,7 +760,12 @@ class ReferenceSky final : public Sky {
     }
     running_settings_ = settings;
     running_ = true;
-    thread_ = std::thread([this, settings] {
+    running_night_ = night_;
+    running_moon_ = moon_;
+    // The moon's light: this model's view for a sun in the moon's direction (as `atmo render`).
+    running_moon_view_ = moon_ != nullptr ? model_->View(settings.altitude_m, moon_->direction()) : nullptr;
+    running_settings_.terms.moon_sky = running_moon_view_.get();
+    thread_ = std::thread([this, settings = running_settings_] {
       ProgressiveSettings progressive;
       progressive.samples_per_pixel = spp_;
       progressive.cancel = &cancel_;
@@ -797,6 +815,13 @@ class ReferenceSky final : public Sky {
   std::vector<gl::GpuTexture> textures_;
   RenderSettings running_settings_;
   bool running_ = false;
+  // SetNight's night sky and moon; those the running render traces (its terms point at them) and
+  // the model's view for a sun in that moon's direction, kept until the next Restart.
+  std::shared_ptr<const NightSky> night_;
+  std::shared_ptr<const Moon> moon_;
+  std::shared_ptr<const NightSky> running_night_;
+  std::shared_ptr<const Moon> running_moon_;
+  std::unique_ptr<SkyView> running_moon_view_;
   std::thread thread_;
   std::atomic<bool> cancel_{false};
   mutable std::mutex mutex_;  // guards what follows (the worker's results)

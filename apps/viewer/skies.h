@@ -10,7 +10,8 @@
 //              on a worker thread, uploaded when done; the frame pass gl::RunSource4dFramePass.
 //   reference  the CPU path tracer's progressive render (RenderProgressive) on a background
 //              thread at a fraction of the window's size, each finished pass uploaded; restarted
-//              when the view, the camera or the terms change.
+//              when the view, the camera, the terms, the night sky or the moon change. The night
+//              sky and the moon are traced in it (DrawsNight), not added by the viewer.
 //
 // To use it (the window's gl::Context current on this thread):
 //   std::unique_ptr<Sky> sky = MakeSky(context, request);   // throws atmo::Error for bad parameters
@@ -31,6 +32,8 @@
 #include "atmo/hillaire_tables.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
+#include "atmo/moon.h"
+#include "atmo/night_sky.h"
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/timing.h"
@@ -99,6 +102,14 @@ class Sky {
   virtual std::string Status() const { return ""; }
   // Whether the shown estimate is final (reference: reference_spp reached); true for the others.
   virtual bool Converged() const { return true; }
+  // Whether the sky draws the night sky and the moon into its own frames (reference: its
+  // progressive render traces them as `atmo render --model reference` does). The viewer adds them
+  // to the other models' frames on the GPU.
+  virtual bool DrawsNight() const { return false; }
+  // For a sky that DrawsNight: the night sky (active, made for this sky's parameters, the view of
+  // SetView) and the moon to draw from the next RenderFrame on, null for none. Shared, so that a
+  // render on a thread of its own keeps them alive; a new pointer restarts such a render.
+  virtual void SetNight(std::shared_ptr<const NightSky> /*night*/, std::shared_ptr<const Moon> /*moon*/) {}
   // Model hillaire's GL sky (the viewer's fused frame-and-display pass runs its frame code), else null.
   virtual const gl::HillaireGl* hillaire_gl() const { return nullptr; }
 };

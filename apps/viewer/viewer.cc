@@ -619,13 +619,16 @@ class Viewer {
   // frames get it on the GPU now (NightSkyGl).
   void UpdateNight();
   bool NightShown() const;
+  // Hands the night sky and the moon of the view to a sky that draws them itself (Sky::DrawsNight).
+  void GiveNight(Sky& sky) const;
   // Adds the night sky to `sky`'s frame textures, just rendered through `camera`.
   void AddNight(const Sky& sky, const Camera& camera);
   // The moon's light: RenderMoonlit renders `sky` for a sun in the moon's direction (no disc) into
-  // moon_frames_ and puts the sky's view back to the sun's; AddMoon adds those frames times the
+  // `moon_frames` and puts the sky's view back to the sun's; AddMoon adds those frames times the
   // moon's relative irradiance and its disc to the frames just rendered.
-  void RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms);
-  void AddMoon(const Sky& sky, const Camera& camera);
+  void RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms,
+                     std::vector<gl::GpuTexture>& moon_frames);
+  void AddMoon(const Sky& sky, const Camera& camera, const std::vector<gl::GpuTexture>& moon_frames);
   void SetViewToMoon(Sky& sky);
 
   ViewerOptions options_;
@@ -711,15 +714,16 @@ class Viewer {
   // sky renders while the sun is below the horizon (NightShown) by night_gl_, and on the host to
   // screenshots (as `atmo render` adds it). night_key_ is what night_ was made for.
   const StarCatalogue* stars_ = nullptr;  // --star-catalogue or stellarium-data; null: none
-  std::unique_ptr<NightSky> night_;
+  std::shared_ptr<NightSky> night_;
   std::unique_ptr<gl::NightSkyGl> night_gl_;
   std::vector<double> night_key_;
   // The moon of --moon-* or of --date (with the night sky; include/atmo/moon.h), shown with the
   // night sky; its moonlit frames; its disc integrated over the pixels on the host (the patch
   // of the frame that holds it, from moon_disc_origin_), for the camera and moon of moon_disc_key_.
-  std::optional<Moon> moon_;
+  std::shared_ptr<const Moon> moon_;
   MoonPosition moon_place_;  // of moon_: its elevation and azimuth, the "sun" of its moonlit frames
   std::vector<gl::GpuTexture> moon_frames_;
+  std::vector<gl::GpuTexture> compare_moon_frames_;  // the compared sky's (--compare)
   Image moon_disc_;
   shared::ivec2 moon_disc_origin_{0, 0};
   std::vector<double> moon_disc_key_;
@@ -961,10 +965,9 @@ void Viewer::Screenshot(const std::string& exr_path, const std::string& png_path
   std::uint64_t samples_per_pixel = 0;
   Image image = sky_->Screenshot(plan.settings, &standard_error, &samples_per_pixel);
   drawn_generation_ = -1;  // the screenshot's frame (no disc) is in the frame textures now
-  // The night sky, as `atmo render` adds it (reference's progressive render leaves it out in the
-  // viewer, docs/viewer.md).
+  // The night sky, as `atmo render` adds it (reference's estimate has it: DrawsNight).
   UpdateNight();
-  if (night_ != nullptr && night_->active() && shown_model_ != "reference") {
+  if (night_ != nullptr && night_->active() && !sky_->DrawsNight()) {
     AddNightSky(night_->Scaled(plan.model_parameters.solar_irradiance), plan.settings.camera, image);
     if (moon_) {
       // The moonlit sky, as `atmo render --backend gl` adds it: the frame for a sun in the
@@ -1223,11 +1226,19 @@ void Viewer::FollowDate() {
 }
 
 // The sun below the horizon (above it the night sky is less than 1e-6 of the sky's light: at sun
-// 0 degrees the clear sky is some 10^3 cd/m^2, the moonless night sky 2e-4), a model other than
-// reference (whose frames come from the CPU's progressive render, uploaded when a pass ends), a
-// planet's atmosphere.
+// 0 degrees the clear sky is some 10^3 cd/m^2, the moonless night sky 2e-4), a sky that does not
+// draw the night itself (reference does: GiveNight), a planet's atmosphere.
 bool Viewer::NightShown() const {
-  return night_ != nullptr && night_->active() && shown_model_ != "reference" && state_.sun_elevation_deg < 0.0;
+  return night_ != nullptr && night_->active() && sky_ != nullptr && !sky_->DrawsNight() &&
+         state_.sun_elevation_deg < 0.0;
+}
+
+// As `atmo render --model reference` passes them to the model: the night sky and the moon at any
+// sun elevation (its glow's scattered light is traced only with the sun below the horizon).
+void Viewer::GiveNight(Sky& sky) const {
+  if (!sky.DrawsNight()) return;
+  const bool active = night_ != nullptr && night_->active();
+  sky.SetNight(active ? night_ : nullptr, active ? moon_ : nullptr);
 }
 
 void Viewer::UpdateNight() {
@@ -1248,15 +1259,15 @@ void Viewer::UpdateNight() {
   const cli::SunOptions& place_sun = place;
   const glm::dvec3 pole = dated ? EclipticPoleDirection(dated->julian_day_utc, *place.latitude_deg, *place.longitude_deg)
                                 : glm::dvec3(0.0);
-  night_ = std::make_unique<NightSky>(current_, std::max(state_.altitude_m, 0.0), sun, pole);
+  night_ = std::make_shared<NightSky>(current_, std::max(state_.altitude_m, 0.0), sun, pole);
   moon_.reset();
   moon_disc_key_.clear();
   if (const std::optional<MoonPosition> place =
           cli::ResolveMoon(options_.render.moon, place_sun, state_.sun_azimuth_deg,
                            dated ? std::optional<double>(dated->julian_day_utc) : std::nullopt)) {
     moon_place_ = *place;
-    moon_.emplace(SunDirection(place->elevation_deg, place->azimuth_deg), place->phase_angle_deg, place->distance_km,
-                  current_.wavelengths_nm, sun);
+    moon_ = std::make_shared<const Moon>(SunDirection(place->elevation_deg, place->azimuth_deg),
+                                         place->phase_angle_deg, place->distance_km, current_.wavelengths_nm, sun);
   }
   const CelestialFrame frame = dated ? CelestialFrame::FromDate(dated->julian_day_utc, *place.latitude_deg,
                                                                 *place.longitude_deg)
@@ -1273,26 +1284,27 @@ void Viewer::SetViewToMoon(Sky& sky) {
   sky.SetView(state_.altitude_m, moon_place_.elevation_deg, moon_place_.azimuth_deg, state_.ground, pass_timings_);
 }
 
-void Viewer::RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms) {
+void Viewer::RenderMoonlit(Sky& sky, const Camera& camera, const RadianceTerms& terms,
+                           std::vector<gl::GpuTexture>& moon_frames) {
   SetViewToMoon(sky);
   RadianceTerms moon_terms = terms;
   moon_terms.sun_disc = false;
   sky.RenderFrame(camera, moon_terms, pass_timings_);
-  moon_frames_.resize(sky.batch_count());
+  moon_frames.resize(sky.batch_count());
   for (std::size_t b = 0; b < sky.batch_count(); ++b) {
     const gl::GpuTexture& frame = sky.frame_texture(b);
     const shared::ivec2 size = frame.size2();
-    if (moon_frames_[b].empty() || moon_frames_[b].size2().x != size.x || moon_frames_[b].size2().y != size.y) {
-      moon_frames_[b] = gl::GpuTexture::Make2D(size);
+    if (moon_frames[b].empty() || moon_frames[b].size2().x != size.x || moon_frames[b].size2().y != size.y) {
+      moon_frames[b] = gl::GpuTexture::Make2D(size);
     }
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-    glCopyImageSubData(frame.id(), GL_TEXTURE_2D, 0, 0, 0, 0, moon_frames_[b].id(), GL_TEXTURE_2D, 0, 0, 0, 0, size.x,
+    glCopyImageSubData(frame.id(), GL_TEXTURE_2D, 0, 0, 0, 0, moon_frames[b].id(), GL_TEXTURE_2D, 0, 0, 0, 0, size.x,
                        size.y, 1);
   }
   sky.SetView(state_.altitude_m, state_.sun_elevation_deg, state_.sun_azimuth_deg, state_.ground, pass_timings_);
 }
 
-void Viewer::AddMoon(const Sky& sky, const Camera& camera) {
+void Viewer::AddMoon(const Sky& sky, const Camera& camera, const std::vector<gl::GpuTexture>& moon_frames) {
   const std::vector<double>& solar = CurrentPlan().model_parameters.solar_irradiance;
   const glm::dvec3& d = moon_->direction();
   const std::vector<double> key = {static_cast<double>(camera.kind), static_cast<double>(camera.width),
@@ -1331,7 +1343,7 @@ void Viewer::AddMoon(const Sky& sky, const Camera& camera) {
   std::vector<shared::vec3> scale;
   for (std::size_t b = 0; b < sky.batch_count(); ++b) {
     frames.push_back(&sky.frame_texture(b));
-    moonlit.push_back(&moon_frames_.at(b));
+    moonlit.push_back(&moon_frames.at(b));
     scale.push_back(BatchValues(moon_->relative_irradiance(), b));
   }
   night_gl_->AddMoon(frames, moonlit, scale, moon_disc_, moon_disc_origin_, pass_timings_);
@@ -1821,11 +1833,12 @@ int Viewer::Run() {
                                pending_->BuildsOnItsOwnThread() && sky_->SameInputsSameFrame();
       waiting_for_build_ = reuse_frame;
       if (fused == nullptr && !reuse_frame) {
-        const bool moon = night && moon_.has_value();
-        if (moon) RenderMoonlit(*sky_, camera, terms);
+        const bool moon = night && moon_ != nullptr;
+        if (moon) RenderMoonlit(*sky_, camera, terms, moon_frames_);
+        GiveNight(*sky_);
         sky_->RenderFrame(camera, terms, pass_timings_);
         if (night) AddNight(*sky_, camera);
-        if (moon) AddMoon(*sky_, camera);
+        if (moon) AddMoon(*sky_, camera, moon_frames_);
         drawn_generation_ = sky_generation_;
         drawn_camera_ = camera;
         drawn_terms_ = terms;
@@ -1833,8 +1846,15 @@ int Viewer::Run() {
       }
       if (fused != nullptr) drawn_generation_ = -1;
       if (compare_sky_ != nullptr) {
-        compare_sky_->RenderFrame(ViewCamera(state_, width, height), terms, pass_timings_);
-        if (night && compare_shown_model_ != "reference") AddNight(*compare_sky_, camera);
+        // The compared sky gets the night as the shown one, the moon where its channels are the
+        // shown sky's (the moon's irradiance is per channel).
+        const bool night_on_gpu = night && !compare_sky_->DrawsNight();
+        const bool moon = night_on_gpu && moon_ != nullptr && compare_sky_->batch_count() == sky_->batch_count();
+        if (moon) RenderMoonlit(*compare_sky_, camera, terms, compare_moon_frames_);
+        GiveNight(*compare_sky_);
+        compare_sky_->RenderFrame(camera, terms, pass_timings_);
+        if (night_on_gpu) AddNight(*compare_sky_, camera);
+        if (moon) AddMoon(*compare_sky_, camera, compare_moon_frames_);
       }
       if (meter) {
         std::vector<const gl::GpuTexture*> frames;

@@ -26,8 +26,9 @@
 // before (an observer in space, looking through the shell) is not, the air above the shell being
 // negligible. The zodiacal light comes from outside the atmosphere: attenuated by the
 // transmittance, 0 on rays that meet the ground. What scatters out of these rays is not scattered
-// back in by this class (the direct, attenuated light only), and the reference path tracer adds
-// the same direct term (it does not trace the glow's scattered light yet: docs/night.md).
+// back in by this class (the direct, attenuated light only). The reference path tracer adds the
+// same direct term and traces the airglow's scattered light with paths of its own
+// (atmo::RenderProgressive); the deterministic models leave it out (docs/night.md).
 #pragma once
 
 #include <span>

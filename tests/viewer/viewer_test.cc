@@ -158,6 +158,9 @@ class Viewer : public ViewerProgram {
   }
   // A hidden window.
   RunResult RunViewer(const std::string& args) const { return RunViewerWith("--hidden", args); }
+  // Defined with its tests, below.
+  void ExpectSplitHalvesAreEachModelsOwnWindow(const std::string& flags, const std::string& first,
+                                               const std::string& second) const;
   // Defined with the frame log's reader, below.
   // `flags`: more viewer flags; `worker_thread`: the tables are built on a thread of their own
   // (--source4d-tables cpu), not in steps, and the caller checks the finished frame.
@@ -685,9 +688,7 @@ TEST_F(Viewer, ReferenceAccumulatesToAtmoRendersEstimate) {
   const RunResult v = RunViewer(view + " --model reference --width 160 --height 88 --frames 2 --screenshot viewer.exr");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("32 of 32 paths per pixel"), std::string::npos) << v.out;
-  // The viewer's reference draws no night sky (docs/viewer.md, "Not yet"): the render without it.
-  const RunResult r = Run("render --model reference " + view +
-                          " --no-night-glow --no-stars --width 40 --height 22 --exr render.exr --no-png");
+  const RunResult r = Run("render --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
@@ -696,6 +697,44 @@ TEST_F(Viewer, ReferenceAccumulatesToAtmoRendersEstimate) {
   EXPECT_EQ(Metadata(vm, "atmo:samplesPerPixel"), "32");
   ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());  // with the .stderr channels
   EXPECT_LT(MaxRelativeDifference(viewer_image, render_image, 1.0), 1e-6);
+}
+
+// Model reference at night: its progressive render traces the moon's light, the glow's scattered
+// light and the stars as `atmo render --model reference` does (the same paths), and the moon and
+// the night light it: without them the estimate is darker everywhere.
+TEST_F(Viewer, ReferenceTracesTheNightAndTheMoonAsAtmoRender) {
+  const std::string view =
+      "--sun-elevation -30 --sun-azimuth 200 --yaw 100 --pitch 20 --fov 90 --spp 8"
+      " --moon-elevation 40 --moon-azimuth 100 --moon-phase 30";
+  const RunResult v = RunViewer(view + " --model reference --width 160 --height 88 --frames 2 --screenshot viewer.exr");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("8 of 8 paths per pixel"), std::string::npos) << v.out;
+  const RunResult r = Run("render --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image viewer_image = ReadExr(dir_ / "viewer.exr");
+  const Image render_image = ReadExr(dir_ / "render.exr");
+  ASSERT_EQ(viewer_image.pixels.size(), render_image.pixels.size());  // with the .stderr channels
+  EXPECT_LT(MaxRelativeDifference(viewer_image, render_image, 1.0), 1e-6);
+  // The same view without the moon, the glow and the stars: the moonlit sky is tens of times brighter.
+  const RunResult dark =
+      RunViewer("--sun-elevation -30 --sun-azimuth 200 --yaw 100 --pitch 20 --fov 90 --spp 8 --no-night-glow"
+                " --no-stars --model reference --width 160 --height 88 --frames 2 --screenshot dark.exr");
+  ASSERT_EQ(dark.exit_code, 0) << dark.err;
+  const Image dark_image = ReadExr(dir_ / "dark.exr");
+  ASSERT_EQ(dark_image.pixels.size(), viewer_image.pixels.size());
+  double lit = 0.0, unlit = 0.0;
+  for (int y = 0; y < viewer_image.height; ++y) {
+    for (int x = 0; x < viewer_image.width; ++x) {
+      for (int c = 0; c < 3; ++c) {  // the radiance channels (the .stderr ones follow)
+        const std::size_t i = (static_cast<std::size_t>(y) * viewer_image.width + x) * viewer_image.channels + c;
+        lit += viewer_image.pixels[i];
+        unlit += dark_image.pixels[i];
+      }
+    }
+  }
+  std::printf("[ figures ] reference at sun -30: summed radiance with the moon and the night %.4g, without %.4g\n",
+              lit, unlit);
+  EXPECT_GT(lit, 10.0 * unlit);
 }
 
 // Compare mode, difference view: a model against itself is (B - A) / A = 0 everywhere, the scale's
@@ -719,15 +758,15 @@ TEST_F(Viewer, DifferenceOfAModelWithItselfIsNeutral) {
 }
 
 // Compare mode, split view: left of the split the first model's window, right of it the second's,
-// pixel for pixel (the same display pass on each one's frame).
-TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
-  const std::string flags = std::string(kSameFlags) + " --ev 9 --no-panels --frames 3";
-  const std::string elek = " --model elek --option size=16x64x16";
-  RunResult v = RunViewer(flags + elek + " --compare hillaire --split 0.4 --window-screenshot split.png");
+// pixel for pixel (the same display pass on each one's frame). `flags` the view, `first` the first
+// model's flags, `second` the compared model.
+void Viewer::ExpectSplitHalvesAreEachModelsOwnWindow(const std::string& flags, const std::string& first,
+                                                     const std::string& second) const {
+  RunResult v = RunViewer(flags + first + " --compare " + second + " --split 0.4 --window-screenshot split.png");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  v = RunViewer(flags + elek + " --window-screenshot a.png");
+  v = RunViewer(flags + first + " --window-screenshot a.png");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  v = RunViewer(flags + " --window-screenshot b.png");
+  v = RunViewer(flags + " --model " + second + " --window-screenshot b.png");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   int width = 0, height = 0;
   const std::vector<unsigned char> split = ReadPngRgb(dir_ / "split.png", width, height);
@@ -747,9 +786,23 @@ TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
       }
     }
   }
-  EXPECT_EQ(differ_a, 0);
-  EXPECT_EQ(differ_b, 0);
-  EXPECT_GT(differ_ab, 1000);  // the two models do differ, so the halves say something
+  EXPECT_EQ(differ_a, 0) << flags;
+  EXPECT_EQ(differ_b, 0) << flags;
+  EXPECT_GT(differ_ab, 1000) << flags;  // the two models do differ, so the halves say something
+}
+
+TEST_F(Viewer, SplitHalvesAreEachModelsOwnWindow) {
+  ExpectSplitHalvesAreEachModelsOwnWindow(std::string(kSameFlags) + " --ev 9 --no-panels --frames 3",
+                                          " --model elek --option size=16x64x16", "hillaire");
+}
+
+// The same at night under the moon: the compared sky gets the moon's light and disc as the first
+// (its half is hillaire's own moonlit window).
+TEST_F(Viewer, ComparedSkyIsMoonlitAsItsOwnWindow) {
+  ExpectSplitHalvesAreEachModelsOwnWindow(
+      "--width 160 --height 90 --sun-elevation -30 --sun-azimuth 200 --yaw 100 --pitch 30 --fov 100 --ev -4"
+      " --no-dither --moon-elevation 40 --moon-azimuth 100 --moon-phase 30 --no-panels --frames 3",
+      " --model elek --option size=16x64x16", "hillaire");
 }
 
 // The spectral toggle (the panel's checkbox, the script key `spectral`): the RGB preset, then its
