@@ -467,7 +467,9 @@ TEST(Moon, MoonlitSkyAgainstKrisciunasAndSchaefer) {
 // their data (k = 0.172 mag per air mass in V; us-standard with its aerosol's extinction scaled,
 // 3.45 times, until the model's own k at 2800 m is that), over moons 15-75 degrees up at phases
 // 0-90 degrees and targets 15-90 degrees up, 10 degrees or more from the moon (K&S's aerosol term
-// holds from there; 894 positions). K&S state an accuracy of 8-23 %. source4d, the accurate
+// holds from there; 894 positions). K&S state an accuracy of 8-23 %, the RMS deviation of their
+// model from their measurements; atmo's RMS deviation from their model over all 894 positions is
+// 14.8 % for source4d and 19.0 % for hillaire (asserted: 18 % and 23 %). source4d, the accurate
 // solver: median 0.98, 91 % of the positions within 23 %, 98 % of the 669 that are 30 degrees or
 // more up and 20 or more from the moon (p5-p95 0.80-1.14 there). hillaire, 10 % brighter than
 // source4d in this hazier air: median 1.08, 78 % and 88 % (0.90-1.28). The rest lie near the moon
@@ -510,6 +512,13 @@ TEST(Moon, MoonlitSkyAtKrisciunasAndSchaefersSite) {
              static_cast<double>(ratios.size());
     };
     const bool accurate = std::string(name) == "source4d";
+    // K&S's 8-23 % is the RMS deviation of their model from their measurements: atmo's from theirs.
+    double squares = 0.0;
+    for (double r : all) squares += (r - 1.0) * (r - 1.0);
+    const double rms = std::sqrt(squares / static_cast<double>(all.size()));
+    std::printf("[ figures ] %s at K&S's site: RMS deviation from K&S %.1f %% over %zu positions\n", name, 100.0 * rms,
+                all.size());
+    EXPECT_LE(rms, accurate ? 0.18 : 0.23) << name << ": K&S's stated accuracy is 8-23 % RMS";
     std::sort(all.begin(), all.end());
     EXPECT_NEAR(all[all.size() / 2], 1.0, accurate ? 0.06 : 0.12) << name << ": the median";
     EXPECT_GE(share_within(all, 0.23), accurate ? 0.85 : 0.75) << name;
