@@ -52,7 +52,8 @@ py::dict Components(const IrradianceComponents& e, const SpectralConversion& con
 
 AnnualSettings Settings(const std::string& model, const ModelOptions& options, const std::string& aerosol_type,
                         const std::vector<std::tuple<double, double, bool>>& planes, int subdivision,
-                        int patch_samples, double circumsolar_deg, bool sun_in_matrix, int sky_map_size = 0) {
+                        int patch_samples, double circumsolar_deg, bool sun_in_matrix, int sky_map_size = 0,
+                        bool per_wavelength = false) {
   AnnualSettings s;
   s.model = model;
   s.options = options;
@@ -63,6 +64,7 @@ AnnualSettings Settings(const std::string& model, const ModelOptions& options, c
   s.circumsolar_half_angle_deg = circumsolar_deg;
   s.sun_in_matrix = sun_in_matrix;
   s.sky_map_size = sky_map_size;
+  s.per_wavelength = per_wavelength;
   return s;
 }
 
@@ -180,14 +182,14 @@ void AddDaylightBindings(py::module_& m) {
       [](const std::string& epw, const std::string& out_dir, const std::string& model, const std::string& parameters_json,
          const ModelOptions& options, const std::string& aerosol_type,
          const std::vector<std::tuple<double, double, bool>>& planes, int subdivision, int patch_samples,
-         double circumsolar_deg, bool sun_in_matrix, int sky_map_size, std::size_t first_hour, std::size_t end_hour,
-         int shard, int shards) {
+         double circumsolar_deg, bool sun_in_matrix, int sky_map_size, bool per_wavelength, std::size_t first_hour,
+         std::size_t end_hour, int shard, int shards) {
         AnnualRunReport report;
         {
           py::gil_scoped_release release;
           AnnualSkies skies(FromJson(parameters_json), ReadEpw(epw),
                             Settings(model, options, aerosol_type, planes, subdivision, patch_samples,
-                                     circumsolar_deg, sun_in_matrix, sky_map_size));
+                                     circumsolar_deg, sun_in_matrix, sky_map_size, per_wavelength));
           report = RunAnnual(skies, AnnualRun{out_dir, first_hour, end_hour, shard, shards});
         }
         py::dict d;
@@ -201,24 +203,24 @@ void AddDaylightBindings(py::module_& m) {
       },
       py::arg("epw"), py::arg("out_dir"), py::arg("model"), py::arg("parameters_json"), py::arg("options"),
       py::arg("aerosol_type"), py::arg("planes"), py::arg("subdivision"), py::arg("patch_samples"),
-      py::arg("circumsolar_deg"), py::arg("sun_in_matrix"), py::arg("sky_map_size"), py::arg("first_hour"),
-      py::arg("end_hour"), py::arg("shard"), py::arg("shards"));
+      py::arg("circumsolar_deg"), py::arg("sun_in_matrix"), py::arg("sky_map_size"), py::arg("per_wavelength"),
+      py::arg("first_hour"), py::arg("end_hour"), py::arg("shard"), py::arg("shards"));
 
   m.def(
       "annual_merge",
       [](const std::string& epw, const std::string& out_dir, const std::string& model, const std::string& parameters_json,
          const ModelOptions& options, const std::string& aerosol_type,
          const std::vector<std::tuple<double, double, bool>>& planes, int subdivision, int patch_samples,
-         double circumsolar_deg, bool sun_in_matrix, int sky_map_size) {
+         double circumsolar_deg, bool sun_in_matrix, int sky_map_size, bool per_wavelength) {
         py::gil_scoped_release release;
         const AnnualSkies skies(FromJson(parameters_json), ReadEpw(epw),
                                 Settings(model, options, aerosol_type, planes, subdivision, patch_samples,
-                                         circumsolar_deg, sun_in_matrix, sky_map_size));
+                                         circumsolar_deg, sun_in_matrix, sky_map_size, per_wavelength));
         return MergeAnnual(skies, out_dir);
       },
       py::arg("epw"), py::arg("out_dir"), py::arg("model"), py::arg("parameters_json"), py::arg("options"),
       py::arg("aerosol_type"), py::arg("planes"), py::arg("subdivision"), py::arg("patch_samples"),
-      py::arg("circumsolar_deg"), py::arg("sun_in_matrix"), py::arg("sky_map_size"));
+      py::arg("circumsolar_deg"), py::arg("sun_in_matrix"), py::arg("sky_map_size"), py::arg("per_wavelength"));
 }
 
 }  // namespace atmo::python

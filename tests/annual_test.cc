@@ -2,6 +2,7 @@
 // NREL's TMY3 year for Greensboro and on broken files, the calibrated hours against their
 // measurements, the blend of table nodes against the sky built for the exact values, the sky
 // matrix against the light it came from, and shards and reruns against one serial run.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -264,8 +265,10 @@ TEST_F(Folder, SkyMatrixHoldsTheHoursLight) {
 // one serial run; a folder of another run is refused.
 TEST_F(Folder, ShardsAndRerunsGiveTheSerialRunsBytes) {
   const fs::path epw = Write("two_days.epw", EpwExcerpt(4320, 48));
+  AnnualSettings settings = FastSettings();
+  settings.per_wavelength = true;
   const auto run = [&](const fs::path& out, std::size_t first, std::size_t end, int shard, int shards) {
-    AnnualSkies year(Preset("us-standard"), ReadEpw(epw), FastSettings());
+    AnnualSkies year(Preset("us-standard"), ReadEpw(epw), settings);
     return RunAnnual(year, AnnualRun{out, first, end, shard, shards});
   };
   const AnnualRunReport serial = run(dir_ / "serial", 0, 48, 0, 1);
@@ -280,7 +283,7 @@ TEST_F(Folder, ShardsAndRerunsGiveTheSerialRunsBytes) {
   const AnnualRunReport rest = run(dir_ / "resumed", 0, 48, 0, 1);
   EXPECT_EQ(rest.already_done, 20u);
   EXPECT_EQ(rest.computed, 28u);
-  for (const char* name : {"sky.mtx", "hours.csv", "irradiance.csv"}) {
+  for (const char* name : {"sky.mtx", "hours.csv", "irradiance.csv", "irradiance_spectral.csv"}) {
     const std::string expected = ReadFile(dir_ / "serial" / name);
     EXPECT_FALSE(expected.empty());
     EXPECT_EQ(ReadFile(dir_ / "sharded" / name), expected) << name;
@@ -295,12 +298,72 @@ TEST_F(Folder, ShardsAndRerunsGiveTheSerialRunsBytes) {
   EXPECT_LT(redo.computed, 48u);
   EXPECT_EQ(ReadFile(dir_ / "resumed" / "sky.mtx"), ReadFile(dir_ / "serial" / "sky.mtx"));
   // Other settings into the same folder: refused, the folder unchanged.
-  AnnualSettings other = FastSettings();
+  AnnualSettings broadband = settings;
+  broadband.per_wavelength = false;
+  AnnualSkies without(Preset("us-standard"), ReadEpw(epw), broadband);
+  EXPECT_THROW(RunAnnual(without, AnnualRun{dir_ / "serial", 0, 48, 0, 1}), Error);
+  AnnualSettings other = settings;
   other.sky_subdivision = 2;
   AnnualSkies year(Preset("us-standard"), ReadEpw(epw), other);
   EXPECT_THROW(RunAnnual(year, AnnualRun{dir_ / "serial", 0, 48, 0, 1}), Error);
   EXPECT_THROW(RunAnnual(year, AnnualRun{dir_ / "other", 0, 48, 2, 2}), Error);
   EXPECT_THROW(RunAnnual(year, AnnualRun{dir_ / "other", 60, 70, 0, 1}), Error);
+}
+
+// irradiance_spectral.csv (per_wavelength): each hour's and plane's irradiance per channel is the
+// spectrum of irradiance.csv's broadband row. Divided by the solar spectrum at each channel it is
+// the relative irradiance, whose integral over 360-830 nm (SpectralConversion's rule) and luminous
+// value are the row's W m^-2 and lux, part by part, to the files' 9 digits. At night every value
+// is 0; by day the global light is the sum of its parts and the sky's light is there in every
+// channel.
+TEST_F(Folder, PerWavelengthIrradianceIsTheBroadbandRowsSpectrum) {
+  AnnualSettings settings = FastSettings();
+  settings.per_wavelength = true;
+  AnnualSkies year(Preset("us-standard"), ReadEpw(Write("june.epw", EpwExcerpt(4320, 24))), settings);
+  ASSERT_TRUE(RunAnnual(year, AnnualRun{dir_ / "out", 0, 24, 0, 1}).merged);
+  const SpectralConversion convert(year.base().wavelengths_nm);
+  const std::size_t n = year.channel_count();
+  const auto rows = [](const fs::path& path) {
+    std::istringstream in(ReadFile(path));
+    std::string line;
+    std::getline(in, line);  // the header
+    std::vector<std::vector<std::string>> out;
+    while (std::getline(in, line)) {
+      std::vector<std::string> fields;
+      std::istringstream split(line);
+      for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+      out.push_back(fields);
+    }
+    return out;
+  };
+  const auto broadband = rows(dir_ / "out" / "irradiance.csv");
+  const auto spectral = rows(dir_ / "out" / "irradiance_spectral.csv");
+  ASSERT_EQ(spectral.size(), broadband.size() * n);  // 24 hours x 4 planes x the channels
+  int daylight = 0;
+  for (std::size_t r = 0; r < broadband.size(); ++r) {
+    const std::vector<std::string>& b = broadband[r];  // hour, month, day, hour_of_day, plane, 5 lux, 5 W m^-2
+    std::vector<std::vector<double>> relative(5, std::vector<double>(n));
+    for (std::size_t c = 0; c < n; ++c) {
+      const std::vector<std::string>& s = spectral[r * n + c];  // hour .. plane, wavelength, 5 parts
+      ASSERT_EQ(s.size(), 11u);
+      for (int k = 0; k < 5; ++k) EXPECT_EQ(s[k], b[k]) << "row " << r;
+      EXPECT_NEAR(std::stod(s[5]), year.base().wavelengths_nm[c], 1e-6);
+      for (int k = 0; k < 5; ++k) relative[k][c] = std::stod(s[6 + k]) / convert.solar_irradiance()[c];
+      // global = direct + circumsolar + sky diffuse + ground reflected
+      const double parts = std::stod(s[6]) + std::stod(s[7]) + std::stod(s[8]) + std::stod(s[9]);
+      EXPECT_NEAR(std::stod(s[10]), parts, 1e-7 * std::max(parts, 1e-30)) << "row " << r;
+    }
+    for (int k = 0; k < 5; ++k) {
+      const double lux = std::stod(b[5 + k]), w_m2 = std::stod(b[10 + k]);
+      EXPECT_NEAR(convert.Luminance(relative[k]), lux, 1e-7 * std::max(lux, 1e-20)) << "row " << r << " part " << k;
+      EXPECT_NEAR(convert.Radiance(relative[k]), w_m2, 1e-7 * std::max(w_m2, 1e-20)) << "row " << r << " part " << k;
+    }
+    if (std::stod(b[14]) > 0.0) {
+      ++daylight;
+      for (std::size_t c = 0; c < n; ++c) EXPECT_GT(relative[2][c], 0.0) << "the sky's light, row " << r;
+    }
+  }
+  EXPECT_GT(daylight, 40);  // 4 planes over the day's 14 hours of light (a plane facing away may get none)
 }
 
 // The matrix file as Radiance reads it: the header's sizes, then rows x columns lines of 3 numbers.

@@ -346,6 +346,7 @@ struct AnnualCommand {
   std::string shard;  // I/N; empty: 0/1
   bool no_sun_in_matrix = false;
   int sky_maps = 0;  // > 0: maps/sky_HHHH.hdr of this size and sky_HHHH.rad per hour with light
+  bool per_wavelength = false;  // also irradiance_spectral.csv
   std::optional<double> latitude_deg;   // must agree with the file's
   std::optional<double> longitude_deg;
 };

@@ -239,6 +239,7 @@ int RunAnnual(const CommonOptions& given, const AnnualCommand& command) {
   settings.circumsolar_half_angle_deg = command.circumsolar_deg;
   settings.sun_in_matrix = !command.no_sun_in_matrix;
   settings.sky_map_size = command.sky_maps;
+  settings.per_wavelength = command.per_wavelength;
   AnnualSkies skies(parameters, std::move(weather), settings);
   const auto start = std::chrono::steady_clock::now();
   const AnnualRunReport report = atmo::RunAnnual(skies, run, [](const std::string& message) {
@@ -248,7 +249,8 @@ int RunAnnual(const CommonOptions& given, const AnnualCommand& command) {
   std::printf("annual: %zu hours computed (%zu of the selection already done) with %d models of %s in %.1f s; ",
               report.computed, report.already_done, report.models_built, common.model.c_str(), seconds);
   if (report.merged) {
-    std::printf("wrote %s/sky.mtx, hours.csv and irradiance.csv\n", command.out_dir.c_str());
+    std::printf("wrote %s/sky.mtx, hours.csv and irradiance.csv%s\n", command.out_dir.c_str(),
+                command.per_wavelength ? " (and irradiance_spectral.csv)" : "");
   } else {
     std::printf("%zu of the file's %zu hours done: run the other shards (or rerun) to finish\n", report.file_done,
                 skies.weather().hours.size());

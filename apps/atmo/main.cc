@@ -449,6 +449,8 @@ int main(int argc, char** argv) {
                          "and its Radiance scene maps/sky_HHHH.rad")
       ->check(kInteger)
       ->check(CLI::Range(16, 4096));
+  annual_app->add_flag("--per-wavelength", annual.per_wavelength,
+                       "also write irradiance_spectral.csv: every plane's irradiance per wavelength, W m^-2 nm^-1");
   annual_app->add_flag("--no-sun-in-matrix", annual.no_sun_in_matrix,
                        "leave the sun's direct light out of the matrix's patches (the sky alone)");
   AddOptionalNumber(annual_app, "--latitude", annual.latitude_deg, "check that the file is for this latitude (degrees)");

@@ -64,6 +64,8 @@ struct AnnualSettings {
   bool sun_in_matrix = true;  // add the sun's direct light to the patch that holds it (as gendaymtx does)
   // > 0: each hour with light also gets HourSky::sky_map, this many pixels a side (at most 4096).
   int sky_map_size = 0;
+  // Also irradiance_spectral.csv (RunAnnual): every plane's irradiance per channel, W m^-2 nm^-1.
+  bool per_wavelength = false;
 };
 
 enum class HourStatus { kNight, kMissing, kLowSun, kClear, kCloudy, kOvercast, kDim };

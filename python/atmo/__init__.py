@@ -741,20 +741,22 @@ def read_epw(path: Union[str, os.PathLike]) -> dict:
 def annual(epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *, model: str = "source4d",
            preset: Optional[str] = None, config=None, options=None, aerosol: str = "continental-average",
            planes=(), subdivision: int = 1, patch_samples: int = 2, circumsolar_deg: float = 2.5,
-           sun_in_matrix: bool = True, sky_maps: int = 0, hours: Optional[tuple] = None,
-           shard: tuple = (0, 1)) -> dict:
+           sun_in_matrix: bool = True, sky_maps: int = 0, per_wavelength: bool = False,
+           hours: Optional[tuple] = None, shard: tuple = (0, 1)) -> dict:
     """One run (or shard) of `atmo annual` (include/atmo/annual.h): the selected hours of the
     weather file as calibrated skies, written as parts into out_dir, skipped when already there;
     out_dir/sky.mtx, hours.csv and irradiance.csv once every hour of the file is done. hours: (A, B),
     the file's hours A..B-1; shard: (I, N), the whole days whose number modulo N is I. Returns
     {selected, already_done, computed, file_done, models_built, merged}. Deterministic: any split
     into shards writes the bytes of one serial run. sky_maps: > 0, also each hour's sky as
-    out_dir/maps/sky_HHHH.hdr (an angular fisheye this many pixels a side) and sky_HHHH.rad."""
+    out_dir/maps/sky_HHHH.hdr (an angular fisheye this many pixels a side) and sky_HHHH.rad.
+    per_wavelength: also out_dir/irradiance_spectral.csv, every plane's irradiance per channel in
+    W m^-2 nm^-1."""
     first, end = (0, 2**63) if hours is None else (int(hours[0]), int(hours[1]))
     return dict(_atmo.annual(os.fspath(epw), os.fspath(out_dir), model, _parameters_json(preset, config),
                              _options(options), aerosol, _planes(planes), int(subdivision), int(patch_samples),
-                             float(circumsolar_deg), bool(sun_in_matrix), int(sky_maps), first, end, int(shard[0]),
-                             int(shard[1])))
+                             float(circumsolar_deg), bool(sun_in_matrix), int(sky_maps), bool(per_wavelength), first,
+                             end, int(shard[0]), int(shard[1])))
 
 
 def annual_on_dask(client, epw: Union[str, os.PathLike], out_dir: Union[str, os.PathLike], *,
@@ -784,7 +786,8 @@ def annual_on_dask(client, epw: Union[str, os.PathLike], out_dir: Union[str, os.
         if progress is not None:
             progress(done, shards)
     merge_keys = {k: kwargs[k] for k in ("model", "preset", "config", "options", "aerosol", "planes", "subdivision",
-                                         "patch_samples", "circumsolar_deg", "sun_in_matrix", "sky_maps")
+                                         "patch_samples", "circumsolar_deg", "sun_in_matrix", "sky_maps",
+                                         "per_wavelength")
                   if k in kwargs}
     merged = _annual_merge(epw, out_dir, **merge_keys)
     return {"shards": reports, "merged": merged}
@@ -792,10 +795,11 @@ def annual_on_dask(client, epw: Union[str, os.PathLike], out_dir: Union[str, os.
 
 def _annual_merge(epw, out_dir, *, model: str = "source4d", preset: Optional[str] = None, config=None, options=None,
                   aerosol: str = "continental-average", planes=(), subdivision: int = 1, patch_samples: int = 2,
-                  circumsolar_deg: float = 2.5, sun_in_matrix: bool = True, sky_maps: int = 0) -> bool:
+                  circumsolar_deg: float = 2.5, sun_in_matrix: bool = True, sky_maps: int = 0,
+                  per_wavelength: bool = False) -> bool:
     return bool(_atmo.annual_merge(os.fspath(epw), os.fspath(out_dir), model, _parameters_json(preset, config),
                                    _options(options), aerosol, _planes(planes), int(subdivision), int(patch_samples),
-                                   float(circumsolar_deg), bool(sun_in_matrix), int(sky_maps)))
+                                   float(circumsolar_deg), bool(sun_in_matrix), int(sky_maps), bool(per_wavelength)))
 
 
 def __dir__() -> list:

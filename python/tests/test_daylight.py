@@ -69,13 +69,17 @@ def test_read_epw():
 
 def test_annual_shards_match_the_serial_run(tmp_path):
     epw = epw_excerpt(tmp_path / "two_days.epw", 4320, 48)
-    kwargs = dict(model="hillaire", planes=[(30.0, 180.0)])
+    kwargs = dict(model="hillaire", planes=[(30.0, 180.0)], per_wavelength=True)
     serial = atmo.annual(epw, tmp_path / "serial", **kwargs)
     assert serial["merged"] and serial["computed"] == 48
     first = atmo.annual(epw, tmp_path / "sharded", shard=(1, 2), **kwargs)
     assert not first["merged"]
     assert atmo.annual(epw, tmp_path / "sharded", shard=(0, 2), **kwargs)["merged"]
-    for name in ("sky.mtx", "hours.csv", "irradiance.csv"):
+    # 48 hours x 3 planes (horizontal, facing the sun, 30:180) x the preset's channels.
+    spectral = (tmp_path / "serial" / "irradiance_spectral.csv").read_text().splitlines()
+    assert spectral[0].startswith("hour,month,day,hour_of_day,plane,wavelength_nm,direct_w_m2_nm")
+    assert len(spectral) == 1 + 48 * 3 * len(atmo.preset("us-standard")["wavelengths_nm"])
+    for name in ("sky.mtx", "hours.csv", "irradiance.csv", "irradiance_spectral.csv"):
         assert (tmp_path / "sharded" / name).read_bytes() == (tmp_path / "serial" / name).read_bytes()
 
 

@@ -68,6 +68,7 @@ std::string Fingerprint(const AnnualSkies& skies) {
   j["min_sun_elevation_deg"] = s.min_sun_elevation_deg;
   j["sun_in_matrix"] = s.sun_in_matrix;
   j["sky_map_size"] = s.sky_map_size;
+  if (s.per_wavelength) j["per_wavelength"] = true;  // absent when off: the runs of before match
   return j.dump(2) + "\n";
 }
 
@@ -85,7 +86,8 @@ std::string G(double v) {
   return b;
 }
 
-// One hour as part lines: H (the hour), P (each plane), M (the matrix column).
+// One hour as part lines: H (the hour), P (each plane), S (each plane per channel, with
+// per_wavelength), M (the matrix column).
 std::string PartLines(const AnnualSkies& skies, const SpectralConversion& convert, const HourSky& h) {
   std::string out = "H," + std::to_string(h.hour) + "," + std::string(ToString(h.status)) + "," +
                     G(h.julian_day_utc) + "," + G(h.sun_elevation_deg) + "," + G(h.sun_azimuth_deg) + "," +
@@ -99,6 +101,14 @@ std::string PartLines(const AnnualSkies& skies, const SpectralConversion& conver
     for (const auto* part : parts) out.append(1, ',').append(G(convert.Luminance(*part)));
     for (const auto* part : parts) out.append(1, ',').append(G(convert.Radiance(*part)));
     out += "\n";
+    if (skies.settings().per_wavelength) {
+      // Channel by channel, the five parts of each (W m^-2 nm^-1).
+      out += "S," + std::to_string(h.hour) + "," + std::to_string(p);
+      for (std::size_t c = 0; c < skies.channel_count(); ++c) {
+        for (const auto* part : parts) out.append(1, ',').append(G(convert.SpectralRadiance(c, (*part)[c])));
+      }
+      out += "\n";
+    }
   }
   if (!h.patch_radiance.empty()) {
     const std::size_t n = skies.channel_count();
@@ -164,6 +174,7 @@ std::string HourScene(const AnnualSkies& skies, const SpectralConversion& conver
 struct PartHour {
   std::vector<std::string> h;               // the H fields after the hour
   std::vector<std::vector<std::string>> p;  // per plane, the fields after the plane index
+  std::vector<std::vector<std::string>> s;  // per plane, the S fields after the plane index
   std::string m;                            // the M values, comma-separated
 };
 
@@ -202,11 +213,12 @@ std::map<std::size_t, PartHour> ReadParts(const fs::path& out_dir) {
       if (line[0] == 'H') {
         if (!h.h.empty()) continue;  // the same hour twice (never from atmo itself): the first stays
         h.h = Split(rest);
-      } else if (line[0] == 'P') {
+      } else if (line[0] == 'P' || line[0] == 'S') {
         std::vector<std::string> f = Split(rest);
         const std::size_t plane = std::stoul(f[0]);
-        if (h.p.size() <= plane) h.p.resize(plane + 1);
-        if (h.p[plane].empty()) h.p[plane].assign(f.begin() + 1, f.end());
+        std::vector<std::vector<std::string>>& planes = line[0] == 'P' ? h.p : h.s;
+        if (planes.size() <= plane) planes.resize(plane + 1);
+        if (planes[plane].empty()) planes[plane].assign(f.begin() + 1, f.end());
       } else if (line[0] == 'M') {
         if (h.m.empty()) h.m = rest;
       } else {
@@ -318,6 +330,11 @@ bool MergeAnnual(const AnnualSkies& skies, const fs::path& out_dir) {
   std::string irradiance_csv =
       "hour,month,day,hour_of_day,plane,direct_lux,circumsolar_lux,sky_diffuse_lux,ground_reflected_lux,global_lux,"
       "direct_w_m2,circumsolar_w_m2,sky_diffuse_w_m2,ground_reflected_w_m2,global_w_m2\n";
+  const bool spectral = skies.settings().per_wavelength;
+  const std::vector<double>& wavelengths = skies.base().wavelengths_nm;
+  std::string spectral_csv =
+      "hour,month,day,hour_of_day,plane,wavelength_nm,direct_w_m2_nm,circumsolar_w_m2_nm,sky_diffuse_w_m2_nm,"
+      "ground_reflected_w_m2_nm,global_w_m2_nm\n";
   for (std::size_t h = 0; h < hours.size(); ++h) {
     const PartHour& part = parts.at(h);
     const WeatherHour& w = hours[h];
@@ -331,6 +348,16 @@ bool MergeAnnual(const AnnualSkies& skies, const fs::path& out_dir) {
       irradiance_csv += when + "," + labels[p];
       for (const std::string& v : part.p[p]) irradiance_csv += "," + v;
       irradiance_csv += "\n";
+      if (!spectral) continue;
+      constexpr std::size_t kParts = 5;
+      if (p >= part.s.size() || part.s[p].size() != kParts * wavelengths.size()) {
+        throw Error("the per-wavelength parts of hour " + std::to_string(h) + " are malformed");
+      }
+      for (std::size_t c = 0; c < wavelengths.size(); ++c) {
+        spectral_csv += when + "," + labels[p] + "," + G(wavelengths[c]);
+        for (std::size_t k = 0; k < kParts; ++k) spectral_csv += "," + part.s[p][kParts * c + k];
+        spectral_csv += "\n";
+      }
     }
   }
   // The matrix: row r (ground, then patches), column c (hour): "R G B" per line, rows apart by a
@@ -353,6 +380,7 @@ bool MergeAnnual(const AnnualSkies& skies, const fs::path& out_dir) {
                              "\nNCOLS=" + std::to_string(hours.size()) + "\nNCOMP=3\nFORMAT=ascii\n\n";
   WriteTextFileAtomically(out_dir / "hours.csv", hours_csv);
   WriteTextFileAtomically(out_dir / "irradiance.csv", irradiance_csv);
+  if (spectral) WriteTextFileAtomically(out_dir / "irradiance_spectral.csv", spectral_csv);
   WriteFileAtomically(out_dir / "sky.mtx", [&](const fs::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     out << header;
