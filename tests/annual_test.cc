@@ -338,7 +338,7 @@ TEST_F(Folder, PerWavelengthIrradianceIsTheBroadbandRowsSpectrum) {
   };
   const auto broadband = rows(dir_ / "out" / "irradiance.csv");
   const auto spectral = rows(dir_ / "out" / "irradiance_spectral.csv");
-  ASSERT_EQ(spectral.size(), broadband.size() * n);  // 24 hours x 4 planes x the channels
+  ASSERT_EQ(spectral.size(), broadband.size() * n);  // each row (an hour with light, a plane) per channel
   int daylight = 0;
   for (std::size_t r = 0; r < broadband.size(); ++r) {
     const std::vector<std::string>& b = broadband[r];  // hour, month, day, hour_of_day, plane, 5 lux, 5 W m^-2
