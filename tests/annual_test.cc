@@ -313,14 +313,14 @@ TEST_F(Folder, ShardsAndRerunsGiveTheSerialRunsBytes) {
 // irradiance_spectral.csv (per_wavelength): each hour's and plane's irradiance per channel is the
 // spectrum of irradiance.csv's broadband row. Divided by the solar spectrum at each channel it is
 // the relative irradiance, whose integral over 360-830 nm (SpectralConversion's rule) and luminous
-// value are the row's W m^-2 and lux, part by part, to the files' 9 digits. At night every value
-// is 0; by day the global light is the sum of its parts and the sky's light is there in every
-// channel.
+// value are the row's W m^-2 and lux, part by part, to the files' 9 digits; the global light is the
+// sum of its parts, and the sky's light is there in every channel.
 TEST_F(Folder, PerWavelengthIrradianceIsTheBroadbandRowsSpectrum) {
   AnnualSettings settings = FastSettings();
   settings.per_wavelength = true;
-  AnnualSkies year(Preset("us-standard"), ReadEpw(Write("june.epw", EpwExcerpt(4320, 24))), settings);
-  ASSERT_TRUE(RunAnnual(year, AnnualRun{dir_ / "out", 0, 24, 0, 1}).merged);
+  // The daylight of a June day, 06:00 to 18:00 (12 hours of the file).
+  AnnualSkies year(Preset("us-standard"), ReadEpw(Write("june.epw", EpwExcerpt(4326, 12))), settings);
+  ASSERT_TRUE(RunAnnual(year, AnnualRun{dir_ / "out", 0, 12, 0, 1}).merged);
   const SpectralConversion convert(year.base().wavelengths_nm);
   const std::size_t n = year.channel_count();
   const auto rows = [](const fs::path& path) {
@@ -363,7 +363,7 @@ TEST_F(Folder, PerWavelengthIrradianceIsTheBroadbandRowsSpectrum) {
       for (std::size_t c = 0; c < n; ++c) EXPECT_GT(relative[2][c], 0.0) << "the sky's light, row " << r;
     }
   }
-  EXPECT_GT(daylight, 40);  // 4 planes over the day's 14 hours of light (a plane facing away may get none)
+  EXPECT_GT(daylight, 40);  // 4 planes over the 12 hours of light (a plane facing away may get none)
 }
 
 // The matrix file as Radiance reads it: the header's sizes, then rows x columns lines of 3 numbers.
