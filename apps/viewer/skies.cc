@@ -720,7 +720,8 @@ class ReferenceSky final : public Sky {
   bool DrawsNight() const override { return true; }
   void SetNight(std::shared_ptr<const NightSky> night, std::shared_ptr<const Moon> moon) override {
     if (night != nullptr && night->channel_count() != parameters_.channel_count()) {
-      throw Error("atmo-viewer: the night sky's channels do not match the reference sky's");
+      night = nullptr;  // made for other channels (a compared sky's): none, as the viewer's GPU pass does
+      moon = nullptr;
     }
     night_ = std::move(night);
     moon_ = std::move(moon);

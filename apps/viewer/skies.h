@@ -106,9 +106,10 @@ class Sky {
   // progressive render traces them as `atmo render --model reference` does). The viewer adds them
   // to the other models' frames on the GPU.
   virtual bool DrawsNight() const { return false; }
-  // For a sky that DrawsNight: the night sky (active, made for this sky's parameters, the view of
-  // SetView) and the moon to draw from the next RenderFrame on, null for none. Shared, so that a
-  // render on a thread of its own keeps them alive; a new pointer restarts such a render.
+  // For a sky that DrawsNight: the night sky (active, made for the view of SetView) and the moon to
+  // draw from the next RenderFrame on, null for none (also when made for other channels than this
+  // sky's). Shared, so that a render on a thread of its own keeps them alive; a new pointer
+  // restarts such a render.
   virtual void SetNight(std::shared_ptr<const NightSky> /*night*/, std::shared_ptr<const Moon> /*moon*/) {}
   // Model hillaire's GL sky (the viewer's fused frame-and-display pass runs its frame code), else null.
   virtual const gl::HillaireGl* hillaire_gl() const { return nullptr; }

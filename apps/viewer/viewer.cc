@@ -619,6 +619,7 @@ class Viewer {
   // frames get it on the GPU now (NightSkyGl).
   void UpdateNight();
   bool NightShown() const;
+  bool NightOnGpu(const Sky& sky) const;  // NightShown for `sky` (the shown or the compared one)
   // Hands the night sky and the moon of the view to a sky that draws them itself (Sky::DrawsNight).
   void GiveNight(Sky& sky) const;
   // Adds the night sky to `sky`'s frame textures, just rendered through `camera`.
@@ -1228,9 +1229,10 @@ void Viewer::FollowDate() {
 // The sun below the horizon (above it the night sky is less than 1e-6 of the sky's light: at sun
 // 0 degrees the clear sky is some 10^3 cd/m^2, the moonless night sky 2e-4), a sky that does not
 // draw the night itself (reference does: GiveNight), a planet's atmosphere.
-bool Viewer::NightShown() const {
-  return night_ != nullptr && night_->active() && sky_ != nullptr && !sky_->DrawsNight() &&
-         state_.sun_elevation_deg < 0.0;
+bool Viewer::NightShown() const { return sky_ != nullptr && NightOnGpu(*sky_); }
+
+bool Viewer::NightOnGpu(const Sky& sky) const {
+  return night_ != nullptr && night_->active() && !sky.DrawsNight() && state_.sun_elevation_deg < 0.0;
 }
 
 // As `atmo render --model reference` passes them to the model: the night sky and the moon at any
@@ -1848,7 +1850,7 @@ int Viewer::Run() {
       if (compare_sky_ != nullptr) {
         // The compared sky gets the night as the shown one, the moon where its channels are the
         // shown sky's (the moon's irradiance is per channel).
-        const bool night_on_gpu = night && !compare_sky_->DrawsNight();
+        const bool night_on_gpu = NightOnGpu(*compare_sky_);
         const bool moon = night_on_gpu && moon_ != nullptr && compare_sky_->batch_count() == sky_->batch_count();
         if (moon) RenderMoonlit(*compare_sky_, camera, terms, compare_moon_frames_);
         GiveNight(*compare_sky_);
