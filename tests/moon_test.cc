@@ -141,6 +141,67 @@ TEST(Moon, DiscCarriesTheIrradianceWithThePhase) {
   EXPECT_THROW(Moon(glm::dvec3(0, 0, 2), 10.0, 384400.0, wavelengths, sun), Error);
 }
 
+// Earthshine: the night side of the disc shines with the earthshine's radiance alone, the sunlit
+// side with both; the disc's irradiance (a Monte Carlo integral of DiscRadiance over a cap around
+// it) is relative_irradiance() with the earthshine in it; the earthshine is 0 at full moon (the
+// Earth new, seen from the moon) and grows towards new moon, where it is (2/3) 0.30 (R_E / d)^2 of
+// the sun's light on the moon, returned at zero phase: 10.7 magnitudes under the full moon's mean
+// surface brightness at a thin crescent (160 degrees).
+TEST(Moon, EarthshineLightsTheNightSide) {
+  const std::vector<double> wavelengths = {680.0, 550.0, 440.0};
+  const glm::dvec3 direction = Elevated(20.0, 250.0);
+  const glm::dvec3 sun = Elevated(-12.0, 260.0);
+  const Moon full(direction, 0.0, kMoonReferenceDistanceKm, wavelengths, sun);
+  EXPECT_NEAR(full.earthshine_radiance()[1], 0.0, 1e-12 * full.relative_irradiance()[1]);
+  double previous = 0.0;
+  for (double phase : {30.0, 60.0, 90.0, 120.0, 150.0, 170.0}) {
+    const Moon moon(direction, phase, kMoonReferenceDistanceKm, wavelengths, sun);
+    EXPECT_GT(moon.earthshine_radiance()[1], previous) << phase;
+    previous = moon.earthshine_radiance()[1];
+  }
+  const Moon crescent(direction, 160.0, kMoonReferenceDistanceKm, wavelengths, sun);
+  const double solid_angle = 2.0 * kPi * (1.0 - std::cos(crescent.angular_radius_rad()));
+  const double full_mean = full.relative_irradiance()[1] / solid_angle;
+  const double magnitudes = -2.5 * std::log10(crescent.earthshine_radiance()[1] / full_mean);
+  std::printf("[ figures ] earthshine at phase 160: %.2f mag under the full moon's mean surface brightness\n",
+              magnitudes);
+  EXPECT_NEAR(magnitudes, 10.7, 0.1);
+  // The night side: the earthshine alone, in every channel.
+  const glm::dvec3 towards_sun = glm::normalize(sun - glm::dot(sun, direction) * direction);
+  const glm::dvec3 night_side = glm::normalize(direction - 0.5 * crescent.angular_radius_rad() * towards_sun);
+  ASSERT_EQ(crescent.DiscShape(night_side), 0.0);
+  std::vector<double> radiance(3);
+  crescent.DiscRadiance(night_side, radiance);
+  for (std::size_t c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(radiance[c], crescent.earthshine_radiance()[c]);
+  crescent.DiscRadiance(glm::normalize(direction + 2.0 * crescent.angular_radius_rad() * towards_sun), radiance);
+  EXPECT_EQ(radiance[1], 0.0);  // off the disc
+  // The disc carries relative_irradiance(), the earthshine in it (a sizeable share at 160 degrees).
+  const glm::dvec3 e1 = glm::normalize(glm::cross(direction, glm::dvec3(0, 0, 1)));
+  const glm::dvec3 e2 = glm::cross(direction, e1);
+  const double cap = 1.5 * crescent.angular_radius_rad();
+  const double cap_solid_angle = 2.0 * kPi * (1.0 - std::cos(cap));
+  std::uint64_t state = 777;
+  const auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  std::vector<double> sum(3, 0.0);
+  const int n = 2000000;
+  for (int k = 0; k < n; ++k) {
+    const double cos_theta = 1.0 - uniform() * (1.0 - std::cos(cap));
+    const double phi = 2.0 * kPi * uniform();
+    const double sin_theta = std::sqrt(1.0 - cos_theta * cos_theta);
+    crescent.DiscRadiance(cos_theta * direction + sin_theta * (std::cos(phi) * e1 + std::sin(phi) * e2), radiance);
+    for (std::size_t c = 0; c < 3; ++c) sum[c] += radiance[c];
+  }
+  const double earthshine_share = crescent.earthshine_radiance()[1] * solid_angle / crescent.relative_irradiance()[1];
+  std::printf("[ figures ] earthshine's share of the moon's irradiance at phase 160: %.3g\n", earthshine_share);
+  EXPECT_GT(earthshine_share, 0.01);
+  for (std::size_t c = 0; c < 3; ++c) {
+    EXPECT_NEAR(sum[c] * cap_solid_angle / n, crescent.relative_irradiance()[c], 0.01 * crescent.relative_irradiance()[c]);
+  }
+}
+
 // The renderers add the moon: its disc with the irradiance it carries (summed over the pixels'
 // solid angles), and the moonlit sky, which is the model's sky for a sun in the moon's direction
 // times the moon's relative irradiance.

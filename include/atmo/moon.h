@@ -22,6 +22,16 @@
 // which averages the waxing and waning moon (their difference, the b-terms, is up to ~4 % at
 // quarter). The fit covers 1.55 to 97 degrees of phase; below 1.55 degrees, where its opposition
 // term extrapolates up to ~0.3 mag too bright, the reflectance is held at its 1.55-degree value.
+//
+// Earthshine. The sunlit Earth lights the whole disc, the night side included, from almost the
+// observer's direction (the Earth-moon-observer angle is under a degree). Its irradiance at the
+// moon over the sun's is (2/3) p* Phi(alpha_E) (R_E / d)^2: a Lambert sphere of the Earth's
+// apparent albedo p* = 0.30, the value of the earthshine measurements that define it (Goode et al.
+// 2001, GRL 28, 1671; Qiu et al. 2003, JGR 108, 4709, find it varying by about +-20 % with the
+// season, the clouds and the phase), at the Earth's phase angle alpha_E = 180 degrees - the moon's,
+// with Phi(a) = (sin a + (pi - a) cos a) / pi. The moon returns it as the ROLO reflectance at zero
+// phase (the opposition surge included), uniformly over the disc, with the sun's spectrum (the
+// Earth's bluer reflectance is left out).
 #pragma once
 
 #include <span>
@@ -36,6 +46,8 @@ inline constexpr double kRoloMinPhaseDeg = 1.55;
 // The moon's mean distance of the ROLO model (km) and its radius (km).
 inline constexpr double kMoonReferenceDistanceKm = 384400.0;
 inline constexpr double kMoonRadiusKm = 1737.4;
+inline constexpr double kEarthRadiusKm = 6371.0;
+inline constexpr double kEarthApparentAlbedo = 0.30;  // p* of the earthshine measurements (above)
 
 struct MoonPosition {
   double elevation_deg = 0.0;      // topocentric, geometric (no refraction), of the centre
@@ -67,15 +79,18 @@ class Moon {
   double phase_angle_deg() const { return phase_angle_deg_; }
   double angular_radius_rad() const { return angular_radius_rad_; }
   // Per channel: the moon's irradiance at the top of the atmosphere over the sun's (at 1 au) at
-  // the channel's wavelength: A Omega_M / pi (384 400 km / distance)^2. Scales the moonlit sky.
+  // the channel's wavelength: the sunlit disc's A Omega_M / pi (384 400 km / distance)^2 plus the
+  // earthshine's radiance times the disc's solid angle. Scales the moonlit sky.
   const std::vector<double>& relative_irradiance() const { return relative_irradiance_; }
+  // Per channel: the earthshine's radiance over the whole disc (sr^-1 per unit solar irradiance).
+  const std::vector<double>& earthshine_radiance() const { return earthshine_radiance_; }
 
   // The disc's radiance along `view` per unit solar irradiance, unattenuated, per channel: 0 off
-  // the disc and on its dark side; on the lit side the Lommel-Seeliger law mu0 / (mu0 + mu) of the
-  // lunar surface (no limb darkening at full moon), normalised so that the disc's irradiance is
-  // relative_irradiance() exactly.
+  // the disc; the earthshine everywhere on it; on the lit side also the sunlight by the
+  // Lommel-Seeliger law mu0 / (mu0 + mu) of the lunar surface (no limb darkening at full moon),
+  // normalised so that the disc's irradiance is relative_irradiance() exactly.
   void DiscRadiance(const glm::dvec3& view, std::span<double> out) const;
-  // The same for one channel's scale 1: the shape of the disc (sr^-1), which integrates to 1.
+  // The sunlit part's shape for one channel's scale 1 (sr^-1), which integrates to 1.
   double DiscShape(const glm::dvec3& view) const;
 
  private:
@@ -84,6 +99,8 @@ class Moon {
   double phase_angle_deg_;
   double angular_radius_rad_;
   double shape_normalisation_ = 1.0;  // 1 / integral over the disc of the unnormalised law
+  std::vector<double> sunlit_irradiance_;  // per channel: the sunlit part's share of relative_irradiance_
+  std::vector<double> earthshine_radiance_;
   std::vector<double> relative_irradiance_;
 };
 

@@ -73,7 +73,19 @@ Moon::Moon(const glm::dvec3& direction, double phase_angle_deg, double distance_
 
   const double scale = data::kMoonSolidAngleSr / kPi * (kMoonReferenceDistanceKm / distance_km) *
                        (kMoonReferenceDistanceKm / distance_km);
-  for (double nm : wavelengths_nm) relative_irradiance_.push_back(LunarDiskReflectance(nm, phase_angle_deg) * scale);
+  for (double nm : wavelengths_nm) sunlit_irradiance_.push_back(LunarDiskReflectance(nm, phase_angle_deg) * scale);
+
+  // Earthshine (include/atmo/moon.h): the Earth at phase angle pi - i, a Lambert sphere of the
+  // apparent albedo p*, lights the disc; the moon returns it at zero phase.
+  const double earth_phase = kPi - i;
+  const double lambert = (std::sin(earth_phase) + (kPi - earth_phase) * std::cos(earth_phase)) / kPi;
+  const double earth_size = kEarthRadiusKm / distance_km;
+  const double earthlight = 2.0 / 3.0 * kEarthApparentAlbedo * std::max(lambert, 0.0) * earth_size * earth_size;
+  const double disc_solid_angle = 2.0 * kPi * (1.0 - std::cos(angular_radius_rad_));
+  for (std::size_t c = 0; c < wavelengths_nm.size(); ++c) {
+    earthshine_radiance_.push_back(LunarDiskReflectance(wavelengths_nm[c], 0.0) * earthlight / kPi);
+    relative_irradiance_.push_back(sunlit_irradiance_[c] + earthshine_radiance_[c] * disc_solid_angle);
+  }
 
   // The disc's shape integrates to 1: the unnormalised law summed over a fine grid of the disc's
   // tangent plane (solid angle per cell ~ cell area for so small a disc; the grid's error is < 0.1 %
@@ -115,9 +127,10 @@ double Moon::DiscShape(const glm::dvec3& view) const {
 }
 
 void Moon::DiscRadiance(const glm::dvec3& view, std::span<double> out) const {
-  const double shape = DiscShape(view);
+  const bool on_disc = glm::dot(view, direction_) > std::cos(angular_radius_rad_);
+  const double shape = on_disc ? DiscShape(view) : 0.0;
   for (std::size_t c = 0; c < relative_irradiance_.size() && c < out.size(); ++c) {
-    out[c] = shape * relative_irradiance_[c];
+    out[c] = on_disc ? shape * sunlit_irradiance_[c] + earthshine_radiance_[c] : 0.0;
   }
 }
 
