@@ -146,7 +146,8 @@ TEST(Moon, DiscCarriesTheIrradianceWithThePhase) {
 // it) is relative_irradiance() with the earthshine in it; the earthshine is 0 at full moon (the
 // Earth new, seen from the moon) and grows towards new moon, where it is (2/3) 0.30 (R_E / d)^2 of
 // the sun's light on the moon, returned at zero phase: 10.7 magnitudes under the full moon's mean
-// surface brightness at a thin crescent (160 degrees).
+// surface brightness at a thin crescent (160 degrees), and within the measured 12-17 V mag per
+// square arcsecond at the phases where it is observed.
 TEST(Moon, EarthshineLightsTheNightSide) {
   const std::vector<double> wavelengths = {680.0, 550.0, 440.0};
   const glm::dvec3 direction = Elevated(20.0, 250.0);
@@ -166,6 +167,18 @@ TEST(Moon, EarthshineLightsTheNightSide) {
   std::printf("[ figures ] earthshine at phase 160: %.2f mag under the full moon's mean surface brightness\n",
               magnitudes);
   EXPECT_NEAR(magnitudes, 10.7, 0.1);
+  // Against the measured surface brightness of the earthshine: 12 to 17 V mag per square arcsecond
+  // over the lunar phases it is observed at and the lunar geography (Montanes-Rodriguez et al. 2007,
+  // AJ 134, 1145, from the Big Bear earthshine photometry); Garstang's 1986 conversion
+  // L = 1.085e5 10^(-0.4 V) cd/m^2 (as docs/validation.md uses for the night sky).
+  const SpectralConversion convert(wavelengths);
+  for (double phase : {60.0, 90.0, 120.0, 150.0}) {
+    const Moon moon(direction, phase, kMoonReferenceDistanceKm, wavelengths, sun);
+    const double v = -2.5 * std::log10(convert.Luminance(moon.earthshine_radiance()) / 1.085e5);
+    std::printf("[ figures ] earthshine at moon phase %.0f: V %.2f mag/arcsec^2\n", phase, v);
+    EXPECT_GT(v, 12.0) << phase;
+    EXPECT_LT(v, 17.0) << phase;
+  }
   // The night side: the earthshine alone, in every channel.
   const glm::dvec3 towards_sun = glm::normalize(sun - glm::dot(sun, direction) * direction);
   const glm::dvec3 night_side = glm::normalize(direction - 0.5 * crescent.angular_radius_rad() * towards_sun);
