@@ -30,11 +30,13 @@ Only the Python standard library is used. With --write, the table between
 """
 
 import argparse
+import atexit
 import csv
 import io
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -50,6 +52,7 @@ class Atmo:
         self.path = path
         self.preset = preset
         self.folder = tempfile.mkdtemp(prefix="genssky_")
+        atexit.register(shutil.rmtree, self.folder, True)  # the grids and the configs go with the run
 
     def sample(self, points, config=None, options=(), model="source4d", extra=()):
         """points: (sun_zenith, view_zenith, azimuth) at the ground -> per point the channels' radiance."""
