@@ -14,6 +14,8 @@
 #include "atmo/error.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
+#include "atmo/render.h"
+#include "atmo/spectrum.h"
 #include "cpu/path_tracer.h"
 #include "cpu/source4d_tables.h"
 #include "models/source4d_model.h"
@@ -344,6 +346,73 @@ TEST(Source4dModel, SkyViewTableMatchesTheMarch) {
     // 4-5 %, the p95.
     EXPECT_LT(median, 1e-3) << altitude << " m, p95 " << p95;
     EXPECT_LT(p95, altitude < 50e3 ? 5e-3 : 0.08) << altitude << " m, median " << median;
+  }
+}
+
+// The sky-view table's texels are marched when a lookup first needs them: a perspective view
+// marches a small part of the table, and its image is the same, bit for bit, as that of a
+// view whose whole table was marched first (by an equirectangular image), for every channel
+// (two batches) and folded into colour.
+TEST(Source4dModel, SkyViewMarchesOnlyTheTexelsAnImageReads) {
+  const AtmosphereParameters p = MakeSpectral(Preset("earth"), 6);
+  const auto model = MakeSource4d(p, {{"table", "8x12x16x6"}, {"gather", "17x5"}, {"orders", "3"}});
+  model->Precompute();
+  const glm::dvec3 sun = Direction(80.0, 30.0);
+  Camera perspective;
+  perspective.kind = CameraKind::kPerspective;
+  // Pixels 5 degrees apart, several texels: no pixel's taps are marched for another pixel.
+  perspective.width = 12;
+  perspective.height = 7;
+  perspective.fov_deg = 60.0;
+  perspective.yaw_deg = 100.0;  // not towards the sun: no pixel mirrors another
+  perspective.pitch_deg = 10.0;
+  const RadianceTerms terms{/*sun_disc=*/false, /*ground=*/true};
+  const std::vector<double> irradiance(p.channel_count(), 1.0);
+  std::vector<glm::vec3> weights;
+  for (std::size_t c = 0; c < p.channel_count(); ++c) weights.emplace_back(0.1f * (c + 1), 0.2f, 1.0f / (c + 1));
+
+  const auto lazy = model->View(1000.0, sun);
+  const Image lazy_image = RenderView(*lazy, perspective, terms, irradiance);
+  const Image lazy_folded = RenderViewFolded(*lazy, perspective, terms, weights);
+  const std::size_t marched = Source4dModel::SkyViewTexelsMarched(*lazy);
+
+  // The direction of every texel's centre, which marches the whole table.
+  const auto whole = model->View(1000.0, sun);
+  const shared::ivec2 size(384, 216);
+  const double sun_azimuth = std::atan2(sun.y, sun.x);
+  std::vector<glm::dvec3> centres;
+  for (int y = 0; y < size.y; ++y) {
+    for (int x = 0; x < size.x; ++x) {
+      double mu = 0.0;
+      double azimuth = 0.0;
+      shared::GetViewAnglesFromSkyViewTextureUv(model->batches()[0].atmosphere, size, p.ground_radius_m + 1000.0,
+                                                shared::vec2((x + 0.5) / size.x, (y + 0.5) / size.y), mu, azimuth);
+      const double sin_theta = std::sqrt(std::max(1.0 - mu * mu, 0.0));
+      centres.emplace_back(sin_theta * std::cos(sun_azimuth + azimuth), sin_theta * std::sin(sun_azimuth + azimuth), mu);
+    }
+  }
+  std::vector<float> discarded(centres.size() * p.channel_count());
+  whole->RadianceBatch(centres, terms, discarded);
+  const std::size_t all = Source4dModel::SkyViewTexelsMarched(*whole);
+  const Image whole_image = RenderView(*whole, perspective, terms, irradiance);
+  const Image whole_folded = RenderViewFolded(*whole, perspective, terms, weights);
+
+  // 384 x 216 texels, columns 0 .. 192 marched (the others are their mirror images).
+  EXPECT_EQ(all, 193u * 216u);
+  EXPECT_EQ(Source4dModel::SkyViewTexelsMarched(*whole), all);
+  EXPECT_GT(marched, 0u);
+  EXPECT_LT(marched, all / 20) << "84 pixels need at most 84 x 9 texels";
+  ASSERT_EQ(lazy_image.pixels.size(), whole_image.pixels.size());
+  EXPECT_TRUE(lazy_image.pixels == whole_image.pixels);
+  EXPECT_TRUE(lazy_folded.pixels == whole_folded.pixels);
+  // The folded image is the per-channel one folded (float lookups of the folded table against
+  // double lookups of each channel's).
+  for (std::size_t i = 0; i < lazy_folded.pixels.size() / 3; ++i) {
+    glm::dvec3 folded(0.0);
+    for (std::size_t c = 0; c < p.channel_count(); ++c) {
+      folded += glm::dvec3(weights[c]) * static_cast<double>(lazy_image.pixels[i * p.channel_count() + c]);
+    }
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(lazy_folded.pixels[3 * i + k], folded[k], 1e-4 * folded[k] + 1e-12) << i;
   }
 }
 

@@ -340,20 +340,18 @@ void RunSource4dCpuBuild(const std::shared_ptr<Source4dCpuBuildState>& state,
   try {
     oneapi::tbb::task_arena arena;
     arena.execute([&] {
-      std::vector<cpu::Source4dTables> built;
-      for (const shared::AtmosphereParameters& atmosphere : atmospheres) {
+      if (state->cancel) throw Source4dBuildCancelled{};
+      std::vector<cpu::Source4dTables> built(atmospheres.size());
+      std::vector<cpu::Source4dTables*> tables;
+      for (cpu::Source4dTables& t : built) tables.push_back(&t);
+      cpu::ComputeSource4dTables(atmospheres, settings, tables, [&](std::string_view pass, double ms) {
+        {
+          std::lock_guard<std::mutex> lock(state->mutex);
+          state->passes.emplace_back(std::string(pass), ms);
+        }
+        ++state->passes_done;
         if (state->cancel) throw Source4dBuildCancelled{};
-        cpu::Source4dTables tables;
-        cpu::ComputeSource4dTables(atmosphere, settings, tables, [&](std::string_view pass, double ms) {
-          {
-            std::lock_guard<std::mutex> lock(state->mutex);
-            state->passes.emplace_back(std::string(pass), ms);
-          }
-          ++state->passes_done;
-          if (state->cancel) throw Source4dBuildCancelled{};
-        });
-        built.push_back(std::move(tables));
-      }
+      });
       std::lock_guard<std::mutex> lock(state->mutex);
       state->tables = std::move(built);
     });
@@ -406,9 +404,10 @@ class Source4dCpuBuild {
  public:
   Source4dCpuBuild(std::vector<shared::AtmosphereParameters> atmospheres, const cpu::Source4dSettings& settings)
       : state_(std::make_shared<Source4dCpuBuildState>()) {
-    // ComputeSource4dTables's passes: transmittance, quadrature, sum, and with orders >= 2 the
-    // gathering of orders 1 .. N-1 and the products of orders 2 .. N.
-    state_->passes_total = static_cast<int>(atmospheres.size()) * (2 * std::max(settings.orders, 1) + 1);
+    // ComputeSource4dTables's passes: transmittance and quadrature once for all batches, then per
+    // batch the sum and, with orders >= 2, the gathering of orders 1 .. N-1 and the products of
+    // orders 2 .. N.
+    state_->passes_total = 2 + static_cast<int>(atmospheres.size()) * (2 * std::max(settings.orders, 1) - 1);
     thread_ = std::thread([state = state_, atmospheres = std::move(atmospheres), settings] {
       RunSource4dCpuBuild(state, atmospheres, settings);
     });
@@ -509,13 +508,14 @@ class Source4dSky final : public Sky {
     cpu_build_.reset();
     if (cpu_tables_) {
       // On this thread, at once (the benchmark of --recompute-every-frame).
-      std::vector<cpu::Source4dTables> tables;
-      for (const shared::AtmosphereParameters& atmosphere : CpuAtmospheres()) {
-        cpu::ComputeSource4dTables(atmosphere, model_.settings().tables, tables.emplace_back(),
-                                   [&](std::string_view pass, double ms) {
-                                     if (timings != nullptr) timings->Add("cpu_" + std::string(pass), ms);
-                                   });
-      }
+      const std::vector<shared::AtmosphereParameters> atmospheres = CpuAtmospheres();
+      std::vector<cpu::Source4dTables> tables(atmospheres.size());
+      std::vector<cpu::Source4dTables*> pointers;
+      for (cpu::Source4dTables& t : tables) pointers.push_back(&t);
+      cpu::ComputeSource4dTables(atmospheres, model_.settings().tables, pointers,
+                                 [&](std::string_view pass, double ms) {
+                                   if (timings != nullptr) timings->Add("cpu_" + std::string(pass), ms);
+                                 });
       Upload(tables, timings);
       return;
     }

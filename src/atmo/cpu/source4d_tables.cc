@@ -11,6 +11,7 @@
 #include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
 #include "models/model_options.h"
 
@@ -725,21 +726,17 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
   return q;
 }
 
-void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,
-                           Source4dTables& tables, const std::function<void(std::string_view, double)>& record) {
+namespace {
+
+// The orders of one batch, on its transmittance table (already in `tables`) and the quadrature.
+void ComputeSource4dOrders(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,
+                           const Source4dQuadrature& q, Source4dTables& tables,
+                           const std::function<void(std::string_view, double)>& record) {
   const auto note = [&](std::string_view pass, Clock::time_point start) {
     if (record) record(pass, MillisecondsSince(start));
   };
-  auto start = Clock::now();
-  tables.mu_s_size = s.mu_s_size;
-  tables.transmittance = shared::Texture2D(s.transmittance_lut.x, s.transmittance_lut.y);
-  ComputeTransmittanceTable(atmosphere, s.transmittance_samples, tables.transmittance);
-  note("source4d_transmittance_lut", start);
-
-  start = Clock::now();
+  Clock::time_point start;
   const Grid grid{atmosphere, s};
-  const Source4dQuadrature q = ComputeSource4dQuadrature(atmosphere, s);
-  note("source4d_quadrature", start);
 
   const int columns = grid.nodes() * 3;
   const std::size_t table_size = static_cast<std::size_t>(q.out_count) * columns;
@@ -820,6 +817,41 @@ void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const
   WriteLogTable(grid, sum_m, tables.mie);
   tables.ground_irradiance = IrradianceTable(irradiance_sum);
   note("source4d_sum", start);
+}
+
+}  // namespace
+
+void ComputeSource4dTables(std::span<const shared::AtmosphereParameters> batches, const Source4dSettings& s,
+                           std::span<Source4dTables* const> tables,
+                           const std::function<void(std::string_view, double)>& record) {
+  if (batches.empty() || batches.size() != tables.size()) {
+    throw Error("ComputeSource4dTables needs one table set per batch and at least one batch");
+  }
+  const auto note = [&](std::string_view pass, Clock::time_point start) {
+    if (record) record(pass, MillisecondsSince(start));
+  };
+  // The transmittance tables of all batches in one pass (the density integrals are shared).
+  auto start = Clock::now();
+  std::vector<shared::Texture2D*> transmittance;
+  for (Source4dTables* t : tables) {
+    t->mu_s_size = s.mu_s_size;
+    t->transmittance = shared::Texture2D(s.transmittance_lut.x, s.transmittance_lut.y);
+    transmittance.push_back(&t->transmittance);
+  }
+  ComputeTransmittanceTables(batches, s.transmittance_samples, transmittance);
+  note("source4d_transmittance_lut", start);
+  // The quadrature depends on the phase functions alone, which every batch of one atmosphere
+  // shares (ToSharedParameters): computed once.
+  start = Clock::now();
+  const Source4dQuadrature q = ComputeSource4dQuadrature(batches.front(), s);
+  note("source4d_quadrature", start);
+  for (std::size_t b = 0; b < batches.size(); ++b) ComputeSource4dOrders(batches[b], s, q, *tables[b], record);
+}
+
+void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,
+                           Source4dTables& tables, const std::function<void(std::string_view, double)>& record) {
+  Source4dTables* const one[] = {&tables};
+  ComputeSource4dTables(std::span<const shared::AtmosphereParameters>(&atmosphere, 1), s, one, record);
 }
 
 }  // namespace atmo::cpu

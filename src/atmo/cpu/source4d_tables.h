@@ -18,6 +18,7 @@
 #pragma once
 
 #include <functional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -59,6 +60,13 @@ struct Source4dTables {
 // Builds the tables of one channel batch. `record(pass, ms)` receives each pass's time.
 void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& settings,
                            Source4dTables& tables,
+                           const std::function<void(std::string_view, double)>& record = {});
+// The same for every channel batch of one atmosphere (ToSharedParameters of each batch), tables[b]
+// for batches[b]: the transmittance tables in one pass and the quadrature once (they share the
+// geometry, the density profiles and the phase functions), then each batch's orders. Each
+// batch's tables equal those of the one-batch call.
+void ComputeSource4dTables(std::span<const shared::AtmosphereParameters> batches, const Source4dSettings& settings,
+                           std::span<Source4dTables* const> tables,
                            const std::function<void(std::string_view, double)>& record = {});
 
 // Quadrature matrices of the gathering grid (exposed for tests): W[cd * in + ab] for the output

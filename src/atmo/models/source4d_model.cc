@@ -1,9 +1,14 @@
 #include "models/source4d_model.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <mutex>
+#include <shared_mutex>
 #include <string>
+#include <thread>
 
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
@@ -146,10 +151,14 @@ double Source4dModel::EstimatedPrecomputeSeconds() const {
 }
 
 void Source4dModel::Precompute() {
+  std::vector<shared::AtmosphereParameters> atmospheres;
+  std::vector<cpu::Source4dTables*> tables;
   for (Batch& batch : batches_) {
-    cpu::ComputeSource4dTables(batch.atmosphere, settings_.tables, batch.tables,
-                               [&](std::string_view pass, double ms) { RecordPass(pass, ms); });
+    atmospheres.push_back(batch.atmosphere);
+    tables.push_back(&batch.tables);
   }
+  cpu::ComputeSource4dTables(atmospheres, settings_.tables, tables,
+                             [&](std::string_view pass, double ms) { RecordPass(pass, ms); });
 }
 
 void Source4dModel::SetComputedTables(std::size_t b, cpu::Source4dTables tables) {
@@ -182,6 +191,10 @@ class Source4dSkyView final : public SkyView {
 
   void Radiance(const glm::dvec3& view, std::span<double> out) const override {
     if (table_serves_ && model_.settings().sky_view == Source4dModelSettings::SkyViewMode::kOn) {
+      {
+        std::shared_lock<std::shared_mutex> lock(folded_mutex_);
+        EnsureTexels(std::span<const glm::dvec3>(&view, 1));
+      }
       const double azimuth = shared::GetAzimuthFromSun(view, sun_direction());
       ScatterBatches(model_.batches().size(), out, [&](std::size_t b) {
         return shared::GetSkyRadianceFromSkyView(model_.batches()[b].atmosphere, sky_view_[b], r_, view.z, azimuth);
@@ -242,7 +255,10 @@ class Source4dSkyView final : public SkyView {
                      std::span<float> out) const override {
     const std::size_t n = channel_count();
     if (table_serves_) {
-      EnsureTables();
+      {
+        std::shared_lock<std::shared_mutex> lock(folded_mutex_);  // MarchTexel reads the folded weights
+        EnsureTexels(views);
+      }
       cpu::LookupSkyViewBatch(*this, terms.ground ? sky_and_ground_lookup_ : sky_lookup_,
                               terms.ground ? sky_and_ground_view_ : sky_view_, horizon_nadir_angle_, terms.sun_disc,
                               views, out);
@@ -264,53 +280,178 @@ class Source4dSkyView final : public SkyView {
     });
   }
 
+  // The sky-view tables folded into three values per channel weight (RenderViewFolded): one float
+  // lookup per pixel whatever the number of channels, as hillaire's. The folded tables follow the
+  // texels as they are marched, for the last weights asked for.
+  void RadianceBatchFolded(std::span<const glm::dvec3> views, const RadianceTerms& terms,
+                           std::span<const glm::vec3> weights, std::span<float> out) const override {
+    if (!table_serves_) {
+      SkyView::RadianceBatchFolded(views, terms, weights, out);
+      return;
+    }
+    const std::size_t n = channel_count();
+    if (weights.size() != n) throw Error("RadianceBatchFolded needs one weight per channel");
+    EnsureTables();
+    {
+      std::unique_lock<std::shared_mutex> lock(folded_mutex_);
+      if (!std::equal(weights.begin(), weights.end(), folded_weights_.begin(), folded_weights_.end())) {
+        folded_weights_.assign(weights.begin(), weights.end());
+        // Every texel marched so far, folded with the new weights (the others are folded when marched).
+        for (std::size_t i = 0; i < texel_state_.size(); ++i) {
+          if (texel_state_[i].load(std::memory_order_acquire) == kMarched) FoldTexel(i);
+        }
+      }
+    }
+    std::shared_lock<std::shared_mutex> lock(folded_mutex_);
+    EnsureTexels(views);
+    cpu::LookupSkyViewDirections(terms.ground ? folded_sky_and_ground_ : folded_sky_, views, out);
+    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
+    std::vector<double> disc(n);
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const glm::dvec3& view = views[i];
+      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+        for (int k = 0; k < 3; ++k) out[3 * i + k] = 0.0f;
+        continue;
+      }
+      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
+        SunDiscRadiance(view, disc);
+        for (std::size_t c = 0; c < n; ++c) {
+          for (int k = 0; k < 3; ++k) out[3 * i + k] += weights[c][k] * static_cast<float>(disc[c]);
+        }
+      }
+    }
+  }
+
+  // The sky-view texels marched so far (for tests: a narrow view marches few).
+  std::size_t texels_marched() const { return texels_marched_.load(); }
+
  private:
-  // The sky-view tables of every batch and their float lookups, made once (thread-safe). The
-  // build's parallel loop runs isolated: a thread waiting in it must not take another image row
-  // of the caller's parallel loop, whose RadianceBatch would enter this call_once again.
+  static constexpr std::uint8_t kUnmarched = 0;
+  static constexpr std::uint8_t kMarching = 1;
+  static constexpr std::uint8_t kMarched = 2;
+
+  // The sky-view tables of every batch, their float lookups and the texels' states, made once
+  // (thread-safe), all texels zero and unmarched. The texels are marched when a lookup first
+  // needs them (EnsureTexels): an image reads only the part of the table its camera sees (a 90°
+  // perspective view about a seventh of it), and each texel is the same as an eager build's.
   void EnsureTables() const {
     std::call_once(tables_made_, [this] {
-      oneapi::tbb::this_task_arena::isolate([this] {
-        const auto& batches = model_.batches();
-        const auto start = std::chrono::steady_clock::now();
-        for (const auto& batch : batches) {
-          sky_view_.emplace_back();
-          sky_and_ground_view_.emplace_back();
-          ComputeTables(batch, sky_view_.back(), sky_and_ground_view_.back());
-        }
-        model_.RecordSkyViewPass(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-        if (batches.size() == 1) {  // three channels: the frame kernel's float copies
-          sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun_direction());
-          sky_and_ground_lookup_ =
-              cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun_direction());
-        }
-      });
+      const glm::ivec2 size = model_.settings().sky_view_lut;
+      for (std::size_t b = 0; b < model_.batches().size(); ++b) {
+        sky_view_.emplace_back(size.x, size.y, /*repeat=*/true);
+        sky_and_ground_view_.emplace_back(size.x, size.y, /*repeat=*/true);
+      }
+      // Texel x looks at azimuth 2 pi x / width from the sun, so columns x and width - x are
+      // mirror images: columns 0 .. width / 2 are marched, the others copied.
+      texel_state_ = std::vector<std::atomic<std::uint8_t>>(static_cast<std::size_t>(size.y) * (size.x / 2 + 1));
+      sky_lookup_ = cpu::MakeSkyViewLookup(sky_view_[0], horizon_nadir_angle_, sun_direction());
+      sky_and_ground_lookup_ = cpu::MakeSkyViewLookup(sky_and_ground_view_[0], horizon_nadir_angle_, sun_direction());
+      folded_sky_ = sky_lookup_;
+      folded_sky_and_ground_ = sky_and_ground_lookup_;
     });
   }
 
-  // The sky-view table of one batch: the scattered radiance of each texel's direction, and the
-  // same with the lit ground added in the ground half. Texel x looks at azimuth 2 pi x / width
-  // from the sun, so columns x and width - x are mirror images: half of them are marched.
-  void ComputeTables(const Source4dModel::Batch& batch, shared::Texture2D& sky,
-                     shared::Texture2D& sky_and_ground) const {
+  // Marches every texel that a lookup of `views` reads (the bilinear taps of the float lookup,
+  // widened by 0.01 texel for the double-precision one). Threads that need a texel another one
+  // is marching wait for it. The caller holds folded_mutex_ shared.
+  void EnsureTexels(std::span<const glm::dvec3> views) const {
+    EnsureTables();
+    if (texels_marched_.load(std::memory_order_acquire) == texel_state_.size()) return;  // all of them
     const glm::ivec2 size = model_.settings().sky_view_lut;
-    sky = shared::Texture2D(size.x, size.y, /*repeat=*/true);
-    sky_and_ground = shared::Texture2D(size.x, size.y, /*repeat=*/true);
-    const cpu::Source4dTables& t = batch.tables;
     const int half_width = size.x / 2;
-    oneapi::tbb::parallel_for(0, size.y * (half_width + 1), [&](int i) {
-      const int y = i / (half_width + 1);
-      const int x = i % (half_width + 1);
+    constexpr int kChunk = 256;
+    int previous[4] = {-1, -1, -1, -1};  // the last direction's taps: neighbours in a row mostly share them
+    float x[kChunk], y[kChunk], z[kChunk], s[kChunk], t[kChunk];
+    for (std::size_t begin = 0; begin < views.size(); begin += kChunk) {
+      const int count = static_cast<int>(std::min<std::size_t>(kChunk, views.size() - begin));
+      for (int i = 0; i < count; ++i) {
+        const glm::dvec3& v = views[begin + static_cast<std::size_t>(i)];
+        x[i] = static_cast<float>(v.x);
+        y[i] = static_cast<float>(v.y);
+        z[i] = static_cast<float>(v.z);
+      }
+      cpu::GetSkyViewTexelCoordinatesRow(sky_lookup_, x, y, z, count, s, t);
+      for (int i = 0; i < count; ++i) {
+        const glm::dvec3& v = views[begin + static_cast<std::size_t>(i)];
+        if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) continue;  // nothing seen
+        const int s0 = static_cast<int>(std::floor(s[i] - 0.01f));
+        const int s1 = static_cast<int>(std::floor(s[i] + 0.01f)) + 1;
+        const int t0 = std::max(static_cast<int>(std::floor(t[i] - 0.01f)), 0);
+        const int t1 = std::min(static_cast<int>(std::floor(t[i] + 0.01f)) + 1, size.y - 1);
+        if (s0 == previous[0] && s1 == previous[1] && t0 == previous[2] && t1 == previous[3]) continue;
+        previous[0] = s0;
+        previous[1] = s1;
+        previous[2] = t0;
+        previous[3] = t1;
+        for (int row = t0; row <= t1; ++row) {
+          for (int column = s0; column <= s1; ++column) {
+            const int wrapped = ((column % size.x) + size.x) % size.x;
+            const int marched = wrapped <= half_width ? wrapped : size.x - wrapped;
+            EnsureTexel(marched, row);
+          }
+        }
+      }
+    }
+  }
+
+  void EnsureTexel(int x, int y) const {
+    const std::size_t i = static_cast<std::size_t>(y) * (model_.settings().sky_view_lut.x / 2 + 1) + x;
+    std::atomic<std::uint8_t>& state = texel_state_[i];
+    if (state.load(std::memory_order_acquire) == kMarched) return;
+    std::uint8_t expected = kUnmarched;
+    if (state.compare_exchange_strong(expected, kMarching, std::memory_order_acq_rel)) {
+      MarchTexel(x, y);
+      state.store(kMarched, std::memory_order_release);
+      texels_marched_.fetch_add(1, std::memory_order_acq_rel);
+      return;
+    }
+    while (state.load(std::memory_order_acquire) != kMarched) std::this_thread::yield();
+  }
+
+  // Texel (x, y) of every batch's tables (x <= width / 2) and its mirror column, the scattered
+  // radiance of its direction and the same with the lit ground added in the ground half; then
+  // its copies in the float lookups (three channels) and the folded ones. The folded weights are
+  // read under the caller's shared lock (RadianceBatchFolded) or are not yet set.
+  void MarchTexel(int x, int y) const {
+    const glm::ivec2 size = model_.settings().sky_view_lut;
+    const auto& batches = model_.batches();
+    for (std::size_t b = 0; b < batches.size(); ++b) {
+      const cpu::Source4dTables& t = batches[b].tables;
       shared::vec3 ground;
       const shared::vec3 l = shared::ComputeSource4dSkyViewTexel(
-          batch.atmosphere, t.transmittance, t.rayleigh, t.mie, t.ground_irradiance, t.mu_s_size,
+          batches[b].atmosphere, t.transmittance, t.rayleigh, t.mie, t.ground_irradiance, t.mu_s_size,
           shared::ivec2(size.x, size.y), shared::vec2(x + 0.5, y + 0.5), r_, mu_s_, model_.settings().samples, ground);
       for (const int column : {x, (size.x - x) % size.x}) {
-        sky.at(column, y) = glm::vec3(l);
-        sky_and_ground.at(column, y) = glm::vec3(l + ground);
+        sky_view_[b].at(column, y) = glm::vec3(l);
+        sky_and_ground_view_[b].at(column, y) = glm::vec3(l + ground);
       }
-    });
+    }
+    for (const int column : {x, (size.x - x) % size.x}) {
+      const std::size_t texel = static_cast<std::size_t>(y) * size.x + column;
+      sky_lookup_.texels[texel] = glm::vec4(sky_view_[0].texels[texel], 0.0f);
+      sky_and_ground_lookup_.texels[texel] = glm::vec4(sky_and_ground_view_[0].texels[texel], 0.0f);
+    }
+    if (!folded_weights_.empty()) FoldTexel(static_cast<std::size_t>(y) * (size.x / 2 + 1) + x);
+  }
+
+  // The folded lookups' copies of marched texel `i` (its index in texel_state_) and its mirror.
+  void FoldTexel(std::size_t i) const {
+    const glm::ivec2 size = model_.settings().sky_view_lut;
+    const int y = static_cast<int>(i / static_cast<std::size_t>(size.x / 2 + 1));
+    const int x = static_cast<int>(i % static_cast<std::size_t>(size.x / 2 + 1));
+    const std::size_t n = channel_count();
+    for (const int column : {x, (size.x - x) % size.x}) {
+      const std::size_t texel = static_cast<std::size_t>(y) * size.x + column;
+      glm::vec3 sky(0.0f);
+      glm::vec3 sky_and_ground(0.0f);
+      for (std::size_t c = 0; c < n; ++c) {
+        const int k = static_cast<int>(c % 3);
+        sky += folded_weights_[c] * sky_view_[c / 3].texels[texel][k];
+        sky_and_ground += folded_weights_[c] * sky_and_ground_view_[c / 3].texels[texel][k];
+      }
+      folded_sky_.texels[texel] = glm::vec4(sky, 0.0f);
+      folded_sky_and_ground_.texels[texel] = glm::vec4(sky_and_ground, 0.0f);
+    }
   }
 
   shared::vec3 Evaluate(const Source4dModel::Batch& batch, const glm::dvec3& view, shared::vec3& ground) const {
@@ -326,15 +467,27 @@ class Source4dSkyView final : public SkyView {
   double mu_s_;
   double horizon_nadir_angle_ = 0.0;
   bool table_serves_ = false;  // sky_view on or auto, and the observer inside the atmosphere
-  // Made by EnsureTables, once.
+  // Made by EnsureTables, once; their texels marched by EnsureTexels as lookups need them.
   mutable std::once_flag tables_made_;
   mutable std::vector<shared::Texture2D> sky_view_;             // one per batch
   mutable std::vector<shared::Texture2D> sky_and_ground_view_;  // sky_view_ plus the lit ground, for images
-  mutable cpu::SkyViewLookup sky_lookup_;                       // float frame-kernel copies (three channels only)
+  mutable std::vector<std::atomic<std::uint8_t>> texel_state_;  // per marched texel: kUnmarched, kMarching, kMarched
+  mutable std::atomic<std::size_t> texels_marched_{0};
+  mutable cpu::SkyViewLookup sky_lookup_;  // float frame-kernel copies (the first batch; read for three channels)
   mutable cpu::SkyViewLookup sky_and_ground_lookup_;
+  // The folded lookups of RadianceBatchFolded and their weights (empty: none asked for yet).
+  mutable std::shared_mutex folded_mutex_;
+  mutable std::vector<glm::vec3> folded_weights_;
+  mutable cpu::SkyViewLookup folded_sky_;
+  mutable cpu::SkyViewLookup folded_sky_and_ground_;
 };
 
 }  // namespace
+
+std::size_t Source4dModel::SkyViewTexelsMarched(const SkyView& view) {
+  const auto* source4d = dynamic_cast<const Source4dSkyView*>(&view);
+  return source4d != nullptr ? source4d->texels_marched() : 0;
+}
 
 std::unique_ptr<SkyView> Source4dModel::View(double altitude_m, const glm::dvec3& sun_direction) const {
   if (!std::isfinite(altitude_m) || altitude_m < 0.0) {

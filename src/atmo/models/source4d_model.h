@@ -59,8 +59,9 @@ class Source4dModel final : public Model {
   // gl/source4d_gl.h), instead of Precompute. Throws atmo::Error when their sizes are not the
   // settings'.
   void SetComputedTables(std::size_t batch, cpu::Source4dTables tables);
-  // The time of a view's sky-view tables, as pass "sky_view_lut" (Model::pass_timings).
-  void RecordSkyViewPass(double ms) const { RecordPass("sky_view_lut", ms); }
+  // How many texels of `view`'s sky-view table have been marched (0 for a view of another
+  // model): the table's texels are marched as lookups first need them (for tests).
+  static std::size_t SkyViewTexelsMarched(const SkyView& view);
 
  private:
   Source4dModelSettings settings_;
