@@ -88,6 +88,32 @@ TEST(Source4dQuadrature, ReproducesThePhaseFunctionsFirstMomentAndTheCosineInteg
   EXPECT_NEAR(e_cos, 2.0 * kPi / 3.0, 2e-3);
 }
 
+// The Rayleigh matrix's rank-5 form (the products use it) equals the matrix to float rounding,
+// for Rayleigh's phase function, the modified Rayleigh one and the isotropic one.
+TEST(Source4dQuadrature, RayleighMatrixIsItsRankFiveProduct) {
+  const cpu::Source4dSettings s;
+  for (PhaseFunction phase : {PhaseFunction::kRayleigh, PhaseFunction::kModifiedRayleigh, PhaseFunction::kIsotropic}) {
+    AtmosphereParameters p = Preset("earth");
+    p.rayleigh.phase = phase;
+    const cpu::Source4dQuadrature q = cpu::ComputeSource4dQuadrature(ToSharedParameters(p, 0), s);
+    ASSERT_EQ(q.rayleigh_out.size(), static_cast<std::size_t>(q.out_count) * cpu::kSource4dRayleighRank);
+    ASSERT_EQ(q.rayleigh_in.size(), static_cast<std::size_t>(q.in_count) * cpu::kSource4dRayleighRank);
+    double worst = 0.0;
+    for (int cd = 0; cd < q.out_count; ++cd) {
+      float row_max = 0.0f;
+      for (int ab = 0; ab < q.in_count; ++ab) row_max = std::max(row_max, q.rayleigh[cd * q.in_count + ab]);
+      for (int ab = 0; ab < q.in_count; ++ab) {
+        double product = 0.0;
+        for (int t = 0; t < cpu::kSource4dRayleighRank; ++t) {
+          product += double(q.rayleigh_out[cd * cpu::kSource4dRayleighRank + t]) * q.rayleigh_in[t * q.in_count + ab];
+        }
+        worst = std::max(worst, std::fabs(product - q.rayleigh[cd * q.in_count + ab]) / row_max);
+      }
+    }
+    EXPECT_LT(worst, 1e-5) << static_cast<int>(phase);
+  }
+}
+
 // The gathering paths that do the sun-independent work once per ray give the general march's
 // values: order 1 (single scattering; the pairs with a shadow edge on the ray take the general
 // march, the others share the ray's steps) and order 2 (the table's lookups, per step one 2D slice

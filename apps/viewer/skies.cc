@@ -404,10 +404,9 @@ class Source4dCpuBuild {
  public:
   Source4dCpuBuild(std::vector<shared::AtmosphereParameters> atmospheres, const cpu::Source4dSettings& settings)
       : state_(std::make_shared<Source4dCpuBuildState>()) {
-    // ComputeSource4dTables's passes: transmittance and quadrature once for all batches, then per
-    // batch the sum and, with orders >= 2, the gathering of orders 1 .. N-1 and the products of
-    // orders 2 .. N.
-    state_->passes_total = 2 + static_cast<int>(atmospheres.size()) * (2 * std::max(settings.orders, 1) - 1);
+    // ComputeSource4dTables's passes, each over all batches: transmittance, quadrature, sum, and
+    // with orders >= 2 the gathering of orders 1 .. N-1 and the products of orders 2 .. N.
+    state_->passes_total = 2 * std::max(settings.orders, 1) + 1;
     thread_ = std::thread([state = state_, atmospheres = std::move(atmospheres), settings] {
       RunSource4dCpuBuild(state, atmospheres, settings);
     });

@@ -242,15 +242,15 @@ struct SunScratch {
   std::vector<double> r_mu_s, nu;  // per pair (sun node j, azimuth b)
   std::vector<int> base;           // per pair: the slice index of its first tap
   std::vector<float> w_row, w_x;   // per pair: the taps' weights
-  std::vector<float> sum;          // per pair, kLanes
-  std::vector<float> slice;
-  void Resize(int pairs, int slice_texels) {
+  std::vector<float> sum;          // per batch and pair, kLanes: sum[(batch * pairs + p) * kLanes + lane]
+  std::vector<float> slice;        // one batch's at a time
+  void Resize(int pairs, int slice_texels, std::size_t batches) {
     r_mu_s.resize(pairs);
     nu.resize(pairs);
     base.resize(pairs);
     w_row.resize(pairs);
     w_x.resize(pairs);
-    sum.resize(static_cast<std::size_t>(pairs) * kLanes);
+    sum.resize(batches * static_cast<std::size_t>(pairs) * kLanes);
     slice.resize(static_cast<std::size_t>(slice_texels) * kLanes);
   }
 };
@@ -263,16 +263,20 @@ struct SunScratch {
 // that the two agree). Per step the tables are reduced to a 2D slice (Slice), and the sun loop
 // runs over all (sun node, azimuth) pairs of the ray at once: their coordinates in double, then
 // the bilinear lookups, exp (ExpFloat) and weighted sums in 8-float vectors.
-GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& rayleigh, const shared::Texture3D& mie,
-                                   const shared::Texture2D& previous_irradiance) {
+std::vector<GatherField> GatherMultipleRadiance(std::span<const Grid> grids,
+                                                std::span<const shared::Texture3D* const> rayleigh,
+                                                std::span<const shared::Texture3D* const> mie,
+                                                std::span<const shared::Texture2D* const> previous_irradiance) {
+  const std::size_t batches = grids.size();
+  const Grid& grid = grids.front();  // the geometry of every batch
   const Source4dSettings& s = grid.s;
   const auto& atmosphere = grid.atmosphere;
-  GatherField field;
-  field.in_count = s.gather_zeniths * s.gather_azimuths;
-  field.columns = grid.nodes() * 3;
-  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
-  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
-  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  std::vector<GatherField> fields(batches);
+  for (GatherField& field : fields) {
+    field.in_count = s.gather_zeniths * s.gather_azimuths;
+    field.columns = grid.nodes() * 3;
+    field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  }
   std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
   for (int j = 0; j < s.mu_s_size; ++j) {
     sun_mu_s[j] = grid.mu_s(j);
@@ -288,17 +292,21 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
     const double mu = std::cos(theta);
     const double sin_v = std::sin(theta);
     const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
-    glm::dvec3 transmittance;
-    std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, transmittance);
-    for (Step& step : steps) {
-      step.y = shared::GetSource4dZenithCoord(rayleigh, step.mu);
-      step.layer = shared::GetSource4dLayer(atmosphere, rayleigh, s.mu_s_size, step.r);
+    // The steps of every batch: the same points, each batch's media and throughputs.
+    std::vector<std::vector<Step>> steps(batches);
+    std::vector<glm::dvec3> transmittance(batches);
+    for (std::size_t k = 0; k < batches; ++k) {
+      steps[k] = RaySteps(grids[k].atmosphere, r, mu, hits_ground, s.gather_samples, transmittance[k]);
+    }
+    for (Step& step : steps[0]) {
+      step.y = shared::GetSource4dZenithCoord(*rayleigh[0], step.mu);
+      step.layer = shared::GetSource4dLayer(atmosphere, *rayleigh[0], s.mu_s_size, step.r);
     }
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
     // The (sun zenith j, azimuth b) pairs of this ray: r mu_s and nu.
     const int pairs = s.mu_s_size * s.gather_azimuths;
     SunScratch& w = scratch.local();
-    w.Resize(pairs, s.mu_s_size * s.phi_size);
+    w.Resize(pairs, s.mu_s_size * s.phi_size, batches);
     for (int j = 0; j < s.mu_s_size; ++j) {
       for (int b = 0; b < s.gather_azimuths; ++b) {
         const int p = j * s.gather_azimuths + b;
@@ -308,9 +316,9 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
     }
     std::fill(w.sum.begin(), w.sum.end(), 0.0f);
     const shared::Source4dSunAxis sun_axis = shared::GetSource4dSunAxis(s.mu_s_size);
-    for (const Step& step : steps) {
-      Slice(rayleigh, mie, s.mu_s_size, step.y, step.layer, w.slice);
-      // Every pair's sun-zenith row and azimuth at this step (vectorised).
+    for (std::size_t n = 0; n < steps[0].size(); ++n) {
+      const Step& step = steps[0][n];
+      // Every pair's sun-zenith row and azimuth at this step (vectorised), for every batch.
       const double inv_r = 1.0 / step.r;
       const double mu_t = step.mu;
       const double row_scale = s.mu_s_size - 1;
@@ -334,57 +342,68 @@ GatherField GatherMultipleRadiance(const Grid& grid, const shared::Texture3D& ra
         w_row[p] = static_cast<float>(row - row_0);
         w_x[p] = static_cast<float>(azimuth - x_0);
       }
-      float weights[kLanes] = {};
-      for (int c = 0; c < 3; ++c) {
-        weights[c] = static_cast<float>(step.weight_rayleigh[c]);
-        weights[3 + c] = static_cast<float>(step.weight_mie[c]);
-      }
       const int row_stride = s.phi_size * kLanes;
-      for (int p = 0; p < pairs; ++p) {
-        const float* q = w.slice.data() + w.base[p];
-        const float fx = w.w_x[p];
-        const float fr = w.w_row[p];
-        float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
-        // One vector of lanes (GCC vectorises it as it is; clang's cost model for WebAssembly does
-        // not without the pragma, which made the web build's gathers 4x slower).
+      for (std::size_t k = 0; k < batches; ++k) {
+        Slice(*rayleigh[k], *mie[k], s.mu_s_size, step.y, step.layer, w.slice);
+        float weights[kLanes] = {};
+        for (int c = 0; c < 3; ++c) {
+          weights[c] = static_cast<float>(steps[k][n].weight_rayleigh[c]);
+          weights[3 + c] = static_cast<float>(steps[k][n].weight_mie[c]);
+        }
+        float* batch_sum = w.sum.data() + k * static_cast<std::size_t>(pairs) * kLanes;
+        for (int p = 0; p < pairs; ++p) {
+          const float* q = w.slice.data() + w.base[p];
+          const float fx = w.w_x[p];
+          const float fr = w.w_row[p];
+          float* sum = batch_sum + static_cast<std::size_t>(p) * kLanes;
+          // One vector of lanes (GCC vectorises it as it is; clang's cost model for WebAssembly
+          // does not without the pragma, which made the web build's gathers 4x slower).
 #pragma omp simd
-        for (int l = 0; l < kLanes; ++l) {
-          const float low = q[l] + (q[kLanes + l] - q[l]) * fx;
-          const float high = q[row_stride + l] + (q[row_stride + kLanes + l] - q[row_stride + l]) * fx;
-          sum[l] += weights[l] * ExpFloat(low + (high - low) * fr);
+          for (int l = 0; l < kLanes; ++l) {
+            const float low = q[l] + (q[kLanes + l] - q[l]) * fx;
+            const float high = q[row_stride + l] + (q[row_stride + kLanes + l] - q[row_stride + l]) * fx;
+            sum[l] += weights[l] * ExpFloat(low + (high - low) * fr);
+          }
         }
       }
     }
-    for (int j = 0; j < s.mu_s_size; ++j) {
-      const int node = i * s.mu_s_size + j;
-      for (int b = 0; b < s.gather_azimuths; ++b) {
-        const int p = j * s.gather_azimuths + b;
-        const float* sum = w.sum.data() + static_cast<std::size_t>(p) * kLanes;
-        glm::dvec3 L(double(sum[0]) + sum[3], double(sum[1]) + sum[4], double(sum[2]) + sum[5]);
-        if (hits_ground && ground) {
-          const double mu_s_ground = shared::ClampCosine((w.r_mu_s[p] + t_ground * w.nu[p]) / atmosphere.bottom_radius);
-          L += transmittance * albedo_over_pi * shared::GetSource4dGroundIrradiance(previous_irradiance, mu_s_ground);
+    for (std::size_t k = 0; k < batches; ++k) {
+      const shared::AtmosphereParameters& batch = grids[k].atmosphere;
+      const glm::dvec3 albedo_over_pi = batch.ground_albedo / shared::kPi;
+      const bool ground = batch.ground_albedo != glm::dvec3(0.0);
+      const float* batch_sum = w.sum.data() + k * static_cast<std::size_t>(pairs) * kLanes;
+      GatherField& field = fields[k];
+      for (int j = 0; j < s.mu_s_size; ++j) {
+        const int node = i * s.mu_s_size + j;
+        for (int b = 0; b < s.gather_azimuths; ++b) {
+          const int p = j * s.gather_azimuths + b;
+          const float* sum = batch_sum + static_cast<std::size_t>(p) * kLanes;
+          glm::dvec3 L(double(sum[0]) + sum[3], double(sum[1]) + sum[4], double(sum[2]) + sum[5]);
+          if (hits_ground && ground) {
+            const double mu_s_ground = shared::ClampCosine((w.r_mu_s[p] + t_ground * w.nu[p]) / batch.bottom_radius);
+            L += transmittance[k] * albedo_over_pi * shared::GetSource4dGroundIrradiance(*previous_irradiance[k], mu_s_ground);
+          }
+          const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+          for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
         }
-        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
-        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
       }
     }
   });
-  return field;
+  return fields;
 }
 
 // Per-thread buffers of GatherSingleRadiance, per (sun node, azimuth) pair of a ray.
 struct SingleScratch {
   std::vector<double> r_mu_s, nu, rayleigh_phase, mie_phase;
   std::vector<char> shared_steps;
-  std::vector<glm::dvec3> sum, path_transmittance;
+  std::vector<glm::dvec3> sum, path_transmittance;  // per batch and pair: [batch * pairs + p]
   std::vector<int> x_0;  // per step: the transmittance table's column tap and weight, lit or not
   std::vector<double> w_x, lit;
-  void Resize(int pairs) {
+  void Resize(int pairs, std::size_t batches) {
     for (std::vector<double>* v : {&r_mu_s, &nu, &rayleigh_phase, &mie_phase, &w_x, &lit}) v->resize(pairs);
     shared_steps.resize(pairs);
-    sum.resize(pairs);
-    path_transmittance.resize(pairs);
+    sum.resize(batches * pairs);
+    path_transmittance.resize(batches * pairs);
     x_0.resize(pairs);
   }
 };
@@ -394,15 +413,18 @@ struct SingleScratch {
 // whole ray in the planet's shadow) has exactly the ray's shadow-free steps, and only the sun's
 // transmittance and the phase functions differ per pair; the other pairs take the general march,
 // whose steps end at the shadow's edges (tests/source4d_test.cc checks that the two agree).
-GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& transmittance_table) {
+std::vector<GatherField> GatherSingleRadiance(std::span<const Grid> grids,
+                                              std::span<const shared::Texture2D* const> transmittance_tables) {
+  const std::size_t batches = grids.size();
+  const Grid& grid = grids.front();  // the geometry and phase functions of every batch
   const Source4dSettings& s = grid.s;
   const auto& atmosphere = grid.atmosphere;
-  GatherField field;
-  field.in_count = s.gather_zeniths * s.gather_azimuths;
-  field.columns = grid.nodes() * 3;
-  field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
-  const glm::dvec3 albedo_over_pi = atmosphere.ground_albedo / shared::kPi;
-  const bool ground = atmosphere.ground_albedo != glm::dvec3(0.0);
+  std::vector<GatherField> fields(batches);
+  for (GatherField& field : fields) {
+    field.in_count = s.gather_zeniths * s.gather_azimuths;
+    field.columns = grid.nodes() * 3;
+    field.values.assign(static_cast<std::size_t>(field.in_count) * field.columns, 0.0f);
+  }
   const shared::Texture3D no_table;
   std::vector<double> sun_mu_s(s.mu_s_size), sun_sin_s(s.mu_s_size), azimuth_cos(s.gather_azimuths);
   for (int j = 0; j < s.mu_s_size; ++j) {
@@ -413,6 +435,7 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
   const double bottom = atmosphere.bottom_radius;
   const double top = atmosphere.top_radius;
   const double top_rho = std::sqrt((top - bottom) * (top + bottom));  // H of the transmittance mapping
+  const shared::Texture2D& first_table = *transmittance_tables[0];
   oneapi::tbb::enumerable_thread_specific<SingleScratch> scratch;
   oneapi::tbb::parallel_for(0, s.r_size * s.gather_zeniths, [&](int ray) {
     const int i = ray / s.gather_zeniths;
@@ -424,12 +447,17 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
     const bool hits_ground = shared::RayIntersectsGround(atmosphere, r, mu);
     const double t_max = shared::DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, hits_ground);
     const double t_ground = hits_ground ? shared::DistanceToBottomAtmosphereBoundary(atmosphere, r, mu) : 0.0;
-    glm::dvec3 ray_transmittance;
-    const std::vector<Step> steps = RaySteps(atmosphere, r, mu, hits_ground, s.gather_samples, ray_transmittance);
+    // The steps of every batch: the same points, each batch's media and throughputs.
+    std::vector<std::vector<Step>> steps(batches);
+    std::vector<glm::dvec3> ray_transmittance(batches);
+    for (std::size_t k = 0; k < batches; ++k) {
+      steps[k] = RaySteps(grids[k].atmosphere, r, mu, hits_ground, s.gather_samples, ray_transmittance[k]);
+    }
     const int pairs = s.mu_s_size * s.gather_azimuths;
     SingleScratch& w = scratch.local();
-    w.Resize(pairs);
-    // Per pair: nu, and whether it shares the ray's steps (else: the general march, now).
+    w.Resize(pairs, batches);
+    // Per pair: nu, and whether it shares the ray's steps (else: the general march of each
+    // batch, now).
     for (int j = 0; j < s.mu_s_size; ++j) {
       const double mu_s = sun_mu_s[j];
       for (int b = 0; b < s.gather_azimuths; ++b) {
@@ -441,33 +469,38 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
         const bool shadow = t_max > 0.0 && shared::GetSource4dShadowInterval(atmosphere, r, mu, mu_s, nu, t_max,
                                                                              shadow_0, shadow_1);
         w.shared_steps[p] = !shadow || (!(shadow_0 > 0.0) && !(shadow_1 < t_max));
-        w.path_transmittance[p] = ray_transmittance;
+        const double mie_phase =
+            shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu);
         if (w.shared_steps[p]) {
           w.rayleigh_phase[p] = shared::GetRayleighPhase(atmosphere, nu);
-          w.mie_phase[p] =
-              shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu);
-          w.sum[p] = glm::dvec3(0.0);
-        } else {
-          w.sum[p] = shared::IntegrateSource4dRadianceInside(
-              atmosphere, transmittance_table, no_table, no_table, s.mu_s_size, r, mu, mu_s, nu, hits_ground,
-              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0,
-              shared::GetSource4dGatherMiePhase(atmosphere, a, b, s.gather_zeniths, s.gather_azimuths, mu_s, nu),
-              w.path_transmittance[p]);
+          w.mie_phase[p] = mie_phase;
+        }
+        for (std::size_t k = 0; k < batches; ++k) {
+          const std::size_t kp = k * static_cast<std::size_t>(pairs) + p;
+          w.path_transmittance[kp] = ray_transmittance[k];
+          w.sum[kp] = w.shared_steps[p] ? glm::dvec3(0.0)
+                                        : shared::IntegrateSource4dRadianceInside(
+                                              grids[k].atmosphere, *transmittance_tables[k], no_table, no_table,
+                                              s.mu_s_size, r, mu, mu_s, nu, hits_ground,
+                                              std::numeric_limits<double>::infinity(), s.gather_samples, 1.0, 0.0,
+                                              mie_phase, w.path_transmittance[kp]);
         }
       }
     }
     // The shared steps: per step the transmittance table's row taps (the step's r), then every
-    // pair's column tap (vectorised) and lookup: shared::GetTransmittanceToSun, reorganised.
-    const int width = transmittance_table.width;
-    for (const Step& step : steps) {
+    // pair's column tap (vectorised) and each batch's lookup: shared::GetTransmittanceToSun,
+    // reorganised.
+    const int width = first_table.width;
+    for (std::size_t n = 0; n < steps[0].size(); ++n) {
+      const Step& step = steps[0][n];
       const double r_t = step.r;
       const double rho = std::sqrt(std::max((r_t - bottom) * (r_t + bottom), 0.0));
       const double d_min = top - r_t;
       const double d_max = rho + top_rho;
       int y_0, y_1;
       double wy;
-      shared::detail::LinearTaps(shared::GetTextureCoordFromUnitRange(rho / top_rho, transmittance_table.height),
-                                 transmittance_table.height, false, y_0, y_1, wy);
+      shared::detail::LinearTaps(shared::GetTextureCoordFromUnitRange(rho / top_rho, first_table.height),
+                                 first_table.height, false, y_0, y_1, wy);
       const double c_top = (top - r_t) * (top + r_t);
       const double c_bottom = (bottom - r_t) * (bottom + r_t);
       const double inv_r = 1.0 / r_t;
@@ -491,36 +524,48 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
         w_x[p] = column - x;
         lit[p] = mu_s_t < 0.0 && c_bottom + r_mu * r_mu >= 0.0 ? 0.0 : 1.0;  // below the horizon: 0
       }
-      const glm::vec3* row_0 = transmittance_table.texels.data() + static_cast<std::size_t>(y_0) * width;
-      const glm::vec3* row_1 = transmittance_table.texels.data() + static_cast<std::size_t>(y_1) * width;
-      for (int p = 0; p < pairs; ++p) {
-        if (!w.shared_steps[p] || lit[p] == 0.0) continue;
-        const int x = x_0[p];
-        const glm::dvec3 low = glm::mix(glm::dvec3(row_0[x]), glm::dvec3(row_0[x + 1]), w_x[p]);
-        const glm::dvec3 high = glm::mix(glm::dvec3(row_1[x]), glm::dvec3(row_1[x + 1]), w_x[p]);
-        w.sum[p] += glm::mix(low, high, wy) *
-                    (step.weight_rayleigh * w.rayleigh_phase[p] + step.weight_mie * w.mie_phase[p]);
+      for (std::size_t k = 0; k < batches; ++k) {
+        const shared::Texture2D& table = *transmittance_tables[k];
+        const glm::vec3* row_0 = table.texels.data() + static_cast<std::size_t>(y_0) * width;
+        const glm::vec3* row_1 = table.texels.data() + static_cast<std::size_t>(y_1) * width;
+        const Step& batch_step = steps[k][n];
+        glm::dvec3* sum = w.sum.data() + k * static_cast<std::size_t>(pairs);
+        for (int p = 0; p < pairs; ++p) {
+          if (!w.shared_steps[p] || lit[p] == 0.0) continue;
+          const int x = x_0[p];
+          const glm::dvec3 low = glm::mix(glm::dvec3(row_0[x]), glm::dvec3(row_0[x + 1]), w_x[p]);
+          const glm::dvec3 high = glm::mix(glm::dvec3(row_1[x]), glm::dvec3(row_1[x + 1]), w_x[p]);
+          sum[p] += glm::mix(low, high, wy) *
+                    (batch_step.weight_rayleigh * w.rayleigh_phase[p] + batch_step.weight_mie * w.mie_phase[p]);
+        }
       }
     }
-    for (int j = 0; j < s.mu_s_size; ++j) {
-      const double mu_s = sun_mu_s[j];
-      const int node = i * s.mu_s_size + j;
-      for (int b = 0; b < s.gather_azimuths; ++b) {
-        const int p = j * s.gather_azimuths + b;
-        glm::dvec3 L = w.sum[p];
-        if (hits_ground && ground) {
-          const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * w.nu[p]) / atmosphere.bottom_radius);
-          if (mu_s_ground > 0.0) {
-            L += w.path_transmittance[p] * albedo_over_pi * mu_s_ground *
-                 shared::GetTransmittanceToSun(atmosphere, transmittance_table, atmosphere.bottom_radius, mu_s_ground);
+    for (std::size_t k = 0; k < batches; ++k) {
+      const shared::AtmosphereParameters& batch = grids[k].atmosphere;
+      const glm::dvec3 albedo_over_pi = batch.ground_albedo / shared::kPi;
+      const bool ground = batch.ground_albedo != glm::dvec3(0.0);
+      GatherField& field = fields[k];
+      for (int j = 0; j < s.mu_s_size; ++j) {
+        const double mu_s = sun_mu_s[j];
+        const int node = i * s.mu_s_size + j;
+        for (int b = 0; b < s.gather_azimuths; ++b) {
+          const int p = j * s.gather_azimuths + b;
+          const std::size_t kp = k * static_cast<std::size_t>(pairs) + p;
+          glm::dvec3 L = w.sum[kp];
+          if (hits_ground && ground) {
+            const double mu_s_ground = shared::ClampCosine((r * mu_s + t_ground * w.nu[p]) / batch.bottom_radius);
+            if (mu_s_ground > 0.0) {
+              L += w.path_transmittance[kp] * albedo_over_pi * mu_s_ground *
+                   shared::GetTransmittanceToSun(batch, *transmittance_tables[k], batch.bottom_radius, mu_s_ground);
+            }
           }
+          const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
+          for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
         }
-        const std::size_t row = static_cast<std::size_t>(a * s.gather_azimuths + b) * field.columns;
-        for (int c = 0; c < 3; ++c) field.values[row + static_cast<std::size_t>(node) * 3 + c] = static_cast<float>(L[c]);
       }
     }
   });
-  return field;
+  return fields;
 }
 
 // G_m[cd * columns + column] = sum over ab of W_m[cd][ab] field[ab][column], for both media in one
@@ -531,10 +576,12 @@ GatherField GatherSingleRadiance(const Grid& grid, const shared::Texture2D& tran
 constexpr int kBlockRows = 4;
 constexpr int kBlockColumns = 256;
 
-void Convolve(const std::vector<float>& w_r, const std::vector<float>& w_m, int out_count, const GatherField& field,
-              std::vector<float>& g_r, std::vector<float>& g_m) {
-  g_r.assign(static_cast<std::size_t>(out_count) * field.columns, 0.0f);
-  g_m.assign(g_r.size(), 0.0f);
+void Convolve(const Source4dQuadrature& q, const GatherField& field, std::vector<float>& g_r,
+              std::vector<float>& g_m) {
+  const int out_count = q.out_count;
+  const bool low_rank = !q.rayleigh_out.empty();
+  g_r.resize(static_cast<std::size_t>(out_count) * field.columns);
+  g_m.resize(g_r.size());
   const int row_blocks = (out_count + kBlockRows - 1) / kBlockRows;
   const int column_blocks = (field.columns + kBlockColumns - 1) / kBlockColumns;
   oneapi::tbb::parallel_for(0, row_blocks * column_blocks, [&](int block) {
@@ -545,8 +592,8 @@ void Convolve(const std::vector<float>& w_r, const std::vector<float>& w_m, int 
     alignas(32) float sum[2][kBlockRows][kBlockColumns] = {};
     for (int ab = 0; ab < field.in_count; ++ab) {
       const float* in = field.values.data() + static_cast<std::size_t>(ab) * field.columns + k_0;
-      for (int m = 0; m < 2; ++m) {
-        const std::vector<float>& w = m == 0 ? w_r : w_m;
+      for (int m = low_rank ? 1 : 0; m < 2; ++m) {
+        const std::vector<float>& w = m == 0 ? q.rayleigh : q.mie;
         for (int c = 0; c < rows; ++c) {
           const float weight = w[static_cast<std::size_t>(cd_0 + c) * field.in_count + ab];
           if (weight == 0.0f) continue;
@@ -555,11 +602,39 @@ void Convolve(const std::vector<float>& w_r, const std::vector<float>& w_m, int 
         }
       }
     }
-    for (int m = 0; m < 2; ++m) {
+    for (int m = low_rank ? 1 : 0; m < 2; ++m) {
       std::vector<float>& g = m == 0 ? g_r : g_m;
       for (int c = 0; c < rows; ++c) {
         std::copy(sum[m][c], sum[m][c] + width, g.data() + static_cast<std::size_t>(cd_0 + c) * field.columns + k_0);
       }
+    }
+  });
+  if (!low_rank) return;
+  // G_R = F (H L): the field projected on the five node functions, then each view's combination.
+  const std::size_t columns = static_cast<std::size_t>(field.columns);
+  std::vector<float> projected(static_cast<std::size_t>(kSource4dRayleighRank) * columns);
+  oneapi::tbb::parallel_for(0, column_blocks, [&](int block) {
+    const std::size_t k_0 = static_cast<std::size_t>(block) * kBlockColumns;
+    const std::size_t width = std::min<std::size_t>(kBlockColumns, columns - k_0);
+    alignas(32) float sum[kSource4dRayleighRank][kBlockColumns] = {};
+    for (int ab = 0; ab < field.in_count; ++ab) {
+      const float* in = field.values.data() + static_cast<std::size_t>(ab) * columns + k_0;
+      for (int t = 0; t < kSource4dRayleighRank; ++t) {
+        const float weight = q.rayleigh_in[static_cast<std::size_t>(t) * field.in_count + ab];
+        for (std::size_t k = 0; k < width; ++k) sum[t][k] += weight * in[k];
+      }
+    }
+    for (int t = 0; t < kSource4dRayleighRank; ++t) {
+      std::copy(sum[t], sum[t] + width, projected.data() + static_cast<std::size_t>(t) * columns + k_0);
+    }
+  });
+  oneapi::tbb::parallel_for(0, out_count, [&](int cd) {
+    float* out = g_r.data() + static_cast<std::size_t>(cd) * columns;
+    const float* f = q.rayleigh_out.data() + static_cast<std::size_t>(cd) * kSource4dRayleighRank;
+    for (std::size_t k = 0; k < columns; ++k) {
+      float v = 0.0f;
+      for (int t = 0; t < kSource4dRayleighRank; ++t) v += f[t] * projected[static_cast<std::size_t>(t) * columns + k];
+      out[k] = v;
     }
   });
 }
@@ -601,8 +676,15 @@ std::vector<float> GatherSource4dOrder(const shared::AtmosphereParameters& atmos
                                        const Source4dTables& tables, int order, bool shared_geometry) {
   const Grid grid{atmosphere, settings};
   if (shared_geometry) {
-    return order == 1 ? GatherSingleRadiance(grid, tables.transmittance).values
-                      : GatherMultipleRadiance(grid, tables.rayleigh, tables.mie, tables.ground_irradiance).values;
+    const std::span<const Grid> grids(&grid, 1);
+    if (order == 1) {
+      const shared::Texture2D* transmittance[] = {&tables.transmittance};
+      return std::move(GatherSingleRadiance(grids, transmittance).front().values);
+    }
+    const shared::Texture3D* rayleigh[] = {&tables.rayleigh};
+    const shared::Texture3D* mie[] = {&tables.mie};
+    const shared::Texture2D* irradiance[] = {&tables.ground_irradiance};
+    return std::move(GatherMultipleRadiance(grids, rayleigh, mie, irradiance).front().values);
   }
   return GatherRadiance(grid, tables.transmittance, tables.rayleigh, tables.mie, tables.ground_irradiance, order).values;
 }
@@ -685,6 +767,36 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
     }
   }
   q.irradiance = ComputeSource4dIrradianceWeights(s);
+  // The Rayleigh phase function as A + B nu^2, where it is one (checked at six cosines).
+  const double phase_a = shared::GetRayleighPhase(atmosphere, 0.0);
+  const double phase_b = shared::GetRayleighPhase(atmosphere, 1.0) - phase_a;
+  bool quadratic = phase_a > 0.0;
+  for (double nu : {-1.0, -0.6, -0.2, 0.3, 0.7, 0.95}) {
+    quadratic = quadratic && std::fabs(shared::GetRayleighPhase(atmosphere, nu) - (phase_a + phase_b * nu * nu)) <=
+                                 1e-12 * phase_a;
+  }
+  // Its node functions, sum over a node's sub-samples of g_t(w) x solid angle x hat, with
+  // g = (1, c^2, c s cos(phi), s^2 cos^2(phi), s^2 sin^2(phi)), c = cos(theta), s = sin(theta).
+  std::vector<double> rayleigh_in(static_cast<std::size_t>(kSource4dRayleighRank) * q.in_count, 0.0);
+  if (quadratic) {
+    for (const SubSample& sub : subs) {
+      const double c = sub.cos_theta;
+      const double sn = sub.sin_theta;
+      const double g[kSource4dRayleighRank] = {1.0, c * c, c * sn * sub.cos_phi, sn * sn * sub.cos_phi * sub.cos_phi,
+                                               sn * sn * sub.sin_phi * sub.sin_phi};
+      for (int t = 0; t < kSource4dRayleighRank; ++t) {
+        for (int k = 0; k < 4; ++k) {
+          rayleigh_in[static_cast<std::size_t>(t) * q.in_count + sub.node[k]] += g[t] * sub.solid_angle * sub.hat[k];
+        }
+      }
+    }
+    q.rayleigh_in.assign(rayleigh_in.begin(), rayleigh_in.end());
+    q.rayleigh_out.assign(static_cast<std::size_t>(q.out_count) * kSource4dRayleighRank, 0.0f);
+  }
+  std::vector<double> rayleigh_in_sums(kSource4dRayleighRank, 0.0);
+  for (int t = 0; t < kSource4dRayleighRank; ++t) {
+    for (int ab = 0; ab < q.in_count; ++ab) rayleigh_in_sums[t] += rayleigh_in[static_cast<std::size_t>(t) * q.in_count + ab];
+  }
   oneapi::tbb::parallel_for(0, q.out_count, [&](int cd) {
     const int c = cd / s.phi_size;
     const int d = cd % s.phi_size;
@@ -722,100 +834,139 @@ Source4dQuadrature ComputeSource4dQuadrature(const shared::AtmosphereParameters&
       q.rayleigh[static_cast<std::size_t>(cd) * q.in_count + ab] = static_cast<float>(wr[ab] / sum_r);
       q.mie[static_cast<std::size_t>(cd) * q.in_count + ab] = static_cast<float>(wm[ab] / sum_m);
     }
+    if (quadratic) {
+      // p(nu_1) + p(nu_2) of the view and its mirror image = sum_t f_t(v) g_t(w): with
+      // nu = X + Y +- Z (X = cv c, Y = sv s cos(phi) cos(phi_v), Z = sv s sin(phi) sin(phi_v)),
+      // nu_1^2 + nu_2^2 = 2 (X + Y)^2 + 2 Z^2.
+      const double f[kSource4dRayleighRank] = {2.0 * phase_a, 2.0 * phase_b * cv * cv,
+                                               4.0 * phase_b * cv * sv * cos_phi_v,
+                                               2.0 * phase_b * sv * sv * cos_phi_v * cos_phi_v,
+                                               2.0 * phase_b * sv * sv * sin_phi_v * sin_phi_v};
+      double norm = 0.0;
+      for (int t = 0; t < kSource4dRayleighRank; ++t) norm += f[t] * rayleigh_in_sums[t];
+      for (int t = 0; t < kSource4dRayleighRank; ++t) {
+        q.rayleigh_out[static_cast<std::size_t>(cd) * kSource4dRayleighRank + t] = static_cast<float>(f[t] / norm);
+      }
+    }
   });
   return q;
 }
 
 namespace {
 
-// The orders of one batch, on its transmittance table (already in `tables`) and the quadrature.
-void ComputeSource4dOrders(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,
-                           const Source4dQuadrature& q, Source4dTables& tables,
+// One batch's orders: the running sums and the last two orders.
+struct BatchOrders {
+  std::vector<float> sum_r, sum_m, previous_r, g_r, g_m;
+  // The sky's irradiance of the ground, orders >= 1 (the direct sun is added exactly where it is
+  // used: its cos(theta_s) T would not interpolate well between sun-zenith rows).
+  std::vector<glm::dvec3> irradiance_sum, previous_e, e;
+  shared::Texture3D order_r, order_m;
+  shared::Texture2D order_irradiance;
+  GatherField field;
+};
+
+// The orders of every batch, on their transmittance tables (already in `tables`) and the
+// quadrature, in step: each gathering pass marches the rays of all batches at once (the steps'
+// points and the sun's coordinates are the same for all; GatherSingleRadiance,
+// GatherMultipleRadiance), each batch's arithmetic as if alone.
+void ComputeSource4dOrders(std::span<const shared::AtmosphereParameters> atmospheres, const Source4dSettings& s,
+                           const Source4dQuadrature& q, std::span<Source4dTables* const> tables,
                            const std::function<void(std::string_view, double)>& record) {
   const auto note = [&](std::string_view pass, Clock::time_point start) {
     if (record) record(pass, MillisecondsSince(start));
   };
-  Clock::time_point start;
-  const Grid grid{atmosphere, s};
-
+  const std::size_t batches = atmospheres.size();
+  std::vector<Grid> grids;
+  for (const shared::AtmosphereParameters& atmosphere : atmospheres) grids.push_back(Grid{atmosphere, s});
+  const Grid& grid = grids.front();
   const int columns = grid.nodes() * 3;
   const std::size_t table_size = static_cast<std::size_t>(q.out_count) * columns;
-  std::vector<float> sum_r(table_size, 0.0f);
-  std::vector<float> sum_m(table_size, 0.0f);
-  std::vector<float> previous_r;
-  std::vector<float> g_r;
-  std::vector<float> g_m;
-  // The sky's irradiance of the ground, orders >= 1 (the direct sun is added exactly where it is
-  // used: its cos(theta_s) T would not interpolate well between sun-zenith rows).
-  std::vector<glm::dvec3> irradiance_sum(s.mu_s_size, glm::dvec3(0.0));
-  std::vector<glm::dvec3> previous_e;
-  std::vector<glm::dvec3> e;
-  shared::Texture3D order_r;
-  shared::Texture3D order_m;
-  shared::Texture2D order_irradiance;
+  std::vector<BatchOrders> orders(batches);
+  for (BatchOrders& o : orders) {
+    o.sum_r.assign(table_size, 0.0f);
+    o.sum_m.assign(table_size, 0.0f);
+    o.irradiance_sum.assign(s.mu_s_size, glm::dvec3(0.0));
+  }
 
-  start = Clock::now();
-  GatherField field;
+  Clock::time_point start = Clock::now();
   if (s.orders >= 2) {
-    field = GatherSingleRadiance(grid, tables.transmittance);
+    std::vector<const shared::Texture2D*> transmittance;
+    for (Source4dTables* t : tables) transmittance.push_back(&t->transmittance);
+    std::vector<GatherField> fields = GatherSingleRadiance(grids, transmittance);
+    for (std::size_t k = 0; k < batches; ++k) orders[k].field = std::move(fields[k]);
     note("source4d_gather_1", start);
   }
   for (int n = 2; n <= s.orders; ++n) {
     start = Clock::now();
-    previous_r = std::move(g_r);
-    Convolve(q.rayleigh, q.mie, q.out_count, field, g_r, g_m);
-    for (std::size_t k = 0; k < table_size; ++k) {
-      sum_r[k] += g_r[k];
-      sum_m[k] += g_m[k];
+    for (std::size_t k = 0; k < batches; ++k) {
+      BatchOrders& o = orders[k];
+      o.previous_r = std::move(o.g_r);
+      Convolve(q, o.field, o.g_r, o.g_m);
+      for (std::size_t i = 0; i < table_size; ++i) {
+        o.sum_r[i] += o.g_r[i];
+        o.sum_m[i] += o.g_m[i];
+      }
+      o.previous_e = std::move(o.e);
+      o.e = GroundIrradiance(grids[k], q, o.field);
+      for (int j = 0; j < s.mu_s_size; ++j) o.irradiance_sum[j] += o.e[j];
     }
-    previous_e = std::move(e);
-    e = GroundIrradiance(grid, q, field);
-    for (int j = 0; j < s.mu_s_size; ++j) irradiance_sum[j] += e[j];
     note("source4d_convolve_" + std::to_string(n), start);
     if (n == s.orders) break;
     start = Clock::now();
-    WriteLogTable(grid, g_r, order_r);
-    WriteLogTable(grid, g_m, order_m);
-    order_irradiance = IrradianceTable(e);
-    field = GatherMultipleRadiance(grid, order_r, order_m, order_irradiance);
+    std::vector<const shared::Texture3D*> rayleigh, mie;
+    std::vector<const shared::Texture2D*> irradiance;
+    for (std::size_t k = 0; k < batches; ++k) {
+      BatchOrders& o = orders[k];
+      WriteLogTable(grids[k], o.g_r, o.order_r);
+      WriteLogTable(grids[k], o.g_m, o.order_m);
+      o.order_irradiance = IrradianceTable(o.e);
+      rayleigh.push_back(&o.order_r);
+      mie.push_back(&o.order_m);
+      irradiance.push_back(&o.order_irradiance);
+    }
+    std::vector<GatherField> fields = GatherMultipleRadiance(grids, rayleigh, mie, irradiance);
+    for (std::size_t k = 0; k < batches; ++k) orders[k].field = std::move(fields[k]);
     note("source4d_gather_" + std::to_string(n), start);
   }
 
   start = Clock::now();
-  if (s.tail && s.orders >= 3) {
-    // Per node and channel, the ratio of the last two orders summed over directions.
-    std::vector<double> last(columns, 0.0);
-    std::vector<double> before(columns, 0.0);
-    for (int cd = 0; cd < q.out_count; ++cd) {
+  for (std::size_t b = 0; b < batches; ++b) {
+    BatchOrders& o = orders[b];
+    if (s.tail && s.orders >= 3) {
+      // Per node and channel, the ratio of the last two orders summed over directions.
+      std::vector<double> last(columns, 0.0);
+      std::vector<double> before(columns, 0.0);
+      for (int cd = 0; cd < q.out_count; ++cd) {
+        for (int k = 0; k < columns; ++k) {
+          last[k] += o.g_r[static_cast<std::size_t>(cd) * columns + k];
+          before[k] += o.previous_r[static_cast<std::size_t>(cd) * columns + k];
+        }
+      }
+      std::vector<float> factor(columns, 0.0f);
       for (int k = 0; k < columns; ++k) {
-        last[k] += g_r[static_cast<std::size_t>(cd) * columns + k];
-        before[k] += previous_r[static_cast<std::size_t>(cd) * columns + k];
+        const double ratio = before[k] > 0.0 ? std::clamp(last[k] / before[k], 0.0, kSource4dMaxTailRatio) : 0.0;
+        factor[k] = static_cast<float>(ratio / (1.0 - ratio));
+      }
+      for (int cd = 0; cd < q.out_count; ++cd) {
+        for (int k = 0; k < columns; ++k) {
+          const std::size_t i = static_cast<std::size_t>(cd) * columns + k;
+          o.sum_r[i] += factor[k] * o.g_r[i];
+          o.sum_m[i] += factor[k] * o.g_m[i];
+        }
+      }
+      // The ground: E^(N-1) q / (1 - q) with q = E^(N-1) / E^(N-2).
+      for (int j = 0; j < s.mu_s_size; ++j) {
+        for (int c = 0; c < 3; ++c) {
+          const double before_e = o.previous_e.empty() ? 0.0 : o.previous_e[j][c];
+          const double ratio = before_e > 0.0 ? std::clamp(o.e[j][c] / before_e, 0.0, kSource4dMaxTailRatio) : 0.0;
+          o.irradiance_sum[j][c] += o.e[j][c] * ratio / (1.0 - ratio);
+        }
       }
     }
-    std::vector<float> factor(columns, 0.0f);
-    for (int k = 0; k < columns; ++k) {
-      const double ratio = before[k] > 0.0 ? std::clamp(last[k] / before[k], 0.0, kSource4dMaxTailRatio) : 0.0;
-      factor[k] = static_cast<float>(ratio / (1.0 - ratio));
-    }
-    for (int cd = 0; cd < q.out_count; ++cd) {
-      for (int k = 0; k < columns; ++k) {
-        const std::size_t i = static_cast<std::size_t>(cd) * columns + k;
-        sum_r[i] += factor[k] * g_r[i];
-        sum_m[i] += factor[k] * g_m[i];
-      }
-    }
-    // The ground: E^(N-1) q / (1 - q) with q = E^(N-1) / E^(N-2).
-    for (int j = 0; j < s.mu_s_size; ++j) {
-      for (int c = 0; c < 3; ++c) {
-        const double before_e = previous_e.empty() ? 0.0 : previous_e[j][c];
-        const double ratio = before_e > 0.0 ? std::clamp(e[j][c] / before_e, 0.0, kSource4dMaxTailRatio) : 0.0;
-        irradiance_sum[j][c] += e[j][c] * ratio / (1.0 - ratio);
-      }
-    }
+    WriteLogTable(grids[b], o.sum_r, tables[b]->rayleigh);
+    WriteLogTable(grids[b], o.sum_m, tables[b]->mie);
+    tables[b]->ground_irradiance = IrradianceTable(o.irradiance_sum);
   }
-  WriteLogTable(grid, sum_r, tables.rayleigh);
-  WriteLogTable(grid, sum_m, tables.mie);
-  tables.ground_irradiance = IrradianceTable(irradiance_sum);
   note("source4d_sum", start);
 }
 
@@ -845,7 +996,7 @@ void ComputeSource4dTables(std::span<const shared::AtmosphereParameters> batches
   start = Clock::now();
   const Source4dQuadrature q = ComputeSource4dQuadrature(batches.front(), s);
   note("source4d_quadrature", start);
-  for (std::size_t b = 0; b < batches.size(); ++b) ComputeSource4dOrders(batches[b], s, q, *tables[b], record);
+  ComputeSource4dOrders(batches, s, q, tables, record);
 }
 
 void ComputeSource4dTables(const shared::AtmosphereParameters& atmosphere, const Source4dSettings& s,

@@ -79,7 +79,15 @@ struct Source4dQuadrature {
   std::vector<float> rayleigh;  // out_count x in_count
   std::vector<float> mie;
   std::vector<double> irradiance;  // in_count
+  // Where the Rayleigh phase function is A + B nu^2 (every kind the air's medium can have, whose
+  // asymmetry the Rayleigh phase ignores; checked numerically), its matrix has rank 5 (the mirror pair's nu_1^2 + nu_2^2 is a sum of five products of a function
+  // of the view and one of the node), and rayleigh[cd][ab] = sum_t rayleigh_out[cd][t]
+  // rayleigh_in[t][ab] to float rounding: the products then cost 5 / out_count of the full
+  // matrix's. Empty for other phase functions.
+  std::vector<float> rayleigh_out;  // out_count x kSource4dRayleighRank
+  std::vector<float> rayleigh_in;   // kSource4dRayleighRank x in_count
 };
+inline constexpr int kSource4dRayleighRank = 5;
 // The radiance of one order on the gathering grid, values[ab * columns + (node * 3 + channel)],
 // with `tables` as the order below (exposed for tests): order 1 from single scattering; order
 // n >= 2 by marching `tables.rayleigh`/`mie` and reflecting `tables.ground_irradiance`, either
