@@ -322,4 +322,26 @@ void LookupSkyViewBatch(const SkyView& sky, const SkyViewLookup& lookup, const s
   }
 }
 
+void LookupFoldedSkyViewBatch(const SkyView& sky, const SkyViewLookup& folded, std::span<const glm::vec3> weights,
+                              bool sun_disc, std::span<const glm::dvec3> views, std::span<float> out) {
+  LookupSkyViewDirections(folded, views, out);
+  const std::size_t n = sky.channel_count();
+  const glm::dvec3 sun = sky.sun_direction();
+  const double cos_sun = std::cos(sky.sun_angular_radius_rad());
+  std::vector<double> disc(n);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const glm::dvec3& view = views[i];
+    if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
+      for (int k = 0; k < 3; ++k) out[3 * i + k] = 0.0f;
+      continue;
+    }
+    if (sun_disc && glm::dot(view, sun) >= cos_sun) {
+      sky.SunDiscRadiance(view, disc);
+      for (std::size_t c = 0; c < n; ++c) {
+        for (int k = 0; k < 3; ++k) out[3 * i + k] += weights[c][k] * static_cast<float>(disc[c]);
+      }
+    }
+  }
+}
+
 }  // namespace atmo::cpu

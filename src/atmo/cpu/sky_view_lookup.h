@@ -86,6 +86,13 @@ void LookupSkyViewBatch(const SkyView& sky, const SkyViewLookup& lookup, const s
                         double horizon_nadir_angle_rad, bool sun_disc, std::span<const glm::dvec3> views,
                         std::span<float> out);
 
+// The folded image row of the models that read sky-view tables (SkyView::RadianceBatchFolded):
+// `folded`, a table folded into three values with `weights` (one per channel), looked up for
+// `views` into out[3 i + k], 0 where a camera sees nothing, and with `sun_disc`
+// sky.SunDiscRadiance folded with `weights` added inside the disc.
+void LookupFoldedSkyViewBatch(const SkyView& sky, const SkyViewLookup& folded, std::span<const glm::vec3> weights,
+                              bool sun_disc, std::span<const glm::dvec3> views, std::span<float> out);
+
 // The sampling positions of LookupSkyViewRow, for tests: texel coordinates s = u * width - 0.5
 // and t = v * height - 0.5 (texel i's centre at i), s[i] in [0, width] after the wrap in x,
 // t[i] in [0, height - 1].

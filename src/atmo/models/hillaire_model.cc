@@ -278,22 +278,7 @@ class HillaireSkyView final : public SkyView {
       }
       lookup = terms.ground ? &folded_sky_and_ground_ : &folded_sky_;
     }
-    cpu::LookupSkyViewDirections(*lookup, views, out);
-    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
-    std::vector<double> disc(n);
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      const glm::dvec3& view = views[i];
-      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
-        for (int k = 0; k < 3; ++k) out[3 * i + k] = 0.0f;
-        continue;
-      }
-      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
-        SunDiscRadiance(view, disc);
-        for (std::size_t c = 0; c < n; ++c) {
-          for (int k = 0; k < 3; ++k) out[3 * i + k] += weights[c][k] * static_cast<float>(disc[c]);
-        }
-      }
-    }
+    cpu::LookupFoldedSkyViewBatch(*this, *lookup, weights, terms.sun_disc, views, out);
   }
 
  private:

@@ -304,22 +304,8 @@ class Source4dSkyView final : public SkyView {
     }
     std::shared_lock<std::shared_mutex> lock(folded_mutex_);
     EnsureTexels(views);
-    cpu::LookupSkyViewDirections(terms.ground ? folded_sky_and_ground_ : folded_sky_, views, out);
-    const double cos_sun = std::cos(model_.parameters().sun_angular_radius_rad);
-    std::vector<double> disc(n);
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      const glm::dvec3& view = views[i];
-      if (view.x == 0.0 && view.y == 0.0 && view.z == 0.0) {  // nothing seen (outside a fisheye)
-        for (int k = 0; k < 3; ++k) out[3 * i + k] = 0.0f;
-        continue;
-      }
-      if (terms.sun_disc && glm::dot(view, sun_direction()) >= cos_sun) {
-        SunDiscRadiance(view, disc);
-        for (std::size_t c = 0; c < n; ++c) {
-          for (int k = 0; k < 3; ++k) out[3 * i + k] += weights[c][k] * static_cast<float>(disc[c]);
-        }
-      }
-    }
+    cpu::LookupFoldedSkyViewBatch(*this, terms.ground ? folded_sky_and_ground_ : folded_sky_, weights, terms.sun_disc,
+                                  views, out);
   }
 
   // The sky-view texels marched so far (for tests: a narrow view marches few).
