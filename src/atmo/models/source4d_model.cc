@@ -141,12 +141,15 @@ Source4dModel::Source4dModel(const AtmosphereParameters& parameters, const Sourc
 }
 
 double Source4dModel::EstimatedPrecomputeSeconds() const {
-  // Measured (docs/performance.md, `atmo bench --model source4d`): the default 16x24x48x8 table
-  // at 3 channels and 5 orders in 1.14 s on 2 threads, 3.1 us of CPU per cell and order, the
-  // gathers dominating; the cost grows with the cells, the orders and the batches of 3 channels.
+  // Measured (docs/performance.md, "source4d on spectral atmospheres"; `atmo bench --model
+  // source4d`): the default 16x24x48x8 table at 3 channels and 5 orders in 0.56 s on 2 threads,
+  // 1.5 us of CPU per cell and order, the gathers dominating; the cost grows with the cells and
+  // the orders, and each batch of 3 channels after the first adds 0.7 of the first's (the
+  // batches share the rays' geometry: 15 channels took 3.8x as long as 3).
   const cpu::Source4dSettings& t = settings_.tables;
   const double cells = static_cast<double>(t.r_size) * t.mu_size * t.mu_s_size * t.phi_size;
-  const double cpu_seconds = 3.1e-6 * cells * std::max(t.orders, 1) * static_cast<double>(batches_.size());
+  const double batches = 1.0 + kSource4dExtraBatchCost * (static_cast<double>(batches_.size()) - 1.0);
+  const double cpu_seconds = 1.6e-6 * cells * std::max(t.orders, 1) * batches;
   return cpu_seconds / std::max(oneapi::tbb::this_task_arena::max_concurrency(), 1);
 }
 

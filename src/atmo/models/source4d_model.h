@@ -30,6 +30,10 @@
 
 namespace atmo {
 
+// The precomputation's cost of each batch of three channels after the first, relative to the
+// first's (EstimatedPrecomputeSeconds).
+inline constexpr double kSource4dExtraBatchCost = 0.7;
+
 struct Source4dModelSettings {
   cpu::Source4dSettings tables;
   int samples = 64;
