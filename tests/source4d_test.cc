@@ -139,8 +139,12 @@ TEST(Source4dTables, SharedGeometryGatherEqualsThePerRayMarch) {
     double largest = 0.0;
     for (float v : general) largest = std::max(largest, double(v));
     ASSERT_GT(largest, 0.0);
+    // Order 1 computes its coordinates in double as the general march does; orders >= 2 compute
+    // the sun's row and azimuth in float (measured: 1.1e-4 at worst on this coarse grid, where ln G
+    // changes fastest between its 10 sun-zenith rows).
+    const double tolerance = order == 1 ? 1e-5 : 2e-4;
     for (std::size_t k = 0; k < general.size(); ++k) {
-      EXPECT_NEAR(shared_geometry[k], general[k], 1e-5 * std::abs(general[k]) + 1e-9 * largest)
+      EXPECT_NEAR(shared_geometry[k], general[k], tolerance * std::abs(general[k]) + 1e-9 * largest)
           << "order " << order << ", value " << k;
     }
   }

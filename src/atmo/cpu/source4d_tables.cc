@@ -175,27 +175,52 @@ inline float ExpFloat(float x) {
   return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
 }
 
-// shared::GetSource4dUnitSunZenith of a clamped cosine, with the knots' branches as selects.
-inline double SunUnit(double mu_s, const shared::Source4dSunAxis& axis) {
-  const double theta = shared::Source4dAcos(mu_s);
-  const double u_0 = shared::Source4dLerp(theta, 0.0, shared::kSource4dSunKnot1, 0.0, axis.unit_1);
-  const double u_1 =
-      shared::Source4dLerp(theta, shared::kSource4dSunKnot1, shared::kSource4dSunKnot2, axis.unit_1, axis.unit_2);
-  const double u_2 =
-      shared::Source4dLerp(theta, shared::kSource4dSunKnot2, shared::kSource4dSunKnot3, axis.unit_2, axis.unit_3);
-  const double u_3 = std::min(
-      shared::Source4dLerp(theta, shared::kSource4dSunKnot3, shared::kSource4dMaxSunZenith, axis.unit_3, 1.0), 1.0);
-  return theta < shared::kSource4dSunKnot1 ? u_0
-         : theta < shared::kSource4dSunKnot2 ? u_1
-         : theta < shared::kSource4dSunKnot3 ? u_2
-                                             : u_3;
+// shared::GetSource4dUnitSunZenith and shared::GetSource4dAzimuth (radians, 0..pi) in float, with
+// their branches as selects, for the sun loop of the orders >= 2 (twice the lanes of double per
+// vector): shared::Source4dAcos's polynomial and the axis's knots rounded to float. The sun-zenith
+// row and azimuth differ from double ones by ~1e-7 units (~1e-5 rows), which moves the gathered
+// field by up to 1.1e-4 relative on a coarse grid where ln G changes fastest between rows
+// (tests/source4d_test.cc) and rendered images by < 1e-6.
+struct SunAxisFloat {
+  float unit_1, unit_2, unit_3;
+  float knot_1 = static_cast<float>(shared::kSource4dSunKnot1);
+  float knot_2 = static_cast<float>(shared::kSource4dSunKnot2);
+  float knot_3 = static_cast<float>(shared::kSource4dSunKnot3);
+  float max_zenith = static_cast<float>(shared::kSource4dMaxSunZenith);
+};
+
+inline float AcosFloat(float x) {
+  const float a = std::min(std::fabs(x), 1.0f);
+  float p = -0.0012624911f;
+  p = p * a + 0.0066700901f;
+  p = p * a - 0.0170881256f;
+  p = p * a + 0.0308918810f;
+  p = p * a - 0.0501743046f;
+  p = p * a + 0.0889789874f;
+  p = p * a - 0.2145988016f;
+  p = p * a + 1.5707963050f;
+  const float angle = std::sqrt(1.0f - a) * p;
+  return x < 0.0f ? 3.14159265358979f - angle : angle;
 }
 
-// shared::GetSource4dAzimuth (radians, 0..pi) with its branch as a select.
-inline double Azimuth(double mu, double mu_s, double nu) {
-  const double s = std::sqrt(std::max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
-  const double angle = shared::Source4dAcos(shared::ClampCosine((nu - mu * mu_s) / std::max(s, 1e-9)));
-  return s > 1e-9 ? angle : 0.0;
+inline float LerpFloat(float x, float x_0, float x_1, float y_0, float y_1) {
+  return y_0 + (y_1 - y_0) * (x - x_0) / (x_1 - x_0);
+}
+
+inline float SunUnitFloat(float mu_s, const SunAxisFloat& axis) {
+  const float theta = AcosFloat(mu_s);
+  const float u_0 = LerpFloat(theta, 0.0f, axis.knot_1, 0.0f, axis.unit_1);
+  const float u_1 = LerpFloat(theta, axis.knot_1, axis.knot_2, axis.unit_1, axis.unit_2);
+  const float u_2 = LerpFloat(theta, axis.knot_2, axis.knot_3, axis.unit_2, axis.unit_3);
+  const float u_3 = std::min(LerpFloat(theta, axis.knot_3, axis.max_zenith, axis.unit_3, 1.0f), 1.0f);
+  return theta < axis.knot_1 ? u_0 : theta < axis.knot_2 ? u_1 : theta < axis.knot_3 ? u_2 : u_3;
+}
+
+inline float AzimuthFloat(float mu, float mu_s, float nu) {
+  const float s = std::sqrt(std::max((1.0f - mu * mu) * (1.0f - mu_s * mu_s), 0.0f));
+  const float c = (nu - mu * mu_s) / std::max(s, 1e-9f);
+  const float angle = AcosFloat(c < -1.0f ? -1.0f : (c > 1.0f ? 1.0f : c));
+  return s > 1e-9f ? angle : 0.0f;
 }
 
 // The 2D slice of both tables at one step of a gathering ray: the step's view-zenith coordinate y
@@ -240,6 +265,7 @@ void Slice(const shared::Texture3D& rayleigh, const shared::Texture3D& mie, int 
 // Per-thread buffers of the sun loop.
 struct SunScratch {
   std::vector<double> r_mu_s, nu;  // per pair (sun node j, azimuth b)
+  std::vector<float> r_mu_s_f, nu_f;  // the same in float, for the coordinates
   std::vector<int> base;           // per pair: the slice index of its first tap
   std::vector<float> w_row, w_x;   // per pair: the taps' weights
   std::vector<float> sum;          // per batch and pair, kLanes: sum[(batch * pairs + p) * kLanes + lane]
@@ -247,6 +273,8 @@ struct SunScratch {
   void Resize(int pairs, int slice_texels, std::size_t batches) {
     r_mu_s.resize(pairs);
     nu.resize(pairs);
+    r_mu_s_f.resize(pairs);
+    nu_f.resize(pairs);
     base.resize(pairs);
     w_row.resize(pairs);
     w_x.resize(pairs);
@@ -312,35 +340,43 @@ std::vector<GatherField> GatherMultipleRadiance(std::span<const Grid> grids,
         const int p = j * s.gather_azimuths + b;
         w.r_mu_s[p] = r * sun_mu_s[j];
         w.nu[p] = shared::ClampCosine(mu * sun_mu_s[j] + sin_v * sun_sin_s[j] * azimuth_cos[b]);
+        w.r_mu_s_f[p] = static_cast<float>(w.r_mu_s[p]);
+        w.nu_f[p] = static_cast<float>(w.nu[p]);
       }
     }
     std::fill(w.sum.begin(), w.sum.end(), 0.0f);
-    const shared::Source4dSunAxis sun_axis = shared::GetSource4dSunAxis(s.mu_s_size);
+    const shared::Source4dSunAxis axis = shared::GetSource4dSunAxis(s.mu_s_size);
+    SunAxisFloat sun_axis;
+    sun_axis.unit_1 = static_cast<float>(axis.unit_1);
+    sun_axis.unit_2 = static_cast<float>(axis.unit_2);
+    sun_axis.unit_3 = static_cast<float>(axis.unit_3);
     for (std::size_t n = 0; n < steps[0].size(); ++n) {
       const Step& step = steps[0][n];
-      // Every pair's sun-zenith row and azimuth at this step (vectorised), for every batch.
-      const double inv_r = 1.0 / step.r;
-      const double mu_t = step.mu;
-      const double row_scale = s.mu_s_size - 1;
-      const double azimuth_scale = (s.phi_size - 1) / shared::kPi;
-      const double t = step.t;
+      // Every pair's sun-zenith row and azimuth at this step (vectorised, in float), for every
+      // batch.
+      const float inv_r = static_cast<float>(1.0 / step.r);
+      const float mu_t = static_cast<float>(step.mu);
+      const float row_scale = static_cast<float>(s.mu_s_size - 1);
+      const float azimuth_scale = static_cast<float>((s.phi_size - 1) / shared::kPi);
+      const float t = static_cast<float>(step.t);
       const int last_row = s.mu_s_size - 2;
       const int last_x = s.phi_size - 2;
       const int phi_size = s.phi_size;
-      const double* __restrict r_mu_s = w.r_mu_s.data();
-      const double* __restrict nu = w.nu.data();
+      const float* __restrict r_mu_s = w.r_mu_s_f.data();
+      const float* __restrict nu = w.nu_f.data();
       int* __restrict base = w.base.data();
       float* __restrict w_row = w.w_row.data();
       float* __restrict w_x = w.w_x.data();
       for (int p = 0; p < pairs; ++p) {
-        const double mu_s_t = shared::ClampCosine((r_mu_s[p] + t * nu[p]) * inv_r);
-        const double row = SunUnit(mu_s_t, sun_axis) * row_scale;
-        const double azimuth = Azimuth(mu_t, mu_s_t, nu[p]) * azimuth_scale;
+        const float c = (r_mu_s[p] + t * nu[p]) * inv_r;
+        const float mu_s_t = c < -1.0f ? -1.0f : (c > 1.0f ? 1.0f : c);
+        const float row = SunUnitFloat(mu_s_t, sun_axis) * row_scale;
+        const float azimuth = AzimuthFloat(mu_t, mu_s_t, nu[p]) * azimuth_scale;
         const int row_0 = std::min(static_cast<int>(row), last_row);
         const int x_0 = std::min(static_cast<int>(azimuth), last_x);
         base[p] = (row_0 * phi_size + x_0) * kLanes;
-        w_row[p] = static_cast<float>(row - row_0);
-        w_x[p] = static_cast<float>(azimuth - x_0);
+        w_row[p] = row - static_cast<float>(row_0);
+        w_x[p] = azimuth - static_cast<float>(x_0);
       }
       const int row_stride = s.phi_size * kLanes;
       for (std::size_t k = 0; k < batches; ++k) {
