@@ -289,8 +289,9 @@ struct SunScratch {
 // azimuth of the grid; only the sun's coordinates and the lookups differ. The steps are those of
 // shared::IntegrateSource4dRadianceInside with single_weight = 0 (tests/source4d_test.cc checks
 // that the two agree). Per step the tables are reduced to a 2D slice (Slice), and the sun loop
-// runs over all (sun node, azimuth) pairs of the ray at once: their coordinates in double, then
-// the bilinear lookups, exp (ExpFloat) and weighted sums in 8-float vectors.
+// runs over all (sun node, azimuth) pairs of the ray at once: their coordinates in float (once
+// for every batch), then each batch's bilinear lookups, exp (ExpFloat) and weighted sums in
+// 8-float vectors. fields[k] is batch k's, as if it had been gathered alone.
 std::vector<GatherField> GatherMultipleRadiance(std::span<const Grid> grids,
                                                 std::span<const shared::Texture3D* const> rayleigh,
                                                 std::span<const shared::Texture3D* const> mie,
