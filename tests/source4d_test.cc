@@ -98,7 +98,7 @@ TEST(Source4dQuadrature, RayleighMatrixIsItsRankFiveProduct) {
     const cpu::Source4dQuadrature q = cpu::ComputeSource4dQuadrature(ToSharedParameters(p, 0), s);
     ASSERT_EQ(q.rayleigh_out.size(), static_cast<std::size_t>(q.out_count) * cpu::kSource4dRayleighRank);
     ASSERT_EQ(q.rayleigh_in.size(), static_cast<std::size_t>(q.in_count) * cpu::kSource4dRayleighRank);
-    double worst = 0.0;
+    double largest_difference = 0.0;  // relative to each row's largest weight
     for (int cd = 0; cd < q.out_count; ++cd) {
       float row_max = 0.0f;
       for (int ab = 0; ab < q.in_count; ++ab) row_max = std::max(row_max, q.rayleigh[cd * q.in_count + ab]);
@@ -107,10 +107,11 @@ TEST(Source4dQuadrature, RayleighMatrixIsItsRankFiveProduct) {
         for (int t = 0; t < cpu::kSource4dRayleighRank; ++t) {
           product += double(q.rayleigh_out[cd * cpu::kSource4dRayleighRank + t]) * q.rayleigh_in[t * q.in_count + ab];
         }
-        worst = std::max(worst, std::fabs(product - q.rayleigh[cd * q.in_count + ab]) / row_max);
+        const double difference = std::fabs(product - q.rayleigh[cd * q.in_count + ab]) / row_max;
+        largest_difference = std::max(largest_difference, difference);
       }
     }
-    EXPECT_LT(worst, 1e-5) << static_cast<int>(phase);
+    EXPECT_LT(largest_difference, 1e-5) << static_cast<int>(phase);
   }
 }
 
