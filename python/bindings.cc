@@ -56,6 +56,7 @@
 #include "atmo/parameters.h"
 #include "atmo/render.h"
 #include "atmo/spectrum.h"
+#include "atmo/table_cache.h"
 #include "cpu/camera.h"
 #include "shared/shared.h"
 
@@ -1003,6 +1004,28 @@ PYBIND11_MODULE(_atmo, m) {
       },
       py::arg("date"), py::arg("latitude_deg"), py::arg("longitude_deg"));
   m.def("set_threads", &SetThreads, py::arg("threads"));
+  m.def(
+      "set_table_cache",
+      [](const std::optional<std::string>& folder, std::uint64_t max_bytes) {
+        if (!folder) {
+          SetTableCache(std::nullopt);
+          return;
+        }
+        if (folder->empty()) throw Error("table cache: the folder is empty (None turns the cache off)");
+        if (max_bytes == 0) throw Error("table cache: max_bytes must be positive");
+        SetTableCache(TableCache{*folder, max_bytes});
+      },
+      py::arg("folder"), py::arg("max_bytes"));
+  m.def("table_cache", []() -> std::optional<std::string> {
+    const std::optional<TableCache> cache = GetTableCache();
+    if (!cache) return std::nullopt;
+    return cache->folder.string();
+  });
+  m.def("default_table_cache", []() -> std::optional<std::string> {
+    const std::optional<TableCache> cache = DefaultTableCache();
+    if (!cache) return std::nullopt;
+    return cache->folder.string();
+  });
   AddDaylightBindings(m);
   m.def("model_names", &ModelNames);
   m.def("preset_names", &PresetNames);

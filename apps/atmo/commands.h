@@ -16,6 +16,7 @@
 #include "atmo/colour.h"
 #include "atmo/cubemap.h"
 #include "atmo/engine_target.h"
+#include "atmo/table_cache.h"
 #include "atmo/image.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -43,6 +44,7 @@ struct CommonOptions {
   std::string backend = "cpu";
   int threads = 0;  // 0: oneTBB's default
   std::string max_memory;  // --max-memory SIZE (atmo::ParseByteSize); empty: half the machine's memory
+  std::string table_cache;  // --table-cache FOLDER|off; empty: atmo::DefaultTableCache()
   // Accepted for every model. Deterministic models ignore it; a Monte Carlo model will receive it
   // (see CreateModelFor).
   std::uint64_t seed = 0;
@@ -81,6 +83,9 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
 // --backend gl, models elek and source4d compute their tables on the GPU (gl::PrecomputeElekGl,
 // gl::PrecomputeSource4dGl) and answer from them; other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
+// The table cache of --table-cache (a folder, or off), else atmo::DefaultTableCache(). Throws
+// atmo::Error for a path that exists and is not a folder.
+std::optional<TableCache> TableCacheFor(const CommonOptions& common);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.
 void CheckOutputWritable(const std::filesystem::path& path);

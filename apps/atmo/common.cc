@@ -5,10 +5,12 @@
 #include <charconv>
 #include <cstdarg>
 #include <cstdio>
+#include <filesystem>
 #include <system_error>
 
 #include "atmo/error.h"
 #include "atmo/spectrum.h"
+#include "atmo/table_cache.h"
 #include "commands.h"
 #ifdef ATMO_HAVE_GL
 #include "gl/context.h"
@@ -97,6 +99,16 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
 }
 #endif
+
+std::optional<TableCache> TableCacheFor(const CommonOptions& common) {
+  if (common.table_cache == "off") return std::nullopt;
+  if (common.table_cache.empty()) return DefaultTableCache();
+  std::error_code ec;
+  if (std::filesystem::exists(common.table_cache, ec) && !std::filesystem::is_directory(common.table_cache, ec)) {
+    throw Error("--table-cache '" + common.table_cache + "' is not a folder");
+  }
+  return TableCache{common.table_cache};
+}
 
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {
 #ifdef ATMO_HAVE_GL

@@ -78,7 +78,7 @@ void GroupFlags(CLI::App* app) {
       {"--aerosol", "Model and atmosphere"}, {"--aod", "Model and atmosphere"}, {"--angstrom", "Model and atmosphere"},
       {"--visibility", "Model and atmosphere"}, {"--turbidity", "Model and atmosphere"},
       {"--aerosol-phase", "Model and atmosphere"},
-      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
+      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--table-cache", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
       {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
       {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},
       {"--yaw", "Camera"}, {"--target", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
@@ -546,6 +546,7 @@ int main(int argc, char** argv) {
                            static_cast<std::size_t>(common.threads));
     }
     if (!common.max_memory.empty()) atmo::SetMemoryLimitBytes(atmo::ParseByteSize(common.max_memory));
+    atmo::SetTableCache(atmo::cli::TableCacheFor(common));
     // Long precomputations announce their estimate and passes (atmo::SetProgressHandler).
     atmo::SetProgressHandler([](const std::string& message) { std::fprintf(stderr, "atmo: %s\n", message.c_str()); });
     if (render_app->parsed()) return atmo::cli::RunRender(common, render);

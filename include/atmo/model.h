@@ -145,6 +145,12 @@ class Model {
   explicit Model(AtmosphereParameters parameters) : parameters_(std::move(parameters)) {}
   // Adds a pass time; safe to call from const methods and from several threads.
   void RecordPass(std::string_view pass, double ms) const;
+  // The table cache (include/atmo/table_cache.h): a model whose tables are worth keeping writes
+  // what Precompute() made as bytes and returns true; LoadTables reads them back instead of
+  // Precompute() and returns false, leaving the model as it was, when they do not fit its
+  // settings. The default keeps nothing.
+  virtual bool SaveTables(std::vector<unsigned char>& bytes) const { return false; }
+  virtual bool LoadTables(std::span<const unsigned char> bytes) { return false; }
 
  private:
   friend std::unique_ptr<Model> CreateModel(std::string_view, const AtmosphereParameters&, const ModelOptions&);

@@ -48,6 +48,9 @@ __all__ = [
     "sun_direction",
     "model_names",
     "set_threads",
+    "set_table_cache",
+    "table_cache",
+    "default_table_cache",
     "preset_names",
     "preset",
     "aerosol_types",
@@ -622,6 +625,28 @@ def set_threads(threads: int) -> None:
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
         raise ValueError(f"threads must be an integer (got {threads!r})")
     _atmo.set_threads(int(threads))
+
+
+def set_table_cache(folder, max_bytes: int = 1 << 30) -> None:
+    """Keep the tables that source4d models precompute in `folder` (a str or path), and read them
+    back when a later Model has the same model, options, atmosphere and build (bit-identical to
+    computing them); None turns it off, the module's default. `atmo.default_table_cache()` is the
+    folder the atmo command uses. Files are written whole, checked when read, and the least
+    recently used are removed past max_bytes (docs/python.md, "The table cache")."""
+    if isinstance(max_bytes, bool) or not isinstance(max_bytes, (int, np.integer)) or max_bytes <= 0:
+        raise ValueError(f"max_bytes must be a positive integer (got {max_bytes!r})")
+    _atmo.set_table_cache(None if folder is None else os.fspath(folder), int(max_bytes))
+
+
+def table_cache():
+    """The table cache's folder, or None when it is off."""
+    return _atmo.table_cache()
+
+
+def default_table_cache():
+    """The folder the atmo command keeps tables in: $ATMO_TABLE_CACHE (None when "off"), else
+    $XDG_CACHE_HOME/atmo/tables, else ~/.cache/atmo/tables."""
+    return _atmo.default_table_cache()
 
 
 def model_names() -> list:

@@ -50,6 +50,7 @@ set(ATMO_CORE_SOURCES
   io/annual_files.cc
   io/interrupt.cc
   io/ktx2.cc
+  io/table_cache.cc
   metrics/metrics.cc
   timing.cc
   memory.cc

@@ -3,12 +3,17 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <oneapi/tbb/task_arena.h>
 
 #include "atmo/error.h"
+#include "atmo/table_cache.h"
+#include "io/table_cache_file.h"
 #include "models/elek_model.h"
 #include "models/hillaire_model.h"
 #include "models/reference_model.h"
@@ -130,6 +135,19 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
     for (const std::string& n : ModelNames()) known += (known.empty() ? "" : ", ") + n;
     throw Error("unknown model '" + std::string(name) + "' (known: " + known + ")");
   }
+  // Tables kept by an earlier process (include/atmo/table_cache.h) instead of a precomputation.
+  const std::optional<TableCache> cache = GetTableCache();
+  std::string cache_key;
+  if (cache) {
+    cache_key = io::TableCacheKey(name, model_options, parameters);
+    const auto start = std::chrono::steady_clock::now();
+    const std::optional<io::CachedTables> kept = io::ReadCachedTables(*cache, cache_key);
+    if (kept && model->LoadTables(kept->payload)) {
+      model->RecordPass("table_cache_read",
+                        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      return model;
+    }
+  }
   // Long work is announced before it starts, and each of its passes as it ends.
   const double estimate = model->EstimatedPrecomputeSeconds();
   if (progress::Wanted(estimate)) {
@@ -143,6 +161,14 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
   }
   model->Precompute();
   model->announce_passes_ = false;
+  std::vector<unsigned char> bytes;
+  if (cache && model->SaveTables(bytes)) {
+    const std::string why = io::WriteCachedTables(*cache, cache_key, bytes);
+    if (!why.empty()) {
+      progress::Send("table cache: the " + std::string(model->name()) + " tables were not kept in '" +
+                     cache->folder.string() + "': " + why);
+    }
+  }
   return model;
 }
 

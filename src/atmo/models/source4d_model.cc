@@ -16,6 +16,7 @@
 #include "atmo/error.h"
 #include "atmo/memory.h"
 #include "cpu/sky_view_lookup.h"
+#include "io/table_cache_file.h"
 #include "models/model_options.h"
 #include "physics/shared_parameters.h"
 
@@ -175,6 +176,45 @@ void Source4dModel::SetComputedTables(std::size_t b, cpu::Source4dTables tables)
                   tables.ground_irradiance.height == 1;
   if (!ok) throw Error("model source4d: computed tables of other sizes than its settings'");
   batches_.at(b).tables = std::move(tables);
+}
+
+bool Source4dModel::SaveTables(std::vector<unsigned char>& bytes) const {
+  io::TableBytesWriter out;
+  out.Int(static_cast<std::int64_t>(batches_.size()));
+  for (const Batch& batch : batches_) {
+    out.Int(batch.tables.mu_s_size);
+    out.Texture(batch.tables.transmittance);
+    out.Texture(batch.tables.rayleigh);
+    out.Texture(batch.tables.mie);
+    out.Texture(batch.tables.ground_irradiance);
+  }
+  bytes = std::move(out.bytes());
+  return true;
+}
+
+bool Source4dModel::LoadTables(std::span<const unsigned char> bytes) {
+  io::TableBytesReader in(bytes);
+  std::int64_t count = 0;
+  if (!in.Int(count) || count != static_cast<std::int64_t>(batches_.size())) return false;
+  std::vector<cpu::Source4dTables> tables(batches_.size());
+  for (cpu::Source4dTables& t : tables) {
+    std::int64_t mu_s_size = 0;
+    if (!in.Int(mu_s_size) || !in.Texture(t.transmittance) || !in.Texture(t.rayleigh) || !in.Texture(t.mie) ||
+        !in.Texture(t.ground_irradiance)) {
+      return false;
+    }
+    t.mu_s_size = static_cast<int>(std::clamp<std::int64_t>(mu_s_size, 0, 1 << 24));
+  }
+  if (!in.Finished()) return false;
+  // Sizes checked for every batch before any is replaced.
+  const std::vector<Batch> kept = batches_;
+  try {
+    for (std::size_t b = 0; b < tables.size(); ++b) SetComputedTables(b, std::move(tables[b]));
+  } catch (const Error&) {
+    batches_ = kept;
+    return false;
+  }
+  return true;
 }
 
 namespace {

@@ -67,6 +67,11 @@ class Source4dModel final : public Model {
   // model): the table's texels are marched as lookups first need them (for tests).
   static std::size_t SkyViewTexelsMarched(const SkyView& view);
 
+ protected:
+  // The table cache (include/atmo/table_cache.h): every batch's tables.
+  bool SaveTables(std::vector<unsigned char>& bytes) const override;
+  bool LoadTables(std::span<const unsigned char> bytes) override;
+
  private:
   Source4dModelSettings settings_;
   std::vector<Batch> batches_;
