@@ -10,6 +10,7 @@ The commands of a file run in order in one fresh folder, as the test runs them.
     scripts/doc_transcripts.py --check         # print the lines that drifted; exit 1 if any did
     scripts/doc_transcripts.py --doc docs/cli.md --atmo build/apps/atmo/atmo
     scripts/doc_transcripts.py --doc docs/performance.md --measured-only 'aerosol-phase|us-standard'
+    scripts/doc_transcripts.py --timings       # list the timings that nothing regenerates; exit 1 if any
 
 Timings (a number followed by ` s` or ` ms`) are rewritten with what this run measured; the test
 accepts any number there. The machine, its cores and its load are printed first.
@@ -22,6 +23,18 @@ A measured block holds the whole output of a command whose numbers are measureme
     ```
     Measured 2026-12-04 18:40 UTC on ... (the machine, its cores, its load before the run).
     <!-- end measured -->
+
+A record block keeps a dated measurement of an earlier build (a comparison before and after a
+change, a run that took an hour): it is history, not rerun, and says so where a reader sees it:
+
+    <!-- record: 2026-12-04 -->
+    *Record of 2026-12-04, not rerun since.* (the text, with its figures)
+    <!-- end record -->
+
+Every other timing of the manual (a number followed by ms, µs, s, min or fps) must be in a measured
+block, a generated table (`<!-- table: NAME -->`), a transcript, or be a bound (after ≤, ≥, <, >) or
+a setting (a line that ends with `<!-- not measured: WHY -->`): `--timings` lists those that are
+not, and tests/docs_test.cc (`EveryTimingIsRegeneratedOrARecord`) fails on them.
 
 This script reruns the command, replaces the output and writes the stamp line (`--no-measured`
 leaves measured blocks alone: run them on an idle machine). tests/docs_test.cc reruns each
@@ -40,6 +53,11 @@ import tempfile
 TIMING = re.compile(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?= m?s\b)")
 NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
 MEASURED = re.compile(r"^<!-- measured: (.+) -->$")
+# A timing anywhere in the manual's prose, and the bounds that are not measurements (≤ 5 ms).
+ANY_TIMING = re.compile(r"\d\s?(?:ms|µs|s|min|fps)\b")
+BOUND = re.compile(r"[≤≥<>]\s?~?\d+(?:[.,]\d+)?\s?(?:ms|µs|s|min|fps)\b")
+RECORD = re.compile(r"^<!-- record: (\d{4}-\d{2}-\d{2})\b.* -->$")
+BLOCK_END = {"measured": "<!-- end measured -->", "table": "<!-- end table -->", "record": "<!-- end record -->"}
 
 
 def machine():
@@ -118,6 +136,49 @@ def transcripts(lines):
             start = None
 
 
+def untracked_timings(path):
+    """The (line number, line) of each timing of `path` that nothing regenerates (see above)."""
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().split("\n")
+    found = []
+    closing = None
+    date = None  # a record's date, until its visible text shows it
+    sh = False
+    for n, raw in enumerate(lines, 1):
+        line = raw.strip()
+        if closing is not None:
+            if date and date in line:
+                date = None
+            if line == closing:
+                if date:
+                    found.append((n, raw + f"   <- the record's text does not show its date {date}"))
+                closing = date = None
+            continue
+        for kind, end in BLOCK_END.items():
+            if line.startswith(f"<!-- {kind}: "):
+                closing = end
+        if line.startswith("<!-- record: "):
+            match = RECORD.match(line)
+            if match:
+                date = match.group(1)
+            else:
+                found.append((n, raw + "   <- a record needs its date: <!-- record: YYYY-MM-DD -->"))
+        if closing is not None:
+            continue
+        if line.startswith("```sh"):
+            sh = True
+            continue
+        if sh:
+            sh = line != "```"
+            if line.startswith("$ ") or sh:
+                continue
+        if "<!-- not measured: " in line:
+            continue
+        if ANY_TIMING.search(BOUND.sub("", raw)):
+            found.append((n, raw))
+    return found
+
+
 def run(atmo, folder, command):
     if command == "atmo" or command.startswith("atmo "):
         command = "'" + atmo + "'" + command[4:]
@@ -188,13 +249,21 @@ def main():
     parser.add_argument("--no-measured", action="store_true", help="leave the measured blocks alone")
     parser.add_argument("--measured-only", metavar="REGEX",
                         help="rerun only the measured blocks whose command matches REGEX")
+    parser.add_argument("--timings", action="store_true",
+                        help="list the timings outside measured blocks, tables, transcripts and records")
     args = parser.parse_args()
+    docs = args.doc or ["README.md"] + sorted(
+        os.path.join(root, name) for root, _, names in os.walk("docs") for name in names if name.endswith(".md"))
+    if args.timings:
+        found = [(doc, n, line) for doc in docs for n, line in untracked_timings(doc)]
+        for doc, n, line in found:
+            print(f"{doc}:{n}: {line}")
+        print(f"doc_transcripts: {len(found)} timing line(s) that nothing regenerates")
+        sys.exit(1 if found else 0)
     atmo = os.path.abspath(args.atmo)
     if not os.access(atmo, os.X_OK):
         sys.exit(f"doc_transcripts: no atmo binary at {args.atmo} (build first, or pass --atmo)")
     print(f"doc_transcripts: {machine()}")
-    docs = args.doc or ["README.md"] + sorted(
-        os.path.join(root, name) for root, _, names in os.walk("docs") for name in names if name.endswith(".md"))
     drift = sum(rewrite(doc, atmo, args.check, not args.no_measured, args.measured_only) for doc in docs)
     print(f"doc_transcripts: {drift} drifted line(s)" + ("" if args.check else ", rewritten"))
     sys.exit(1 if args.check and drift else 0)

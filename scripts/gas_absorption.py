@@ -506,8 +506,11 @@ def main():
     write_header(q_o2, q_h2o, mean_o2, mean_h2o, o4, col_o2, col_h2o, pair_col,
                  ["Verification (printed by the script, also in docs/data/gas_absorption/README.md):"]
                  + [l for l in report if not l.startswith(("run time", "line-by-line:"))])
-    README.write_text(README_SOURCES + "\n## Verification (output of the last run)\n\n```\n" + "\n".join(report)
-                      + "\n```\n")
+    # The run's times are a dated record (scripts/doc_transcripts.py --timings): history, not rerun.
+    today = time.strftime("%Y-%m-%d", time.gmtime())
+    README.write_text(README_SOURCES + "\n## Verification (output of the last run)\n\n"
+                      + f"<!-- record: {today} -->\n*Record of {today}, not rerun since.*\n\n```\n"
+                      + "\n".join(report) + "\n```\n<!-- end record -->\n")
     print("wrote", OUT_HEADER, "and", README)
 
 
