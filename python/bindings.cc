@@ -1007,24 +1007,21 @@ PYBIND11_MODULE(_atmo, m) {
   m.def(
       "set_table_cache",
       [](const std::optional<std::string>& folder, std::uint64_t max_bytes) {
-        if (!folder) {
-          SetTableCache(std::nullopt);
-          return;
-        }
-        if (folder->empty()) throw Error("table cache: the folder is empty (None turns the cache off)");
+        // None keeps nothing new; the tables shipped with atmo are read either way.
+        if (folder && folder->empty()) throw Error("table cache: the folder is empty (None keeps nothing)");
         if (max_bytes == 0) throw Error("table cache: max_bytes must be positive");
-        SetTableCache(TableCache{*folder, max_bytes});
+        SetTableCache(TableCache{folder ? *folder : std::string(), max_bytes, ShippedTableFolders()});
       },
       py::arg("folder"), py::arg("max_bytes"));
   m.def("table_cache", []() -> std::optional<std::string> {
     const std::optional<TableCache> cache = GetTableCache();
-    if (!cache) return std::nullopt;
+    if (!cache || cache->folder.empty()) return std::nullopt;
     return cache->folder.string();
   });
   m.def("default_table_cache", []() -> std::optional<std::string> {
-    const std::optional<TableCache> cache = DefaultTableCache();
-    if (!cache) return std::nullopt;
-    return cache->folder.string();
+    const TableCache cache = DefaultTableCache();
+    if (cache.folder.empty()) return std::nullopt;
+    return cache.folder.string();
   });
   AddDaylightBindings(m);
   m.def("model_names", &ModelNames);

@@ -74,7 +74,7 @@ class TableCacheTest : public testing::CliFixture {
     SetTableCache(cache_);
   }
   void TearDown() override {
-    SetTableCache(std::nullopt);
+    SetTableCache(TableCache{{}, std::uint64_t{1} << 30, ShippedTableFolders()});  // the process's default
     SetProgressHandler({});
     CliFixture::TearDown();
   }
@@ -87,7 +87,7 @@ TEST_F(TableCacheTest, TablesReadBackAreTheComputedOnesBitForBit) {
   const auto computed = CreateModel("source4d", p, kSmall);
   EXPECT_TRUE(Ran(*computed, "source4d_gather_1"));
   EXPECT_FALSE(Ran(*computed, "table_cache_read"));
-  EXPECT_TRUE(fs::is_regular_file(io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, p))));
+  EXPECT_TRUE(fs::is_regular_file(io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, p))));
 
   const auto read = CreateModel("source4d", p, kSmall);
   EXPECT_TRUE(Ran(*read, "table_cache_read"));
@@ -152,7 +152,7 @@ TEST_F(TableCacheTest, WhatTheTablesDependOnIsInTheKey) {
 TEST_F(TableCacheTest, ADamagedFileIsNeverReadAndIsReplaced) {
   const AtmosphereParameters p = Preset("earth");
   const auto computed = CreateModel("source4d", p, kSmall);
-  const fs::path file = io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, p));
+  const fs::path file = io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, p));
   const std::vector<unsigned char> good = Bytes(file);
   ASSERT_GT(good.size(), 1000u);
 
@@ -197,7 +197,7 @@ TEST_F(TableCacheTest, AFolderThatCannotBeWrittenCostsOnlyTheSaving) {
 TEST_F(TableCacheTest, TheLeastRecentlyUsedFilesGoFirst) {
   const AtmosphereParameters earth = Preset("earth");
   CreateModel("source4d", earth, kSmall);
-  const fs::path first = io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, earth));
+  const fs::path first = io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, earth));
   const std::uintmax_t one = fs::file_size(first);
   // Room for two files: the third atmosphere pushes out the least recently used.
   cache_.max_bytes = 2 * one + one / 2;
@@ -207,14 +207,14 @@ TEST_F(TableCacheTest, TheLeastRecentlyUsedFilesGoFirst) {
   AtmosphereParameters third = earth;
   third.ground_albedo[1] = 0.4;
   CreateModel("source4d", second, kSmall);
-  const fs::path second_file = io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, second));
+  const fs::path second_file = io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, second));
   // The first is used again (read back) after the second was written: the second is the oldest.
   fs::last_write_time(second_file, fs::last_write_time(first) - std::chrono::seconds(10));
   EXPECT_TRUE(Ran(*CreateModel("source4d", earth, kSmall), "table_cache_read"));
   CreateModel("source4d", third, kSmall);
   EXPECT_TRUE(fs::exists(first));
   EXPECT_FALSE(fs::exists(second_file));
-  EXPECT_TRUE(fs::exists(io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, third))));
+  EXPECT_TRUE(fs::exists(io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, third))));
   EXPECT_EQ(CacheFiles(cache_.folder), 2u);
   // A model's tables larger than the whole cache are not kept.
   cache_.max_bytes = one / 2;
@@ -224,9 +224,34 @@ TEST_F(TableCacheTest, TheLeastRecentlyUsedFilesGoFirst) {
   AtmosphereParameters fourth = earth;
   fourth.ground_albedo[1] = 0.6;
   CreateModel("source4d", fourth, kSmall);
-  EXPECT_FALSE(fs::exists(io::CachedTablesPath(cache_, io::TableCacheKey("source4d", kSmall, fourth))));
+  EXPECT_FALSE(fs::exists(io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, fourth))));
   ASSERT_EQ(messages.size(), 1u);
   EXPECT_NE(messages[0].find("larger than the cache"), std::string::npos) << messages[0];
+}
+
+TEST_F(TableCacheTest, ShippedFoldersAreReadAndNeverWritten) {
+  const AtmosphereParameters earth = Preset("earth");
+  const auto computed = CreateModel("source4d", earth, kSmall);
+  const fs::path file = io::CachedTablesPath(cache_.folder, io::TableCacheKey("source4d", kSmall, earth));
+  const auto written = fs::last_write_time(file) - std::chrono::hours(1);
+  fs::last_write_time(file, written);
+  // The folder as a shipped one, and nothing that keeps tables.
+  SetTableCache(TableCache{{}, 1 << 16, {dir_ / "elsewhere", cache_.folder}});
+  const auto read = CreateModel("source4d", earth, kSmall);
+  EXPECT_TRUE(Ran(*read, "table_cache_read"));
+  ExpectSameTables(*computed, *read);
+  EXPECT_EQ(fs::last_write_time(file), written) << "a shipped file is not renewed";
+  // Larger than max_bytes (64 KiB): shipped files are read whatever the cache's size.
+  EXPECT_GT(fs::file_size(file), std::uintmax_t{1} << 16);
+  // Another atmosphere is computed and kept nowhere.
+  AtmosphereParameters other = earth;
+  other.ground_albedo[2] = 0.5;
+  EXPECT_FALSE(Ran(*CreateModel("source4d", other, kSmall), "table_cache_read"));
+  EXPECT_EQ(CacheFiles(cache_.folder), 1u);
+  EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
+  // std::nullopt: not even the shipped tables.
+  SetTableCache(std::nullopt);
+  EXPECT_FALSE(Ran(*CreateModel("source4d", earth, kSmall), "table_cache_read"));
 }
 
 TEST_F(TableCacheTest, ModelsWithoutCostlyTablesKeepNothing) {
@@ -249,11 +274,12 @@ TEST(DefaultTableCache, FollowsTheEnvironment) {
     set("ATMO_TABLE_CACHE", cache);
     set("XDG_CACHE_HOME", xdg);
     set("HOME", home);
-    const std::optional<TableCache> found = DefaultTableCache();
+    const TableCache found = DefaultTableCache();
     set("ATMO_TABLE_CACHE", saved[0] ? kept[0].c_str() : nullptr);
     set("XDG_CACHE_HOME", saved[1] ? kept[1].c_str() : nullptr);
     set("HOME", saved[2] ? kept[2].c_str() : nullptr);
-    return found ? found->folder.string() : std::string("none");
+    EXPECT_EQ(found.shipped, ShippedTableFolders());
+    return found.folder.empty() ? std::string("none") : found.folder.string();
   };
   EXPECT_EQ(with("off", "/x", "/h"), "none");
   EXPECT_EQ(with("", "/x", "/h"), "none");
@@ -262,6 +288,21 @@ TEST(DefaultTableCache, FollowsTheEnvironment) {
   EXPECT_EQ(with(nullptr, "relative", "/h"), "/h/.cache/atmo/tables");  // XDG paths must be absolute
   EXPECT_EQ(with(nullptr, nullptr, "/h"), "/h/.cache/atmo/tables");
   EXPECT_EQ(with(nullptr, nullptr, nullptr), "none");
+}
+
+// The default sky's tables, made when atmo was built: read, and the bytes this build computes.
+TEST(ShippedTables, HoldTheDefaultSkyAsThisBuildComputesIt) {
+  const std::vector<fs::path> shipped = ShippedTableFolders();
+  if (shipped.empty()) GTEST_SKIP() << "configured with -DATMO_BAKE_TABLES=OFF: no shipped tables";
+  const AtmosphereParameters p = Preset("us-standard");
+  SetTableCache(TableCache{{}, std::uint64_t{1} << 30, shipped});
+  const auto read = CreateModel("source4d", p);
+  EXPECT_TRUE(Ran(*read, "table_cache_read"));
+  SetTableCache(std::nullopt);
+  const auto computed = CreateModel("source4d", p);
+  SetTableCache(TableCache{{}, std::uint64_t{1} << 30, shipped});
+  EXPECT_FALSE(Ran(*computed, "table_cache_read"));
+  ExpectSameTables(*computed, *read);
 }
 
 // The command line: a second render finds the first one's tables and writes the same image.

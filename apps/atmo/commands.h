@@ -83,9 +83,9 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
 // --backend gl, models elek and source4d compute their tables on the GPU (gl::PrecomputeElekGl,
 // gl::PrecomputeSource4dGl) and answer from them; other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
-// The table cache of --table-cache (a folder, or off), else atmo::DefaultTableCache(). Throws
-// atmo::Error for a path that exists and is not a folder.
-std::optional<TableCache> TableCacheFor(const CommonOptions& common);
+// atmo::DefaultTableCache(), its folder replaced by --table-cache's (a folder; off: none, the
+// shipped tables are still read). Throws atmo::Error for a path that exists and is not a folder.
+TableCache TableCacheFor(const CommonOptions& common);
 // Fails fast, before heavy work, when `path` cannot be written: its folder is missing or not
 // writable, or the path is a folder.
 void CheckOutputWritable(const std::filesystem::path& path);

@@ -100,14 +100,18 @@ Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const 
 }
 #endif
 
-std::optional<TableCache> TableCacheFor(const CommonOptions& common) {
-  if (common.table_cache == "off") return std::nullopt;
-  if (common.table_cache.empty()) return DefaultTableCache();
-  std::error_code ec;
-  if (std::filesystem::exists(common.table_cache, ec) && !std::filesystem::is_directory(common.table_cache, ec)) {
-    throw Error("--table-cache '" + common.table_cache + "' is not a folder");
+TableCache TableCacheFor(const CommonOptions& common) {
+  TableCache cache = DefaultTableCache();
+  if (common.table_cache == "off") {
+    cache.folder.clear();
+  } else if (!common.table_cache.empty()) {
+    std::error_code ec;
+    if (std::filesystem::exists(common.table_cache, ec) && !std::filesystem::is_directory(common.table_cache, ec)) {
+      throw Error("--table-cache '" + common.table_cache + "' is not a folder");
+    }
+    cache.folder = common.table_cache;
   }
-  return TableCache{common.table_cache};
+  return cache;
 }
 
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters) {

@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::mutex cache_mutex;
+bool cache_set = false;  // before SetTableCache: the shipped tables only
 std::optional<TableCache> process_cache;
 
 constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'T', 'B', 'L', '1'};
@@ -106,33 +107,47 @@ void Trim(const TableCache& cache, const fs::path& keep) {
 
 }  // namespace
 
+std::vector<fs::path> ShippedTableFolders() {
+  std::vector<fs::path> folders;
+  // Compile definitions of src/atmo/CMakeLists.txt (none in the WebAssembly build).
+#ifdef ATMO_BUILD_TABLES_DIR
+  folders.emplace_back(ATMO_BUILD_TABLES_DIR);
+#endif
+#ifdef ATMO_INSTALL_TABLES_DIR
+  folders.emplace_back(ATMO_INSTALL_TABLES_DIR);
+#endif
+  std::error_code ec;
+  std::erase_if(folders, [&](const fs::path& folder) { return !fs::is_directory(folder, ec); });
+  return folders;
+}
+
 void SetTableCache(std::optional<TableCache> cache) {
   const std::lock_guard<std::mutex> lock(cache_mutex);
   process_cache = std::move(cache);
+  cache_set = true;
 }
 
 std::optional<TableCache> GetTableCache() {
   const std::lock_guard<std::mutex> lock(cache_mutex);
+  if (!cache_set) return TableCache{{}, std::uint64_t{1} << 30, ShippedTableFolders()};
   return process_cache;
 }
 
-std::optional<TableCache> DefaultTableCache() {
+TableCache DefaultTableCache() {
+  TableCache cache{{}, std::uint64_t{1} << 30, ShippedTableFolders()};
   const auto variable = [](const char* name) -> std::optional<std::string> {
     const char* value = std::getenv(name);
     if (value == nullptr) return std::nullopt;
     return std::string(value);
   };
   if (const auto setting = variable("ATMO_TABLE_CACHE")) {
-    if (setting->empty() || *setting == "off") return std::nullopt;
-    return TableCache{fs::path(*setting)};
+    if (!setting->empty() && *setting != "off") cache.folder = fs::path(*setting);
+  } else if (const auto xdg = variable("XDG_CACHE_HOME"); xdg && !xdg->empty() && fs::path(*xdg).is_absolute()) {
+    cache.folder = fs::path(*xdg) / "atmo" / "tables";
+  } else if (const auto home = variable("HOME"); home && !home->empty()) {
+    cache.folder = fs::path(*home) / ".cache" / "atmo" / "tables";
   }
-  if (const auto xdg = variable("XDG_CACHE_HOME"); xdg && !xdg->empty() && fs::path(*xdg).is_absolute()) {
-    return TableCache{fs::path(*xdg) / "atmo" / "tables"};
-  }
-  if (const auto home = variable("HOME"); home && !home->empty()) {
-    return TableCache{fs::path(*home) / ".cache" / "atmo" / "tables"};
-  }
-  return std::nullopt;
+  return cache;
 }
 
 std::string_view BuildId() { return ATMO_BUILD_ID; }
@@ -154,20 +169,24 @@ std::string TableCacheKey(std::string_view model, const std::map<std::string, st
   return key + "atmosphere " + ToJson(unnamed) + "\n";
 }
 
-fs::path CachedTablesPath(const TableCache& cache, const std::string& key) {
+fs::path CachedTablesPath(const fs::path& folder, const std::string& key) {
   // Two bases, so that a name is 128 bits of the key; the file still holds the whole key.
-  return cache.folder / (Hex(Fnv1a(key)) + Hex(Fnv1a(key, 0x84222325cbf29ce4ull)) + kExtension);
+  return folder / (Hex(Fnv1a(key)) + Hex(Fnv1a(key, 0x84222325cbf29ce4ull)) + kExtension);
 }
 
-std::optional<CachedTables> ReadCachedTables(const TableCache& cache, const std::string& key) {
-  const fs::path path = CachedTablesPath(cache, key);
+namespace {
+
+// The file `path` if it holds `key`'s tables (the format of io/table_cache_file.h); `renew` marks
+// a hit as recently used.
+std::optional<CachedTables> ReadTablesFile(const fs::path& path, const std::string& key, std::uint64_t max_bytes,
+                                           bool renew) {
   // Read whole into one buffer that is not zero-filled first (a spectral model's file is tens of
   // MB); the model copies its textures straight out of it.
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return std::nullopt;
   struct stat st {};
   const std::size_t header = sizeof kMagic + sizeof kByteOrderMarker + sizeof(std::uint64_t);
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || static_cast<std::uint64_t>(st.st_size) > cache.max_bytes ||
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || static_cast<std::uint64_t>(st.st_size) > max_bytes ||
       static_cast<std::size_t>(st.st_size) < header) {
     ::close(fd);
     return std::nullopt;
@@ -210,13 +229,27 @@ std::optional<CachedTables> ReadCachedTables(const TableCache& cache, const std:
   if (!read_u64(checksum) || at != size) return std::nullopt;
   if (Checksum(key, std::span<const unsigned char>(file + payload_at, payload_size)) != checksum) return std::nullopt;
   std::error_code ec;
-  fs::last_write_time(path, fs::file_time_type::clock::now(), ec);  // recently used (best effort)
+  if (renew) fs::last_write_time(path, fs::file_time_type::clock::now(), ec);  // recently used (best effort)
   tables.payload = std::span<const unsigned char>(file + payload_at, payload_size);
   return tables;
 }
 
+}  // namespace
+
+std::optional<CachedTables> ReadCachedTables(const TableCache& cache, const std::string& key) {
+  if (!cache.folder.empty()) {
+    if (auto tables = ReadTablesFile(CachedTablesPath(cache.folder, key), key, cache.max_bytes, true)) return tables;
+  }
+  for (const fs::path& folder : cache.shipped) {
+    // Shipped files are read whatever the cache's size (they are not the cache's to trim).
+    if (auto tables = ReadTablesFile(CachedTablesPath(folder, key), key, std::uint64_t{1} << 40, false)) return tables;
+  }
+  return std::nullopt;
+}
+
 std::string WriteCachedTables(const TableCache& cache, const std::string& key, std::span<const unsigned char> payload) {
-  const fs::path path = CachedTablesPath(cache, key);
+  if (cache.folder.empty()) return "";
+  const fs::path path = CachedTablesPath(cache.folder, key);
   const std::uint64_t file_bytes = sizeof kMagic + sizeof kByteOrderMarker + 3 * sizeof(std::uint64_t) + key.size() +
                                    payload.size();
   if (file_bytes > cache.max_bytes) return "the tables are larger than the cache (" + FormatBytes(file_bytes) + ")";

@@ -36,18 +36,19 @@ struct CachedTables {
   std::span<const unsigned char> payload;
 };
 
-// The payload kept under `key`, or std::nullopt (no file, another key, a corrupt or unreadable
-// file). A hit marks the file as recently used.
+// The payload kept under `key` in cache.folder, else in a shipped folder, or std::nullopt (no
+// file, another key, a corrupt or unreadable file). A hit in cache.folder marks the file as
+// recently used.
 std::optional<CachedTables> ReadCachedTables(const TableCache& cache, const std::string& key);
 
-// Keeps `payload` under `key` (written whole, then renamed), then removes the least recently used
-// files while the folder holds more than cache.max_bytes. Never throws: returns "" or the reason
-// the file could not be written.
+// Keeps `payload` under `key` in cache.folder (written whole, then renamed; nothing when the
+// folder is empty), then removes the least recently used files while the folder holds more than
+// cache.max_bytes. Never throws: returns "" or the reason the file could not be written.
 std::string WriteCachedTables(const TableCache& cache, const std::string& key,
                               std::span<const unsigned char> payload);
 
-// The file that holds `key` (for tests).
-std::filesystem::path CachedTablesPath(const TableCache& cache, const std::string& key);
+// The file of `folder` that holds `key`.
+std::filesystem::path CachedTablesPath(const std::filesystem::path& folder, const std::string& key);
 
 // Appends integers and textures to a payload, in this machine's byte order (the file's marker
 // rejects another).

@@ -136,7 +136,8 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
     throw Error("unknown model '" + std::string(name) + "' (known: " + known + ")");
   }
   // Tables kept by an earlier process (include/atmo/table_cache.h) instead of a precomputation.
-  const std::optional<TableCache> cache = GetTableCache();
+  std::optional<TableCache> cache = GetTableCache();
+  if (cache && cache->folder.empty() && cache->shipped.empty()) cache.reset();
   std::string cache_key;
   if (cache) {
     cache_key = io::TableCacheKey(name, model_options, parameters);
@@ -162,7 +163,7 @@ std::unique_ptr<Model> CreateModel(std::string_view name, const AtmosphereParame
   model->Precompute();
   model->announce_passes_ = false;
   std::vector<unsigned char> bytes;
-  if (cache && model->SaveTables(bytes)) {
+  if (cache && !cache->folder.empty() && model->SaveTables(bytes)) {
     const std::string why = io::WriteCachedTables(*cache, cache_key, bytes);
     if (!why.empty()) {
       progress::Send("table cache: the " + std::string(model->name()) + " tables were not kept in '" +
