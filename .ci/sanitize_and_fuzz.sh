@@ -28,7 +28,7 @@ start=$(date +%s)
 # tests labelled web build and run WebAssembly, which the sanitizers do not see: they run in the
 # plain build only.
 #
-# Eight tests repeat one numeric loop for minutes under the sanitizers (each 75-450 s of a 2-core
+# Nine tests repeat one numeric loop for minutes under the sanitizers (each 75-450 s of a 2-core
 # machine here, against 3-30 s in the plain build, which runs them): shorter tests and the fuzzers
 # run the same code under ASan, so they are left out of this stage to keep CI inside its limit.
 # (The last two: the moonlit sky at Krisciunas and Schaefer's site, 188 s, and every model on a
@@ -36,7 +36,10 @@ start=$(date +%s)
 heavy='^(Folder\.ShardsAndRerunsGiveTheSerialRunsBytes|Folder\.CalibratedHoursReproduceTheirMeasurements'
 heavy+='|Source4dModel\.SunZenithInterpolationIsSmoothAcrossTheKnots|Source4dModel\.GroundSkyIrradianceMatchesTheReferenceFlux'
 heavy+='|WaterVapor\.EveryModelAbsorbsItsOpticalDepth|StandardPresets\.ReferenceAndSource4dAgreeOnUsStandardAndAHazySky'
-heavy+='|Moon\.MoonlitSkyAtKrisciunasAndSchaefersSite|PhaseTable\.EveryModelAgreesWithTheAnalyticPhaseItTabulates)$'
+heavy+='|Moon\.MoonlitSkyAtKrisciunasAndSchaefersSite|PhaseTable\.EveryModelAgreesWithTheAnalyticPhaseItTabulates'
+# The README's examples (DocsTest.EveryReadmeExampleRuns): since source4d on us-standard became the
+# default, a dozen of them compute spectral tables (90 s in the plain build).
+heavy+='|DocsTest\.EveryReadmeExampleRuns)$'
 ctest --test-dir build-asan --output-on-failure -j2 -LE '^(gl|web)$' -E "$heavy"
 ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --test-dir build-asan --output-on-failure -j2 -L '^gl$'
 echo "ci: sanitizer tests in $(( $(date +%s) - start )) s"

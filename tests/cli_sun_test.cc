@@ -46,7 +46,7 @@ constexpr const char* kNoon = "2026-06-21T12:00+02:00";
 #define ATMO_TINY " --width 8 --height 4"
 
 TEST_F(CliSunTest, RenderTakesTheSunOfTheDateAndRecordsIt) {
-  const RunResult r = Run(std::string("render --date ") + kNoon + ATMO_PLACE ATMO_TINY " --exr sky.exr --png ''");
+  const RunResult r = Run(std::string("render --model hillaire --preset earth --date ") + kNoon + ATMO_PLACE ATMO_TINY " --exr sky.exr --png ''");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto values = ExrMetadata("sky.exr");
   const atmo::SunPosition sun = atmo::ComputeSunPosition(atmo::ParseIsoDateTime(kNoon), 46.5, 7.9);
@@ -69,7 +69,7 @@ TEST_F(CliSunTest, RenderTakesTheSunOfTheDateAndRecordsIt) {
 TEST_F(CliSunTest, RefractionLiftsTheRenderedSun) {
   // At 05:40 CEST the sun is a few degrees up, where refraction is several arcminutes.
   const std::string date = "2026-06-21T05:40+02:00";
-  const RunResult r = Run("render --date " + date + ATMO_PLACE ATMO_TINY " --refraction --exr sky.exr --png ''");
+  const RunResult r = Run("render --model hillaire --preset earth --date " + date + ATMO_PLACE ATMO_TINY " --refraction --exr sky.exr --png ''");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto values = ExrMetadata("sky.exr");
   atmo::SunPositionOptions refracted;
@@ -82,7 +82,7 @@ TEST_F(CliSunTest, RefractionLiftsTheRenderedSun) {
 
 TEST_F(CliSunTest, SampleTakesTheSunZenithOfTheDate) {
   const RunResult dated =
-      Run(std::string("sample --date ") + kNoon + ATMO_PLACE " --altitude 0 --view-zenith 60 --azimuth 90");
+      Run(std::string("sample --model hillaire --preset earth --date ") + kNoon + ATMO_PLACE " --altitude 0 --view-zenith 60 --azimuth 90");
   ASSERT_EQ(dated.exit_code, 0) << dated.err;
   const std::vector<std::string> lines = Lines(dated.out);
   ASSERT_EQ(lines.size(), 4u) << dated.out;
@@ -91,7 +91,7 @@ TEST_F(CliSunTest, SampleTakesTheSunZenithOfTheDate) {
   const atmo::SunPosition sun = atmo::ComputeSunPosition(atmo::ParseIsoDateTime(kNoon), 46.5, 7.9);
   EXPECT_NEAR(std::stod(row[1]), 90.0 - sun.elevation_deg, 1e-7);
   // The same query with that zenith given as --sun-zenith gives the same radiance.
-  const RunResult plain = Run("sample --sun-zenith " + row[1] + " --altitude 0 --view-zenith 60 --azimuth 90");
+  const RunResult plain = Run("sample --model hillaire --preset earth --sun-zenith " + row[1] + " --altitude 0 --view-zenith 60 --azimuth 90");
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_EQ(plain.out, dated.out);
 }
@@ -107,7 +107,7 @@ TEST_F(CliSunTest, BenchTakesTheSunOfTheDate) {
 
 TEST_F(CliSunTest, TimeLapseWritesNumberedFramesAsTheMorningSunRises) {
   // 06:00 to 07:00 CEST every 30 minutes: 3 frames, the sun climbing in the north-east to east.
-  const RunResult r = Run("render --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
+  const RunResult r = Run("render --model hillaire --preset earth --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
                           ATMO_TINY " --exr tl.exr --png tl.png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "");  // no progress bar: stderr is not a terminal
@@ -138,7 +138,7 @@ TEST_F(CliSunTest, TimeLapseWritesNumberedFramesAsTheMorningSunRises) {
 
 TEST_F(CliSunTest, TimeLapseNamesFramesBeforeTheLastExtension) {
   // --until off the step: the frames stop at the last step before it (06:00, 06:30).
-  const RunResult r = Run("render --date 2026-06-21T06:00+02:00 --until 2026-06-21T06:59+02:00 --step 30min" ATMO_PLACE
+  const RunResult r = Run("render --model hillaire --preset earth --date 2026-06-21T06:00+02:00 --until 2026-06-21T06:59+02:00 --step 30min" ATMO_PLACE
                           ATMO_TINY " --exr sky.v1.exr --png frames.png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* name : {"sky.v1_0000.exr", "sky.v1_0001.exr", "frames_0000.png", "frames_0001.png"}) {
@@ -152,7 +152,7 @@ bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0
 TEST_F(CliSunTest, TimeLapseAssemblesAnMp4WithFfmpeg) {
   if (!HaveFfmpeg()) GTEST_SKIP() << "no ffmpeg on PATH";
   // Odd sides: ffmpeg pads them to even for yuv420p.
-  const RunResult r = Run("render --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
+  const RunResult r = Run("render --model hillaire --preset earth --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
                           " --width 9 --height 5 --exr '' --png f.png --mp4 lapse.mp4");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string mp4 = ReadFile(dir_ / "lapse.mp4");
@@ -165,7 +165,7 @@ TEST_F(CliSunTest, Mp4WithoutFfmpegFailsBeforeAnyFrame) {
   const std::string saved = path != nullptr ? path : "";
   fs::create_directories(dir_ / "empty");
   ::setenv("PATH", (dir_ / "empty").c_str(), 1);
-  const RunResult r = Run("render --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
+  const RunResult r = Run("render --model hillaire --preset earth --date 2026-06-21T06:00+02:00 --until 2026-06-21T07:00+02:00 --step 30min" ATMO_PLACE
                           ATMO_TINY " --png f.png --mp4 lapse.mp4");
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_EQ(r.exit_code, 1);
@@ -195,28 +195,28 @@ TEST_P(CliSunFailureTest, FailsWithOneLineAndWritesNothing) {
 #define ATMO_LAPSE " --date 2026-06-21T06:00Z --until 2026-06-21T07:00Z"
 
 const SunFailureCase kSunFailureCases[] = {
-    {"DateWithoutZone", "render --date 2026-06-21T12:00" ATMO_PLACE ATMO_TINY, "'2026-06-21T12:00' has no zone"},
-    {"MalformedDate", "render --date 21.06.2026" ATMO_PLACE ATMO_TINY, "'21.06.2026' is not ISO 8601"},
-    {"MonthOutOfRange", "render --date 2026-13-01T12:00Z" ATMO_PLACE ATMO_TINY, "month out of range"},
-    {"DayOutOfRange", "sample --date 2026-02-29T12:00Z" ATMO_PLACE ATMO_QUERY, "day out of range"},
-    {"LatitudeWithoutDate", "render --latitude 46.5" ATMO_TINY, "--latitude requires --date"},
-    {"LongitudeWithoutDate", "sample --longitude 7.9 --sun-zenith 30" ATMO_QUERY, "--longitude requires --date"},
+    {"DateWithoutZone", "render --model hillaire --preset earth --date 2026-06-21T12:00" ATMO_PLACE ATMO_TINY, "'2026-06-21T12:00' has no zone"},
+    {"MalformedDate", "render --model hillaire --preset earth --date 21.06.2026" ATMO_PLACE ATMO_TINY, "'21.06.2026' is not ISO 8601"},
+    {"MonthOutOfRange", "render --model hillaire --preset earth --date 2026-13-01T12:00Z" ATMO_PLACE ATMO_TINY, "month out of range"},
+    {"DayOutOfRange", "sample --model hillaire --preset earth --date 2026-02-29T12:00Z" ATMO_PLACE ATMO_QUERY, "day out of range"},
+    {"LatitudeWithoutDate", "render --model hillaire --preset earth --latitude 46.5" ATMO_TINY, "--latitude requires --date"},
+    {"LongitudeWithoutDate", "sample --model hillaire --preset earth --longitude 7.9 --sun-zenith 30" ATMO_QUERY, "--longitude requires --date"},
     {"RefractionWithoutDate", "bench --refraction --repeat 1" ATMO_TINY, "--refraction requires --date"},
-    {"DateWithoutPlace", "render --date 2026-06-21T12:00Z" ATMO_TINY, "--date requires --latitude"},
-    {"DateAndSunElevation", "render --date 2026-06-21T12:00Z --sun-elevation 10" ATMO_PLACE ATMO_TINY, "--date"},
-    {"DateAndSunAzimuth", "render --date 2026-06-21T12:00Z --sun-azimuth 10" ATMO_PLACE ATMO_TINY, "--date"},
-    {"DateAndSunZenith", "sample --date 2026-06-21T12:00Z --sun-zenith 30" ATMO_PLACE ATMO_QUERY, "--date"},
-    {"DateAndGrid", "sample --date 2026-06-21T12:00Z --grid grid.csv --out out.csv" ATMO_PLACE, "--date"},
-    {"LatitudeOutOfRange", "render --date 2026-06-21T12:00Z --latitude 95 --longitude 0" ATMO_TINY, "--latitude"},
+    {"DateWithoutPlace", "render --model hillaire --preset earth --date 2026-06-21T12:00Z" ATMO_TINY, "--date requires --latitude"},
+    {"DateAndSunElevation", "render --model hillaire --preset earth --date 2026-06-21T12:00Z --sun-elevation 10" ATMO_PLACE ATMO_TINY, "--date"},
+    {"DateAndSunAzimuth", "render --model hillaire --preset earth --date 2026-06-21T12:00Z --sun-azimuth 10" ATMO_PLACE ATMO_TINY, "--date"},
+    {"DateAndSunZenith", "sample --model hillaire --preset earth --date 2026-06-21T12:00Z --sun-zenith 30" ATMO_PLACE ATMO_QUERY, "--date"},
+    {"DateAndGrid", "sample --model hillaire --preset earth --date 2026-06-21T12:00Z --grid grid.csv --out out.csv" ATMO_PLACE, "--date"},
+    {"LatitudeOutOfRange", "render --model hillaire --preset earth --date 2026-06-21T12:00Z --latitude 95 --longitude 0" ATMO_TINY, "--latitude"},
     {"BadStep", "render" ATMO_LAPSE " --step 10m" ATMO_PLACE ATMO_TINY, "duration '10m'"},
-    {"UntilBeforeDate", "render --date 2026-06-21T07:00Z --until 2026-06-21T06:00Z --step 10min" ATMO_PLACE ATMO_TINY,
+    {"UntilBeforeDate", "render --model hillaire --preset earth --date 2026-06-21T07:00Z --until 2026-06-21T06:00Z --step 10min" ATMO_PLACE ATMO_TINY,
      "is before --date"},
-    {"TooManyFrames", "render --date 2026-01-01T00:00Z --until 2027-01-01T00:00Z --step 1min" ATMO_PLACE ATMO_TINY,
+    {"TooManyFrames", "render --model hillaire --preset earth --date 2026-01-01T00:00Z --until 2027-01-01T00:00Z --step 1min" ATMO_PLACE ATMO_TINY,
      "more than 100000"},
     {"UntilWithoutStep", "render" ATMO_LAPSE ATMO_PLACE ATMO_TINY, "--until requires --step"},
-    {"StepWithoutUntil", "render --date 2026-06-21T06:00Z --step 10min" ATMO_PLACE ATMO_TINY, "--step requires --until"},
-    {"UntilWithoutDate", "render --until 2026-06-21T07:00Z --step 10min" ATMO_TINY, "--until requires --date"},
-    {"Mp4WithoutTimeLapse", "render --date 2026-06-21T06:00Z --mp4 x.mp4" ATMO_PLACE ATMO_TINY, "--mp4 requires --until"},
+    {"StepWithoutUntil", "render --model hillaire --preset earth --date 2026-06-21T06:00Z --step 10min" ATMO_PLACE ATMO_TINY, "--step requires --until"},
+    {"UntilWithoutDate", "render --model hillaire --preset earth --until 2026-06-21T07:00Z --step 10min" ATMO_TINY, "--until requires --date"},
+    {"Mp4WithoutTimeLapse", "render --model hillaire --preset earth --date 2026-06-21T06:00Z --mp4 x.mp4" ATMO_PLACE ATMO_TINY, "--mp4 requires --until"},
     {"Mp4WithoutPng", "render" ATMO_LAPSE " --step 30min --png '' --mp4 x.mp4" ATMO_PLACE ATMO_TINY, "give --png"},
 };
 
@@ -233,7 +233,7 @@ namespace {
 // published for clear skies: Karayel et al. 1984's L_z = (1.376 T - 1.81) tan(alpha) + 0.38 kcd/m^2
 // for Linke turbidity T = 2 (very clean) to 3.5.
 TEST_F(CliSunTest, SolsticeNoonZenithLuminanceIsInThePublishedClearSkyRange) {
-  const RunResult r = Run("render --preset earth-spectral --camera fisheye --width 33 --height 33 "
+  const RunResult r = Run("render --model hillaire --preset earth-spectral --camera fisheye --width 33 --height 33 "
                           "--date 2026-06-21T12:00+02:00 --latitude 46.5 --longitude 7.9 --exr noon.exr --png ''");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   atmo::ImageMetadata metadata;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cctype>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -97,8 +98,8 @@ TEST_F(CliTest, DumpedPresetGivesTheSameSamplesAsThePreset) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   WriteFile(dir_ / "earth.json", r.out);
   const std::string query = " --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 45";
-  const RunResult from_preset = Run("sample --preset earth" + query);
-  const RunResult from_config = Run("sample --config earth.json" + query);
+  const RunResult from_preset = Run("sample --model hillaire --preset earth" + query);
+  const RunResult from_config = Run("sample --model hillaire --config earth.json" + query);
   ASSERT_EQ(from_preset.exit_code, 0) << from_preset.err;
   ASSERT_EQ(from_config.exit_code, 0) << from_config.err;
   EXPECT_EQ(from_preset.out, from_config.out);
@@ -129,7 +130,7 @@ TEST_F(CliTest, SingleConfigurationGivesOneRowPerChannel) {
 }
 
 TEST_F(CliTest, ViewIntoTheGroundHasZeroTransmittance) {
-  const RunResult r = Run("sample --altitude 0 --sun-zenith 30 --view-zenith 120 --azimuth 0");
+  const RunResult r = Run("sample --model hillaire --preset earth --altitude 0 --sun-zenith 30 --view-zenith 120 --azimuth 0");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = SampleRows(r.out);
   ASSERT_EQ(rows.size(), 3u);
@@ -148,7 +149,7 @@ TEST_F(CliTest, GridGivesThreeRowsPerInputRowWithInputsEchoed) {
                                    "1000, 30, 10, 180\n"
                                    "1000,85.5,90,0\n"
                                    "20000,100,45,270\n");
-  const RunResult r = Run("sample --grid grid.csv --out out.csv");
+  const RunResult r = Run("sample --model hillaire --preset earth --grid grid.csv --out out.csv");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = SampleRows(ReadFile(dir_ / "out.csv"));
   const std::vector<std::vector<std::string>> inputs = {{"0", "30", "60", "90"},
@@ -168,7 +169,7 @@ TEST_F(CliTest, RenderWritesExrAndPngForEveryCamera) {
   for (const char* camera : {"perspective", "fisheye", "equirect"}) {
     const std::string exr = std::string(camera) + ".exr";
     const std::string png = std::string(camera) + ".png";
-    const RunResult r = Run(std::string("render --width 64 --height 32 --camera ") + camera + " --exr " +
+    const RunResult r = Run(std::string("render --model hillaire --preset earth --width 64 --height 32 --camera ") + camera + " --exr " +
                             exr + " --png " + png);
     ASSERT_EQ(r.exit_code, 0) << camera << ": " << r.err;
     EXPECT_EQ(Lines(r.out).size(), 1u) << r.out;
@@ -179,9 +180,44 @@ TEST_F(CliTest, RenderWritesExrAndPngForEveryCamera) {
   }
 }
 
+// render, sample and illuminance default to the accurate model on the real sky (whatever --model
+// says, the preset stays us-standard); bench, compare and precompute keep theirs.
+TEST_F(CliTest, DefaultsAreTheAccurateModelOnTheRealSky) {
+  const auto attributes = [&](const std::string& flags) {
+    const RunResult r = Run("render --width 16 --height 8 --sun-elevation 20 --png '' --exr d.exr " + flags);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    atmo::ImageMetadata metadata;
+    atmo::ReadExr(dir_ / "d.exr", &metadata);
+    return std::map<std::string, std::string>(metadata.begin(), metadata.end());
+  };
+  std::map<std::string, std::string> values = attributes("");
+  EXPECT_EQ(values["atmo:model"], "source4d");
+  EXPECT_EQ(values["atmo:preset"], "us-standard");
+  EXPECT_EQ(std::count(values["atmo:wavelengthsNm"].begin(), values["atmo:wavelengthsNm"].end(), ','), 14);
+  values = attributes("--model hillaire");
+  EXPECT_EQ(values["atmo:model"], "hillaire");
+  EXPECT_EQ(values["atmo:preset"], "us-standard");
+  const RunResult sample = Run("sample --altitude 0 --sun-elevation 30 --view-zenith 60 --azimuth 90");
+  ASSERT_EQ(sample.exit_code, 0) << sample.err;
+  EXPECT_EQ(SampleRows(sample.out).size(), 15u);
+  const RunResult lux = Run("illuminance --sun-elevation 30");
+  ASSERT_EQ(lux.exit_code, 0) << lux.err;
+  // The help says each command's own default.
+  for (const char* command : {"render", "sample", "illuminance", "irradiance", "calibrate", "annual"}) {
+    const std::string help = Run(std::string(command) + " --help").out;
+    EXPECT_NE(help.find("--model TEXT=source4d"), std::string::npos) << command;
+    EXPECT_NE(help.find("--preset TEXT=us-standard"), std::string::npos) << command;
+  }
+  for (const char* command : {"bench", "compare"}) {
+    const std::string help = Run(std::string(command) + " --help").out;
+    EXPECT_NE(help.find("--model TEXT=hillaire"), std::string::npos) << command;
+    EXPECT_NE(help.find("--preset TEXT=earth"), std::string::npos) << command;
+  }
+}
+
 TEST_F(CliTest, RenderedExrCarriesItsSettings) {
   const RunResult r =
-      Run("render --width 16 --height 8 --camera equirect --sun-elevation 20 --seed 7 "
+      Run("render --model hillaire --preset earth --width 16 --height 8 --camera equirect --sun-elevation 20 --seed 7 "
           "--threads 1 --exr sky.exr --png ''");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "sky.png"));
@@ -207,7 +243,7 @@ TEST_F(CliTest, RenderSunSizeIsTheDiscDiameter) {
   std::map<std::string, int> bright;
   for (const std::string size : {"", "5"}) {
     const std::string exr = "sun" + size + ".exr";
-    const RunResult r = Run("render --unit relative --width 256 --height 128 --camera equirect --sun-elevation 30 "
+    const RunResult r = Run("render --model hillaire --preset earth --unit relative --width 256 --height 128 --camera equirect --sun-elevation 30 "
                             "--exr " + exr + " --png ''" + (size.empty() ? "" : " --sun-size " + size));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     atmo::ImageMetadata metadata;
@@ -222,7 +258,7 @@ TEST_F(CliTest, RenderSunSizeIsTheDiscDiameter) {
   std::printf("pixels above 30: %d (the Sun), %d (5 degrees)\n", bright[""], bright["5"]);
   EXPECT_GT(bright["5"], 2 * bright[""]);
   for (const char* bad : {"0", "-1", "20.5", "nan"}) {
-    const RunResult r = Run(std::string("render --width 8 --height 4 --exr '' --png '' --sun-size ") + bad);
+    const RunResult r = Run(std::string("render --model hillaire --preset earth --width 8 --height 4 --exr '' --png '' --sun-size ") + bad);
     EXPECT_NE(r.exit_code, 0) << bad;
     EXPECT_NE(r.err.find("--sun-size"), std::string::npos) << r.err;
   }
@@ -231,7 +267,7 @@ TEST_F(CliTest, RenderSunSizeIsTheDiscDiameter) {
 // `atmo render --model reference`: progressive, with standard-error channels. Small images
 // (16x8 equirect, sun 30 degrees high, observer at 0 m, seed 1) keep these fast.
 #define ATMO_REFERENCE_RENDER \
-  "render --model reference --camera equirect --width 16 --height 8 --sun-elevation 30 --altitude 0 --seed 1 "
+  "render --preset earth --model reference --camera equirect --width 16 --height 8 --sun-elevation 30 --altitude 0 --seed 1 "
 
 TEST_F(CliTest, ReferenceRenderHasStandardErrorChannelsThatShrinkAsOneOverSqrtSpp) {
   std::map<int, atmo::Image> images;
@@ -292,7 +328,7 @@ TEST_F(CliTest, ReferenceRenderPixelMatchesSample) {
   ASSERT_EQ(render.exit_code, 0) << render.err;
   const atmo::Image image = atmo::ReadExr(dir_ / "px.exr");
   const RunResult sample = Run(
-      "sample --model reference --altitude 0 --sun-zenith 60 --view-zenith 56.25 --azimuth 101.25 --samples 4096 "
+      "sample --preset earth --model reference --altitude 0 --sun-zenith 60 --view-zenith 56.25 --azimuth 101.25 --samples 4096 "
       "--seed 2");
   ASSERT_EQ(sample.exit_code, 0) << sample.err;
   const auto rows = SampleRows(sample.out);
@@ -365,10 +401,10 @@ const FailureCase kFailureCases[] = {
     {"ThreadsOutOfRange", "render --threads 0" ATMO_TINY_RENDER, "--threads"},
     {"SppForADeterministicModel", "render --model simple --preset simple --spp 16" ATMO_TINY_RENDER,
      "takes no --spp"},
-    {"SppOfOne", "render --model reference --spp 1" ATMO_TINY_RENDER, "--spp"},
-    {"UnknownUnit", "render --unit lumens" ATMO_TINY_RENDER, "--unit"},
-    {"XyzWithoutLuminance", "render --unit radiance --xyz" ATMO_TINY_RENDER, "--xyz needs --unit luminance"},
-    {"SpectralTooFew", "sample --spectral 2" ATMO_SAMPLE_ONE, "--spectral"},
+    {"SppOfOne", "render --preset earth --model reference --spp 1" ATMO_TINY_RENDER, "--spp"},
+    {"UnknownUnit", "render --model hillaire --preset earth --unit lumens" ATMO_TINY_RENDER, "--unit"},
+    {"XyzWithoutLuminance", "render --model hillaire --preset earth --unit radiance --xyz" ATMO_TINY_RENDER, "--xyz needs --unit luminance"},
+    {"SpectralTooFew", "sample --model hillaire --preset earth --spectral 2" ATMO_SAMPLE_ONE, "--spectral"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Cli, CliFailureTest, ::testing::ValuesIn(kFailureCases),
@@ -378,7 +414,7 @@ TEST_F(CliTest, RenderUnitsAreRecordedAndConsistent) {
   // One equirect in the three units: luminance (linear sRGB with chromaticities, cd/m^2),
   // radiance (one channel per wavelength, W m^-2 sr^-1 nm^-1) and relative. Each is the same sky:
   // radiance = relative x E_sun(lambda), luminance = the colour conversion of relative.
-  const std::string base = "render --camera equirect --width 16 --height 8 --sun-elevation 30 --png '' --spectral 5 ";
+  const std::string base = "render --model hillaire --preset earth --camera equirect --width 16 --height 8 --sun-elevation 30 --png '' --spectral 5 ";
   for (const char* unit : {"luminance", "radiance", "relative"}) {
     const RunResult r = Run(base + "--unit " + unit + " --exr " + unit + ".exr");
     ASSERT_EQ(r.exit_code, 0) << unit << ": " << r.err;
@@ -426,7 +462,7 @@ TEST_F(CliTest, SunriseSunIsNearWhiteWithAgxAndKeepsItsHueOnTheLuminanceCurve) {
   // A 2-degree view centred on a sun 1 degree up: the disc fills the middle. Its EXR colour is a
   // deep orange. The default AgX rolls it off to near white, as film and the eye see a sun far
   // over the exposure; the exp curve on luminance keeps the hue (chromaticity kept).
-  const std::string view = "render --width 64 --height 64 --fov 2 --pitch 1 --sun-elevation 1 --exr sun.exr ";
+  const std::string view = "render --model hillaire --preset earth --width 64 --height 64 --fov 2 --pitch 1 --sun-elevation 1 --exr sun.exr ";
   ASSERT_EQ(Run(view + "--png agx.png").exit_code, 0);
   ASSERT_EQ(Run(view + "--png sun.png --tonemap exp").exit_code, 0);
   ASSERT_EQ(Run(view + "--png seed.png --per-channel --gamma 2.2").exit_code, 0);
@@ -464,11 +500,11 @@ double MeanLuma(const std::vector<unsigned char>& rgb, int width, int y0, int y1
 
 TEST_F(CliTest, OutputNamesOfAnotherFormatAreRefused) {
   // -o NAME.jpg would have written NAME.jpg.exr and NAME.jpg.png.
-  ExpectFailureKeepingOutputs("render --width 8 --height 8 -o out.jpg", "-o 'out.jpg' ends in .jpg",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --width 8 --height 8 -o out.jpg", "-o 'out.jpg' ends in .jpg",
                               {"out.jpg.exr", "out.jpg.png"});
-  ExpectFailureKeepingOutputs("render --width 8 --height 8 -o sky.HDR", "ends in .hdr", {"sky.HDR.exr"});
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --width 8 --height 8 -o sky.HDR", "ends in .hdr", {"sky.HDR.exr"});
   // A dot that is not a format's extension is part of the name.
-  ASSERT_EQ(Run("render --width 8 --height 8 -o sky.v2").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --width 8 --height 8 -o sky.v2").exit_code, 0);
   EXPECT_TRUE(fs::exists(dir_ / "sky.v2.exr"));
   EXPECT_TRUE(fs::exists(dir_ / "sky.v2.png"));
 }
@@ -482,19 +518,19 @@ TEST_F(CliTest, MistypedFlagsAndSubcommandsGetASuggestion) {
   };
   EXPECT_NE(error_of("rendr").find("(did you mean render?)"), std::string::npos);
   EXPECT_NE(error_of("iluminance").find("(did you mean illuminance?)"), std::string::npos);
-  EXPECT_NE(error_of("render --sun-elevaton 5").find("(did you mean --sun-elevation?)"), std::string::npos);
-  EXPECT_NE(error_of("sample --altitud=3").find("(did you mean --altitude?)"), std::string::npos);
-  EXPECT_NE(error_of("illuminance --sun-elevatoin 5").find("(did you mean --sun-elevation?)"), std::string::npos);
+  EXPECT_NE(error_of("render --model hillaire --preset earth --sun-elevaton 5").find("(did you mean --sun-elevation?)"), std::string::npos);
+  EXPECT_NE(error_of("sample --model hillaire --preset earth --altitud=3").find("(did you mean --altitude?)"), std::string::npos);
+  EXPECT_NE(error_of("illuminance --model hillaire --preset earth --sun-elevatoin 5").find("(did you mean --sun-elevation?)"), std::string::npos);
   // Nothing close: no guess.
   EXPECT_EQ(error_of("xyzzy").find("did you mean"), std::string::npos);
-  EXPECT_EQ(error_of("render --frobnicate 3").find("did you mean"), std::string::npos);
+  EXPECT_EQ(error_of("render --model hillaire --preset earth --frobnicate 3").find("did you mean"), std::string::npos);
 }
 
 TEST_F(CliTest, TheFirstPictureLooksLikeDaylightAndTheSunIsWhite) {
   // Noon (sun 60 degrees, default exposure and display): the top third of the frame has a mean
   // luma of at least 100 of 255, and a time-lapse keeps dusk darker than noon.
   for (const char* elevation : {"60", "-8"}) {
-    ASSERT_EQ(Run(std::string("render --width 320 --height 180 --no-exr --sun-elevation ") + elevation +
+    ASSERT_EQ(Run(std::string("render --model hillaire --preset earth --width 320 --height 180 --no-exr --sun-elevation ") + elevation +
                   " -o sky" + elevation)
                   .exit_code,
               0);
@@ -507,7 +543,7 @@ TEST_F(CliTest, TheFirstPictureLooksLikeDaylightAndTheSunIsWhite) {
   EXPECT_LT(MeanLuma(dusk, w, 0, h / 3), noon_top - 30.0) << "nautical twilight darker than noon";
   // Sun 30 degrees up, spectral, a 5-degree field of 400 x 400: the disc's centre is near white
   // (every channel at least 235) and not darker than the sky 40 pixels (half a degree) away.
-  ASSERT_EQ(Run("render --preset earth-spectral --sun-elevation 30 --pitch 30 --fov 5 --width 400 --height 400 "
+  ASSERT_EQ(Run("render --model hillaire --preset earth-spectral --sun-elevation 30 --pitch 30 --fov 5 --width 400 --height 400 "
                 "--no-exr -o disc")
                 .exit_code,
             0);
@@ -528,7 +564,7 @@ TEST_F(CliTest, TheFirstPictureLooksLikeDaylightAndTheSunIsWhite) {
 TEST_F(CliTest, CivilTwilightIsVisibleWithAutoExposure) {
   // Sun 4 degrees below the horizon, the all-sky fisheye: at sunny-16 exposure (EV100 15) the sky
   // is black; auto-exposure shows it (mean sRGB code of the sky well above black).
-  const std::string base = "render --preset earth-spectral --camera fisheye --width 64 --height 64 "
+  const std::string base = "render --model hillaire --preset earth-spectral --camera fisheye --width 64 --height 64 "
                            "--sun-elevation -4 --exr '' ";
   ASSERT_EQ(Run(base + "--ev 15 --png day.png").exit_code, 0);
   ASSERT_EQ(Run(base + "--auto-exposure --png auto.png").exit_code, 0);
@@ -552,7 +588,7 @@ TEST_F(CliTest, CivilTwilightIsVisibleWithAutoExposure) {
 }
 
 TEST_F(CliTest, SampleUnitsAgree) {
-  const std::string query = "sample --altitude 0 --sun-zenith 40 --view-zenith 70 --azimuth 120 ";
+  const std::string query = "sample --model hillaire --preset earth --altitude 0 --sun-zenith 40 --view-zenith 70 --azimuth 120 ";
   const RunResult relative = Run(query);
   const RunResult radiance = Run(query + "--unit radiance");
   const RunResult luminance = Run(query + "--unit luminance");
@@ -577,7 +613,7 @@ TEST_F(CliTest, SampleUnitsAgree) {
 
 TEST_F(CliTest, CsvRowErrorNamesTheLine) {
   WriteFile(dir_ / "grid.csv", std::string(kGridHeader) + "\n0,30,60,90\n0,30,60\n");
-  const RunResult r = Run("sample --grid grid.csv");
+  const RunResult r = Run("sample --model hillaire --preset earth --grid grid.csv");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(r.err, "atmo: error: grid.csv:3: expected 4 comma-separated numbers\n");
   EXPECT_EQ(r.out, "");
@@ -589,20 +625,20 @@ namespace {
 
 // The command line as a new user meets it: names, outputs, warnings, aliases, timing.
 TEST_F(CliTest, NonIntegerSideIsSaidToBeNoInteger) {
-  const RunResult r = Run("render --width abc");
+  const RunResult r = Run("render --model hillaire --preset earth --width abc");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "atmo: error: --width: 'abc' is not an integer\n");
 }
 
 TEST_F(CliTest, OutputNameWritesBothFilesOrTheOneItsExtensionNames) {
-  ASSERT_EQ(Run("render --width 8 --height 4 -o both").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --width 8 --height 4 -o both").exit_code, 0);
   EXPECT_TRUE(fs::exists(dir_ / "both.exr"));
   EXPECT_TRUE(fs::exists(dir_ / "both.png"));
-  ASSERT_EQ(Run("render --width 8 --height 4 --output only.png").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --width 8 --height 4 --output only.png").exit_code, 0);
   EXPECT_TRUE(fs::exists(dir_ / "only.png"));
   EXPECT_FALSE(fs::exists(dir_ / "only.png.exr"));
   EXPECT_FALSE(fs::exists(dir_ / "only.exr"));
-  const RunResult no_png = Run("render --width 8 --height 4 --no-png --exr solo.exr");
+  const RunResult no_png = Run("render --model hillaire --preset earth --width 8 --height 4 --no-png --exr solo.exr");
   ASSERT_EQ(no_png.exit_code, 0) << no_png.err;
   EXPECT_TRUE(fs::exists(dir_ / "solo.exr"));
   EXPECT_FALSE(fs::exists(dir_ / "sky.png"));
@@ -610,23 +646,23 @@ TEST_F(CliTest, OutputNameWritesBothFilesOrTheOneItsExtensionNames) {
   EXPECT_EQ(no_png.out.rfind("wrote solo.exr (8x4 perspective, hillaire, earth) in ", 0), 0u) << no_png.out;
   EXPECT_NE(no_png.out.find(": precompute "), std::string::npos) << no_png.out;
   EXPECT_NE(no_png.out.find(", write "), std::string::npos) << no_png.out;
-  EXPECT_EQ(Run("render -o a --exr b.exr").exit_code, 2);
-  EXPECT_EQ(Run("render --no-png --png b.png").exit_code, 2);
+  EXPECT_EQ(Run("render --model hillaire --preset earth -o a --exr b.exr").exit_code, 2);
+  EXPECT_EQ(Run("render --model hillaire --preset earth --no-png --png b.png").exit_code, 2);
 }
 
 TEST_F(CliTest, AnOutputWithTheWrongExtensionIsRefused) {
-  ExpectFailureKeepingOutputs("render --width 8 --height 4 --png x.jpg", "--png 'x.jpg' must end in .png", {"x.jpg"});
-  ExpectFailureKeepingOutputs("render --width 8 --height 4 --exr x.png --png ''", "--exr 'x.png' must end in .exr",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --width 8 --height 4 --png x.jpg", "--png 'x.jpg' must end in .png", {"x.jpg"});
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --width 8 --height 4 --exr x.png --png ''", "--exr 'x.png' must end in .exr",
                               {"x.png"});
-  ExpectFailureKeepingOutputs("sample --altitude 0 --sun-zenith 30 --view-zenith 0 --azimuth 0 --out x.txt",
+  ExpectFailureKeepingOutputs("sample --model hillaire --preset earth --altitude 0 --sun-zenith 30 --view-zenith 0 --azimuth 0 --out x.txt",
                               "--out 'x.txt' must end in .csv", {"x.txt"});
   WriteFile(dir_ / "g.csv", std::string(kGridHeader) + "\n0,30,0,0\n");
   ExpectFailureKeepingOutputs("compare --grid g.csv --json x.csv", "--json 'x.csv' must end in .json", {"x.csv"});
-  EXPECT_EQ(Run("render --width 8 --height 4 --png X.PNG --exr ''").exit_code, 0);  // case does not matter
+  EXPECT_EQ(Run("render --model hillaire --preset earth --width 8 --height 4 --png X.PNG --exr ''").exit_code, 0);  // case does not matter
 }
 
 TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
-  const RunResult r = Run("render --camera equirect --width 16 --height 8 --fov 60 --pitch 5 --png ''");
+  const RunResult r = Run("render --model hillaire --preset earth --camera equirect --width 16 --height 8 --fov 60 --pitch 5 --png ''");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err,
             "atmo: warning: --fov applies to the perspective camera only\n"
@@ -637,10 +673,10 @@ TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
   EXPECT_EQ(values.count("atmo:cameraFovDeg"), 0u);    // the equirect has no field of view
   EXPECT_EQ(values.count("atmo:cameraPitchDeg"), 0u);  // nor a pitch
   EXPECT_EQ(values.count("atmo:cameraYawDeg"), 1u);
-  const RunResult png_only = Run("render --width 8 --height 4 --png '' --exposure 2");
+  const RunResult png_only = Run("render --model hillaire --preset earth --width 8 --height 4 --png '' --exposure 2");
   EXPECT_EQ(png_only.exit_code, 0);
   EXPECT_EQ(png_only.err, "atmo: warning: --exposure applies to the PNG only\n");
-  const RunResult perspective = Run("render --width 8 --height 4 --fov 60 --png ''");
+  const RunResult perspective = Run("render --model hillaire --preset earth --width 8 --height 4 --fov 60 --png ''");
   EXPECT_EQ(perspective.err, "");
   metadata.clear();
   atmo::ReadExr(dir_ / "sky.exr", &metadata);
@@ -648,7 +684,7 @@ TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
   EXPECT_EQ(values["atmo:cameraFovDeg"], "60");
   EXPECT_EQ(values["atmo:cameraPitchDeg"], "10");
   // A cube map's faces fix their own directions: no yaw, field of view or pitch is recorded.
-  ASSERT_EQ(Run("render --camera cubemap --face-size 4 --png ''").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --camera cubemap --face-size 4 --png ''").exit_code, 0);
   metadata.clear();
   atmo::ReadExr(dir_ / "sky.exr", &metadata);
   values = std::map<std::string, std::string>(metadata.begin(), metadata.end());
@@ -661,12 +697,12 @@ TEST_F(CliTest, FlagsTheCameraDoesNotUseAreNamedInAWarning) {
 TEST_F(CliTest, GridDashReadsStandardInput) {
   const std::string grid = std::string(kGridHeader) + "\n0,30,0,0\n1000,85,89,180\n";
   WriteFile(dir_ / "grid.csv", grid);
-  const RunResult from_file = Run("sample --grid grid.csv");
-  const RunResult from_stdin = Run("sample --grid - < grid.csv");
+  const RunResult from_file = Run("sample --model hillaire --preset earth --grid grid.csv");
+  const RunResult from_stdin = Run("sample --model hillaire --preset earth --grid - < grid.csv");
   ASSERT_EQ(from_stdin.exit_code, 0) << from_stdin.err;
   EXPECT_EQ(from_stdin.out, from_file.out);
   WriteFile(dir_ / "bad.csv", std::string(kGridHeader) + "\n0,30,0\n");
-  const RunResult bad = Run("sample --grid - < bad.csv");
+  const RunResult bad = Run("sample --model hillaire --preset earth --grid - < bad.csv");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_EQ(bad.err, "atmo: error: <stdin>:2: expected 4 comma-separated numbers\n");
   const RunResult compare = Run("compare --model hillaire --against hillaire --grid - --image-size 32 < grid.csv");
@@ -676,12 +712,12 @@ TEST_F(CliTest, GridDashReadsStandardInput) {
 }
 
 TEST_F(CliTest, SampleTakesTheSunElevationAndBothPathCountNames) {
-  const RunResult zenith = Run("sample --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90");
-  const RunResult elevation = Run("sample --altitude 0 --sun-elevation 30 --view-zenith 80 --azimuth 90");
+  const RunResult zenith = Run("sample --model hillaire --preset earth --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90");
+  const RunResult elevation = Run("sample --model hillaire --preset earth --altitude 0 --sun-elevation 30 --view-zenith 80 --azimuth 90");
   ASSERT_EQ(elevation.exit_code, 0) << elevation.err;
   EXPECT_EQ(elevation.out, zenith.out);
-  EXPECT_EQ(Run("sample --altitude 0 --sun-elevation 30 --sun-zenith 60 --view-zenith 80 --azimuth 90").exit_code, 2);
-  const std::string one = "sample --model reference --seed 3 --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90 ";
+  EXPECT_EQ(Run("sample --model hillaire --preset earth --altitude 0 --sun-elevation 30 --sun-zenith 60 --view-zenith 80 --azimuth 90").exit_code, 2);
+  const std::string one = "sample --preset earth --model reference --seed 3 --altitude 0 --sun-zenith 60 --view-zenith 80 --azimuth 90 ";
   const RunResult samples = Run(one + "--samples 64");
   const RunResult spp = Run(one + "--spp 64");
   ASSERT_EQ(spp.exit_code, 0) << spp.err;

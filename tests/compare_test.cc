@@ -122,7 +122,7 @@ TEST_F(CompareTest, ModelAgainstItselfHasZeroErrors) {
 // (its radiances and standard errors, to the file's 10 digits), so several models can be measured
 // against one expensive Monte Carlo run.
 TEST_F(CompareTest, SamplesFileStandsInForTheReferenceModel) {
-  const RunResult sampled = Run("sample --model reference --samples 256 --seed 3 --grid grid.csv --out ref.csv");
+  const RunResult sampled = Run("sample --preset earth --model reference --samples 256 --seed 3 --grid grid.csv --out ref.csv");
   ASSERT_EQ(sampled.exit_code, 0) << sampled.err;
   const RunResult direct = Run(
       "compare --model hillaire --against reference --against-option samples=256 --seed 3 --grid grid.csv --csv a.csv");
@@ -152,7 +152,7 @@ TEST_F(CompareTest, SamplesFileStandsInForTheReferenceModel) {
 // A samples file of other media, of other channels, cut short, or combined with a grid or a
 // reference model is refused in one line; the output never replaces the samples file.
 TEST_F(CompareTest, SamplesFileMismatchesAreRefused) {
-  ASSERT_EQ(Run("sample --model hillaire --grid grid.csv --out ref.csv").exit_code, 0);
+  ASSERT_EQ(Run("sample --preset earth --model hillaire --grid grid.csv --out ref.csv").exit_code, 0);
   const std::string before = ReadFile(dir_ / "ref.csv");
   ExpectOneErrorLine(Run("compare --model hillaire --preset atmosphere-plus --against-samples ref.csv"),
                      "wavelength_nm 680 where the atmosphere's channel 1 is 650 nm");

@@ -330,7 +330,7 @@ class CubemapCli : public testing::CliFixture {};
 // its mip chain, the SH JSON, the irradiance cube and the specular chain.
 TEST_F(CubemapCli, WritesEveryEnvironmentOutput) {
   const testing::RunResult r = Run(
-      "render --model hillaire --camera cubemap --face-size 32 --sun-elevation 20 --exr cube.exr --png cube.png "
+      "render --preset earth --model hillaire --camera cubemap --face-size 32 --sun-elevation 20 --exr cube.exr --png cube.png "
       "--ktx2 sky.ktx2 --mips --sh sh.json --irradiance irradiance.exr --specular specular.ktx2 --specular-levels 4");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Image exr = ReadExr(dir_ / "cube.exr");
@@ -347,7 +347,7 @@ TEST_F(CubemapCli, WritesEveryEnvironmentOutput) {
   EXPECT_EQ(sh["y_up"]["irradiance_coefficients"].size(), 9u);
   EXPECT_GT(sh["horizontal_illuminance_lux"].get<double>(), 1000.0);
   EXPECT_TRUE(fs::exists(dir_ / "specular.ktx2"));
-  const testing::RunResult bad = Run("render --model hillaire --camera equirect --ktx2 x.ktx2 --png ''");
+  const testing::RunResult bad = Run("render --preset earth --model hillaire --camera equirect --ktx2 x.ktx2 --png ''");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("--camera cubemap"), std::string::npos) << bad.err;
 }

@@ -59,7 +59,7 @@ TEST_F(EngineTarget, ThreeJsReadsTheSunWhereItIs) {
   ASSERT_TRUE(fs::exists(fs::path(ATMO_NODE_MODULES) / "three" / "package.json"))
       << "three is not in " << ATMO_NODE_MODULES << " (configure installs it with npm)";
   for (const Sun& sun : kSuns) {
-    ASSERT_EQ(Run("render --target three --width 1024 --height 512 --no-png -o three " + SunFlags(sun)).exit_code, 0);
+    ASSERT_EQ(Run("render --model hillaire --preset earth --target three --width 1024 --height 512 --no-png -o three " + SunFlags(sun)).exit_code, 0);
     int status = 0;
     std::string err;
     const std::string out = Node("three_equirect.mjs", "three.exr", sun, status, err);
@@ -90,7 +90,7 @@ TEST_F(EngineTarget, ThreeJsCubeTextureReadsTheSunWhereItIs) {
   if (std::string(ATMO_NODE).empty()) GTEST_SKIP() << "node is not installed (scripts/install_deps.sh installs it)";
   ASSERT_TRUE(fs::exists(fs::path(ATMO_NODE_MODULES) / "three" / "package.json"));
   for (const Sun& sun : {Sun{120.0, 30.0}, Sun{250.0, 8.0}, Sun{10.0, 55.0}}) {
-    ASSERT_EQ(Run("render --camera cubemap --face-size 64 --target three --hdr-faces cube --png '' " + SunFlags(sun))
+    ASSERT_EQ(Run("render --model hillaire --preset earth --camera cubemap --face-size 64 --target three --hdr-faces cube --png '' " + SunFlags(sun))
                   .exit_code,
               0);
     int status = 0;
@@ -116,9 +116,9 @@ TEST_F(EngineTarget, BlenderSeesTheSunWhereItIsAndLightsAPlaneWithAtmosIlluminan
     GTEST_SKIP() << "blender is not installed (scripts/install_deps.sh installs Debian's blender)";
   }
   for (const Sun& sun : kSuns) {
-    ASSERT_EQ(Run("render --target blender --width 1024 --height 512 --no-png -o blender " + SunFlags(sun)).exit_code,
+    ASSERT_EQ(Run("render --model hillaire --preset earth --target blender --width 1024 --height 512 --no-png -o blender " + SunFlags(sun)).exit_code,
               0);
-    const RunResult lux = Run("illuminance --sun-elevation " + std::to_string(sun.elevation_deg));
+    const RunResult lux = Run("illuminance --model hillaire --preset earth --sun-elevation " + std::to_string(sun.elevation_deg));
     ASSERT_EQ(lux.exit_code, 0) << lux.err;
     const std::vector<std::string> header = Split(Lines(lux.out)[0]), row = Split(Lines(lux.out)[1]);
     double expected_lux = 0.0;
@@ -217,7 +217,7 @@ TEST_F(EngineTarget, EveryTargetPutsTheSunWhereItsProgramsLookupFindsIt) {
   // their lookups as their sources write them; three.js and Blender also run above.
   for (const atmo::EngineTarget& target : EngineTargets()) {
     for (const Sun& sun : {Sun{135.0, 30.0}, Sun{250.0, 8.0}, Sun{10.0, 55.0}}) {
-      ASSERT_EQ(Run("render --target " + std::string(target.name) + " --width 512 --height 256 --no-png -o t " +
+      ASSERT_EQ(Run("render --model hillaire --preset earth --target " + std::string(target.name) + " --width 512 --height 256 --no-png -o t " +
                     SunFlags(sun))
                     .exit_code,
                 0);
@@ -246,8 +246,8 @@ TEST_F(EngineTarget, EveryTargetPutsTheSunWhereItsProgramsLookupFindsIt) {
 
 TEST_F(EngineTarget, TheMapIsFixedInTheWorldAndRecorded) {
   // The sun moves, the map does not: the centre column stays east for three.
-  ASSERT_EQ(Run("render --target three --width 64 --height 32 --no-png -o a --sun-azimuth 100").exit_code, 0);
-  ASSERT_EQ(Run("render --target three --width 64 --height 32 --no-png -o b --sun-azimuth 260").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --target three --width 64 --height 32 --no-png -o a --sun-azimuth 100").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --target three --width 64 --height 32 --no-png -o b --sun-azimuth 260").exit_code, 0);
   for (const char* name : {"a.exr", "b.exr"}) {
     ImageMetadata metadata;
     ReadExr(dir_ / name, &metadata);
@@ -260,23 +260,23 @@ TEST_F(EngineTarget, TheMapIsFixedInTheWorldAndRecorded) {
     EXPECT_EQ(target, "three") << name;
   }
   // --target alone is an equirect of 2048 x 1024.
-  ASSERT_EQ(Run("render --target blender --no-png -o c --sun-elevation 20").exit_code, 0);
+  ASSERT_EQ(Run("render --model hillaire --preset earth --target blender --no-png -o c --sun-elevation 20").exit_code, 0);
   const Image c = ReadExr(dir_ / "c.exr");
   EXPECT_EQ(c.width, 2048);
   EXPECT_EQ(c.height, 1024);
 }
 
 TEST_F(EngineTarget, BadTargetsAreRefusedBeforeAnyWork) {
-  ExpectFailureKeepingOutputs("render --target maya -o sky",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --target maya -o sky",
                               "unknown --target 'maya' (known: three, blender, unreal, unity, godot, pbrt, mitsuba)",
                               {"sky.exr", "sky.png"});
-  ExpectFailureKeepingOutputs("render --target three --camera fisheye -o sky", "--target three writes an equirect",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --target three --camera fisheye -o sky", "--target three writes an equirect",
                               {"sky.exr", "sky.png"});
-  ExpectFailureKeepingOutputs("render --target blender --camera cubemap --hdr-faces c -o sky",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --target blender --camera cubemap --hdr-faces c -o sky",
                               "cube maps are written for three only", {"sky.exr", "c_px.hdr"});
-  ExpectFailureKeepingOutputs("render --target three --camera cubemap -o sky", "writes --hdr-faces NAME",
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --target three --camera cubemap -o sky", "writes --hdr-faces NAME",
                               {"sky.exr"});
-  ExpectFailureKeepingOutputs("render --hdr-faces c -o sky", "need --camera cubemap", {"sky.exr", "c_nz.hdr"});
+  ExpectFailureKeepingOutputs("render --model hillaire --preset earth --hdr-faces c -o sky", "need --camera cubemap", {"sky.exr", "c_nz.hdr"});
   EXPECT_THROW(FindEngineTarget(""), Error);
 }
 

@@ -733,7 +733,7 @@ using GlCliTest = atmo::testing::CliFixture;
 
 TEST_F(GlCliTest, RenderWritesBothFiles) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
-  const atmo::testing::RunResult r = Run("render --backend gl --width 64 --height 32 --exr sky.exr --png sky.png");
+  const atmo::testing::RunResult r = Run("render --model hillaire --preset earth --backend gl --width 64 --height 32 --exr sky.exr --png sky.png");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir_ / "sky.exr"));
   EXPECT_TRUE(std::filesystem::exists(dir_ / "sky.png"));
@@ -797,7 +797,7 @@ class GlSampleTest : public GlCliTest {
 TEST_F(GlSampleTest, SampleMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
   atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
-  for (const char* model : {"--model hillaire", "--model elek --preset atmosphere-plus --option size=16x64x16"}) {
+  for (const char* model : {"--model hillaire --preset earth", "--model elek --preset atmosphere-plus --option size=16x64x16"}) {
     const double worst = SampleGlVersusCpu(std::string("sample ") + model + " --grid grid.csv", 8u * 3u);
     // Tolerance: the tables' float-vs-double differences (GlHillaire.SampleMatchesCpu, the elek
     // table tests in gl_elek_test.cc), including twilight (sun 95 degrees) where the values are
@@ -858,7 +858,7 @@ TEST_F(GlCliTest, PrecomputeOnGlWritesATableTheCpuLoads) {
 // converted to luminance (linear sRGB, Y in cd/m^2) exactly as on the CPU.
 TEST_F(GlCliTest, SpectralRenderMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
-  const std::string render = "render --spectral 5 --unit luminance --width 64 --height 32 --sun-elevation 12 --png '' ";
+  const std::string render = "render --model hillaire --preset earth --spectral 5 --unit luminance --width 64 --height 32 --sun-elevation 12 --png '' ";
   const atmo::testing::RunResult cpu = Run(render + "--exr cpu.exr");
   const atmo::testing::RunResult gl = Run(render + "--backend gl --exr gl.exr");
   ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
@@ -901,7 +901,7 @@ TEST_F(GlCliTest, SpectralRenderMatchesTheCpuBackend) {
 TEST_F(GlSampleTest, SpectralSampleMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
   atmo::testing::WriteFile(dir_ / "grid.csv", kSampleGrid);
-  for (const char* model : {"--model hillaire", "--model elek --option size=16x64x16"}) {
+  for (const char* model : {"--model hillaire --preset earth", "--model elek --preset earth --option size=16x64x16"}) {
     const double worst = SampleGlVersusCpu(std::string("sample --spectral 5 ") + model + " --grid grid.csv", 8u * 5u);
     // Tolerance: SampleMatchesTheCpuBackend's (2e-3). Measured on llvmpipe: 6.8e-4 (hillaire),
     // 4.0e-5 (elek).
@@ -913,7 +913,7 @@ TEST_F(GlSampleTest, SpectralSampleMatchesTheCpuBackend) {
 // one table per batch, include/atmo/elek.h), loaded by the CPU, and answering as the CPU's table.
 TEST_F(GlCliTest, SpectralPrecomputeOnGlWritesATableTheCpuLoads) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
-  const std::string elek = "--model elek --spectral 5 --option size=8x32x8 --option orders=2";
+  const std::string elek = "--model elek --preset earth --spectral 5 --option size=8x32x8 --option orders=2";
   const atmo::testing::RunResult r = Run("precompute --backend gl " + elek + " --out table");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(atmo::testing::ReadFile(dir_ / "table.json").find("\"batches\": 2"), std::string::npos);
@@ -934,7 +934,7 @@ TEST_F(GlCliTest, SpectralPrecomputeOnGlWritesATableTheCpuLoads) {
 // `atmo bench --backend gl` with 4 channels (two batches): the passes under their usual names.
 TEST_F(GlCliTest, BenchRunsSpectralOnGl) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
-  for (const char* model : {"--model hillaire", "--model elek --option size=8x32x8 --option orders=2"}) {
+  for (const char* model : {"--model hillaire --preset earth", "--model elek --preset earth --option size=8x32x8 --option orders=2"}) {
     const atmo::testing::RunResult r =
         Run(std::string("bench --backend gl --spectral 4 --repeat 1 --width 32 --height 16 ") + model);
     EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -967,7 +967,7 @@ namespace {
 // pixels, the disc's brightest pixel within 4e-4.
 TEST_F(GlCliTest, MoonMatchesTheCpuBackend) {
   if (GetSharedContext().context == nullptr) GTEST_SKIP() << GetSharedContext().error;
-  const std::string night = "render --sun-elevation -30 --camera fisheye --width 128 --height 128 --no-stars --png '' ";
+  const std::string night = "render --model hillaire --preset earth --sun-elevation -30 --camera fisheye --width 128 --height 128 --no-stars --png '' ";
   const std::string render = night + "--moon-elevation 40 --moon-azimuth 150 --moon-phase 30 ";
   const atmo::testing::RunResult cpu = Run(render + "--exr cpu.exr");
   const atmo::testing::RunResult gl = Run(render + "--backend gl --exr gl.exr");

@@ -395,7 +395,7 @@ TEST_F(MoonCli, SampleAddsTheMoonlitSky) {
 }
 
 TEST_F(MoonCli, MoonByHandAndByDateAndItsBadInput) {
-  testing::RunResult r = Run("illuminance --preset earth --sun-elevation -30 --moon-elevation 60 --moon-phase 0");
+  testing::RunResult r = Run("illuminance --model hillaire --preset earth --sun-elevation -30 --moon-elevation 60 --moon-phase 0");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> lines = testing::Lines(r.out);
   ASSERT_EQ(lines.size(), 2u);
@@ -412,15 +412,15 @@ TEST_F(MoonCli, MoonByHandAndByDateAndItsBadInput) {
   EXPECT_NEAR(global, direct + diffuse + night, 1e-5 * global);
   EXPECT_GT(direct, 0.15);
   // By date: a row for that instant, with the moon's place.
-  r = Run("illuminance --date 2026-12-24T01:28Z --latitude 46.5 --longitude 7.9");
+  r = Run("illuminance --model hillaire --preset earth --date 2026-12-24T01:28Z --latitude 46.5 --longitude 7.9");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ASSERT_EQ(testing::Lines(r.out).size(), 2u);
   // A moon by hand renders; bad input is one line and writes nothing.
-  r = Run("render --sun-elevation -30 --moon-elevation 30 --moon-phase 45 --width 32 --height 18 -o moon");
+  r = Run("render --model hillaire --preset earth --sun-elevation -30 --moon-elevation 30 --moon-phase 45 --width 32 --height 18 -o moon");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* bad : {"--moon-elevation 30 --moon-phase 200", "--moon-elevation 95 --moon-phase 10",
                           "--moon-azimuth 10", "--moon-elevation 30 --moon-phase nan"}) {
-    const testing::RunResult refused = Run(std::string("render --sun-elevation -30 -o refused ") + bad);
+    const testing::RunResult refused = Run(std::string("render --model hillaire --preset earth --sun-elevation -30 -o refused ") + bad);
     EXPECT_NE(refused.exit_code, 0) << bad;
     EXPECT_EQ(testing::Lines(refused.err).size(), 1u) << bad << ": " << refused.err;
     EXPECT_FALSE(std::filesystem::exists(dir_ / "refused.png")) << bad;

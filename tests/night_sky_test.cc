@@ -373,21 +373,21 @@ class NightCli : public testing::CliFixture {};
 // The first try: a render with the sun 30 degrees down is no longer black, and
 // --no-night-glow --no-stars gives the old black back.
 TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
-  const testing::RunResult r = Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 -o night");
+  const testing::RunResult r = Run("render --model hillaire --preset earth --sun-elevation -30 --camera fisheye --width 32 --height 32 -o night");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Image image = ReadExr(dir_ / "night.exr");
   double sum = 0.0;
   for (float v : image.pixels) sum += v;
   EXPECT_GT(sum / image.pixels.size(), 1e-4);  // cd/m^2 in linear sRGB
   const testing::RunResult off =
-      Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --no-night-glow --no-stars -o black");
+      Run("render --model hillaire --preset earth --sun-elevation -30 --camera fisheye --width 32 --height 32 --no-night-glow --no-stars -o black");
   ASSERT_EQ(off.exit_code, 0) << off.err;
   // Black to any display: what is left is sunlight scattered several times through air lit over
   // 2000 km away (hillaire's gathered orders), up to 8.7e-11 cd/m^2; the night sky is 1e-4 and more.
   for (float v : ReadExr(dir_ / "black.exr").pixels) ASSERT_LT(std::abs(v), 1e-9f);
   // --night-vision: the eye's view in the PNG (scotopic at -30), refused for relative units.
   const testing::RunResult seen =
-      Run("render --sun-elevation -30 --camera fisheye --width 32 --height 32 --night-vision -o seen");
+      Run("render --model hillaire --preset earth --sun-elevation -30 --camera fisheye --width 32 --height 32 --night-vision -o seen");
   ASSERT_EQ(seen.exit_code, 0) << seen.err;
   ImageMetadata metadata;
   ReadExr(dir_ / "seen.exr", &metadata);
@@ -399,7 +399,7 @@ TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
     }
   }
   EXPECT_TRUE(found);
-  const testing::RunResult refused = Run("render --night-vision --unit relative -o refused");
+  const testing::RunResult refused = Run("render --model hillaire --preset earth --night-vision --unit relative -o refused");
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_EQ(testing::Lines(refused.err).size(), 1u) << refused.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "refused.png"));
@@ -409,7 +409,7 @@ TEST_F(NightCli, RenderWithTheSunFarDownShowsTheNightSky) {
 // The gl backend adds the same night sky after read-back (on Mesa's llvmpipe in CI).
 TEST_F(NightCli, GlBackendAddsTheSameNightSky) {
   for (const char* backend : {"cpu", "gl"}) {
-    const testing::RunResult r = Run(std::string("render --backend ") + backend +
+    const testing::RunResult r = Run(std::string("render --model hillaire --preset earth --backend ") + backend +
                                      " --sun-elevation -30 --camera fisheye --width 24 --height 24 --unit relative -o " +
                                      backend);
     ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -258,7 +258,7 @@ TEST_F(PhaseTableCli, TheFlagChangesTheSkyWhereThePhaseDiffers) {
   const double ratio = luminance(across, "--aerosol-phase opac") / luminance(across, hg);
   EXPECT_LT(ratio, 0.99);
   EXPECT_GT(ratio, 0.9);
-  const testing::RunResult bad = Run("render --preset us-standard --aerosol-phase mie --width 8 --height 4 -o bad");
+  const testing::RunResult bad = Run("render --model hillaire --preset us-standard --aerosol-phase mie --width 8 --height 4 -o bad");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_EQ(testing::Lines(bad.err).size(), 1u) << bad.err;
   EXPECT_NE(bad.err.find("unknown aerosol phase 'mie'"), std::string::npos) << bad.err;

@@ -70,6 +70,15 @@ void PrintError(const std::string& message) {
 }
 
 
+// The default model and preset of render, sample, illuminance, irradiance, calibrate and annual:
+// `source4d` on `us-standard` (docs/cli.md, "Common flags"). Their help says so.
+constexpr const char* kAccurateModel = "source4d";
+constexpr const char* kAccuratePreset = "us-standard";
+void ShowAccurateDefaults(CLI::App* app) {
+  app->get_option("--model")->default_str(kAccurateModel);
+  app->get_option("--preset")->default_str(kAccuratePreset);
+}
+
 // Puts each flag of `app` into its help group (CLI11's default lumps them all under "Options").
 void GroupFlags(CLI::App* app) {
   static const std::pair<const char*, const char*> kGroups[] = {
@@ -174,6 +183,7 @@ int main(int argc, char** argv) {
   atmo::cli::RenderCommand render;
   CLI::App* render_app = app.add_subcommand("render", "render a sky image (EXR + tone-mapped PNG)");
   AddCommonOptions(render_app, common);
+  ShowAccurateDefaults(render_app);
   atmo::cli::RenderFlags render_flags;
   atmo::cli::AddRenderFlags(render_app, render, render_flags);
   const std::string side_help = " in pixels";
@@ -181,6 +191,7 @@ int main(int argc, char** argv) {
   atmo::cli::SampleCommand sample;
   CLI::App* sample_app = app.add_subcommand("sample", "query radiance and transmittance as CSV");
   AddCommonOptions(sample_app, common);
+  ShowAccurateDefaults(sample_app);
   CLI::Option* grid = sample_app->add_option(
       "--grid", sample.grid_path, "CSV with header altitude_m,sun_zenith_deg,view_zenith_deg,azimuth_deg");
   sample_app->add_option("--out", sample.out_path, "output CSV (default: standard output)");
@@ -340,6 +351,7 @@ int main(int argc, char** argv) {
   CLI::App* illuminance_app = app.add_subcommand(
       "illuminance", "sun and sky illuminance on a horizontal plane, in lux (CSV)");
   AddCommonOptions(illuminance_app, common);
+  ShowAccurateDefaults(illuminance_app);
   illuminance_app
       ->add_option("--sun-elevation", illuminance.sun_elevations_deg,
                    "sun elevation(s) in degrees, e.g. --sun-elevation 10 30 60")
@@ -362,6 +374,7 @@ int main(int argc, char** argv) {
   CLI::App* irradiance_app = app.add_subcommand(
       "irradiance", "the sun's and sky's light on planes: direct, circumsolar, sky diffuse, ground-reflected (CSV)");
   AddCommonOptions(irradiance_app, common);
+  ShowAccurateDefaults(irradiance_app);
   irradiance_app
       ->add_option("--sun-elevation", irradiance.sun_elevations_deg,
                    "sun elevation(s) in degrees, e.g. --sun-elevation 10 30 60")
@@ -393,6 +406,7 @@ int main(int argc, char** argv) {
   CLI::App* calibrate_app = app.add_subcommand(
       "calibrate", "the clear sky (aerosol optical depth and albedo) of a measured direct and diffuse illuminance");
   AddCommonOptions(calibrate_app, common);
+  ShowAccurateDefaults(calibrate_app);
   AddOptionalNumber(calibrate_app, "--sun-elevation", calibrate.sun_elevation_deg, "sun elevation in degrees")
       ->check(RangeOf(1.0, 90.0));
   AddNumber(calibrate_app, "--sun-azimuth", calibrate.sun_azimuth_deg, "sun compass azimuth in degrees")
@@ -425,6 +439,7 @@ int main(int argc, char** argv) {
   CLI::App* annual_app = app.add_subcommand(
       "annual", "a weather file's hours as calibrated skies: Radiance sky matrix and irradiance per plane");
   AddCommonOptions(annual_app, common);
+  ShowAccurateDefaults(annual_app);
   annual_app->add_option("--epw", annual.epw_path, "the EnergyPlus weather file (EPW)")->required();
   annual_app->add_option("--out-dir", annual.out_dir, "the run's folder: parts, run.json and, once complete, sky.mtx, "
                                                       "hours.csv, irradiance.csv")->required();
@@ -549,6 +564,13 @@ int main(int argc, char** argv) {
     atmo::SetTableCache(atmo::cli::TableCacheFor(common));
     // Long precomputations announce their estimate and passes (atmo::SetProgressHandler).
     atmo::SetProgressHandler([](const std::string& message) { std::fprintf(stderr, "atmo: %s\n", message.c_str()); });
+    // render, sample and illuminance give the accurate model on the real sky unless told otherwise
+    // (the daylighting commands do the same, daylight_commands.cc); bench, compare and precompute
+    // keep hillaire (the real-time model) and elek on earth.
+    if (render_app->parsed() || sample_app->parsed() || illuminance_app->parsed()) {
+      if (!common.model_given) common.model = kAccurateModel;
+      if (!common.preset_given && common.config.empty()) common.preset = kAccuratePreset;
+    }
     if (render_app->parsed()) return atmo::cli::RunRender(common, render);
     if (sample_app->parsed()) return atmo::cli::RunSample(common, sample);
     if (compare_app->parsed()) return atmo::cli::RunCompare(common, compare);

@@ -147,6 +147,7 @@ class Frame:
 class Model:
     """A sky model with its precomputed tables.
 
+    Model()                                             # source4d on us-standard, as `atmo render`
     Model(name="hillaire", preset="earth")            # a preset (atmo.preset_names())
     Model("elek", config="my.json")                     # a JSON file as `atmo --config`
     Model("hillaire", config={"preset": "earth", "mie": {"phase_g": 0.7}})   # a dict: the same JSON
@@ -162,7 +163,7 @@ class Model:
     one of aod, visibility and turbidity.
     """
 
-    def __init__(self, name: str = "hillaire", preset: Optional[str] = None,
+    def __init__(self, name: str = "source4d", preset: Optional[str] = None,
                  config: Union[None, str, os.PathLike, Mapping] = None,
                  options: Optional[Mapping[str, object]] = None, spectral: int = 0,
                  seed: Optional[int] = None, aerosol: Optional[str] = None, aod: Optional[float] = None,
@@ -177,7 +178,7 @@ class Model:
         elif config is not None:
             config_path = os.fspath(config)
         elif preset is None:
-            preset = "earth"
+            preset = "us-standard"
         if isinstance(spectral, bool) or not isinstance(spectral, (int, np.integer)):
             raise ValueError(f"spectral must be an integer (got {spectral!r})")
         if spectral != 0 and not 3 <= spectral <= 256:
@@ -630,8 +631,9 @@ def set_threads(threads: int) -> None:
 def set_table_cache(folder, max_bytes: int = 1 << 30) -> None:
     """Keep the tables that source4d models precompute in `folder` (a str or path), and read them
     back when a later Model has the same model, options, atmosphere and build (bit-identical to
-    computing them); None turns it off, the module's default. `atmo.default_table_cache()` is the
-    folder the atmo command uses. Files are written whole, checked when read, and the least
+    computing them); None keeps nothing, the module's default. The tables shipped with atmo (the
+    default sky's, made when it was built) are read either way. `atmo.default_table_cache()` is
+    the folder the atmo command uses. Files are written whole, checked when read, and the least
     recently used are removed past max_bytes (docs/python.md, "The table cache")."""
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, (int, np.integer)) or max_bytes <= 0:
         raise ValueError(f"max_bytes must be a positive integer (got {max_bytes!r})")
@@ -639,7 +641,7 @@ def set_table_cache(folder, max_bytes: int = 1 << 30) -> None:
 
 
 def table_cache():
-    """The table cache's folder, or None when it is off."""
+    """The table cache's folder, or None when it keeps nothing."""
     return _atmo.table_cache()
 
 

@@ -101,7 +101,7 @@ def test_spectral_frames(cli):
 def test_render_matches_atmo_render_exr(tmp_path, cli, cli_args, model_kwargs, render_kwargs):
     # The frame `atmo render` writes into its EXR, bit for bit: the same library calls.
     exr = tmp_path / "cli.exr"
-    cli("render", *cli_args, "--exr", str(exr), "--no-png")
+    cli("render", "--model", "hillaire", "--preset", "earth", *cli_args, "--exr", str(exr), "--no-png")
     printed, printed_alpha, names, metadata = atmo.read_exr(exr)
     frame = atmo.Model("hillaire", preset="earth", **model_kwargs).render(full=True, **render_kwargs)
     assert names == frame.channel_names
@@ -114,7 +114,7 @@ def test_render_matches_atmo_render_exr(tmp_path, cli, cli_args, model_kwargs, r
 def test_monte_carlo_frame_has_standard_errors_that_fall_as_one_over_root_n():
     # Model reference renders progressively; its standard errors come with the frame, and four
     # times the paths halve them (on average over the sky pixels, to Monte Carlo noise).
-    model = atmo.Model("reference", seed=2)
+    model = atmo.Model("reference", preset="earth", seed=2)
     few = model.render(8, 4, "equirect", unit="relative", sun_elevation_deg=30.0, spp=64, full=True)
     many = model.render(8, 4, "equirect", unit="relative", sun_elevation_deg=30.0, spp=256, full=True)
     assert few.image.shape == (4, 8, 3) and few.standard_error.shape == (4, 8, 3)
@@ -132,10 +132,10 @@ def test_monte_carlo_frame_matches_atmo_render_with_its_seed(tmp_path, cli):
     # module's frame (luminance, from the model of unit solar irradiance) is the CLI's, and so
     # are the standard-error channels of the EXR.
     exr = tmp_path / "mc.exr"
-    cli("render", "--model", "reference", "--seed", "5", "--spp", "8", "--camera", "equirect", "--width", "8",
+    cli("render", "--preset", "earth", "--model", "reference", "--seed", "5", "--spp", "8", "--camera", "equirect", "--width", "8",
         "--height", "4", "--exr", str(exr), "--no-png")
     printed, _, names, _ = atmo.read_exr(exr)
-    frame = atmo.Model("reference", seed=5).render(8, 4, "equirect", spp=8, full=True)
+    frame = atmo.Model("reference", preset="earth", seed=5).render(8, 4, "equirect", spp=8, full=True)
     assert names == ("R", "G", "B", "stderr.R", "stderr.G", "stderr.B")
     np.testing.assert_array_equal(frame.image, printed[..., :3])
     np.testing.assert_array_equal(frame.standard_error, printed[..., 3:])
@@ -167,7 +167,7 @@ def test_illuminance_is_the_clis(cli):
     """Model.illuminance gives `atmo illuminance`'s row (printed to 6 digits)."""
     from conftest import parse_csv
     model = atmo.Model("hillaire", preset="earth-spectral")
-    row = parse_csv(cli("illuminance", "--preset", "earth-spectral", "--sun-elevation", "25"))[0]
+    row = parse_csv(cli("illuminance", "--model", "hillaire", "--preset", "earth-spectral", "--sun-elevation", "25"))[0]
     e = model.illuminance(25.0)
     for key in ("direct_normal_lux", "diffuse_horizontal_lux", "global_horizontal_lux", "direct_normal_w_m2",
                 "diffuse_horizontal_w_m2", "night_sky_horizontal_lux", "night_sky_horizontal_w_m2"):
@@ -188,7 +188,7 @@ def test_moon_is_the_clis(cli):
     from conftest import parse_csv
     model = atmo.Model("hillaire", preset="earth")
     e = model.illuminance(-30.0, moon_elevation_deg=60.0, moon_phase_deg=0.0)
-    row = parse_csv(cli("illuminance", "--sun-elevation", "-30", "--moon-elevation", "60", "--moon-phase", "0"))[0]
+    row = parse_csv(cli("illuminance", "--model", "hillaire", "--preset", "earth", "--sun-elevation", "-30", "--moon-elevation", "60", "--moon-phase", "0"))[0]
     for key in ("moon_direct_horizontal_lux", "moon_diffuse_horizontal_lux", "global_horizontal_lux"):
         assert e[key] == pytest.approx(row[key], rel=1e-5), key
     assert 0.17 < e["moon_direct_horizontal_lux"] + e["moon_diffuse_horizontal_lux"] < 0.33
@@ -204,9 +204,9 @@ def test_reference_traces_the_moon():
     is that of a deterministic model within the path tracer's noise, and far brighter than none."""
     kwargs = dict(camera="fisheye", sun_elevation_deg=-30.0, sun_disc=False)
     moon = dict(moon_elevation_deg=40.0, moon_azimuth_deg=100.0, moon_phase_deg=20.0)
-    traced = atmo.Model("reference", seed=3).render(16, spp=32, **kwargs, **moon)
-    dark = atmo.Model("reference", seed=3).render(16, spp=32, **kwargs)
-    scattered = atmo.Model("source4d").render(16, **kwargs, **moon)
+    traced = atmo.Model("reference", preset="earth", seed=3).render(16, spp=32, **kwargs, **moon)
+    dark = atmo.Model("reference", preset="earth", seed=3).render(16, spp=32, **kwargs)
+    scattered = atmo.Model("source4d", preset="earth").render(16, **kwargs, **moon)
     assert float(traced.sum()) > 4.0 * float(dark.sum())
     assert float(traced.sum()) == pytest.approx(float(scattered.sum()), rel=0.05)
 
@@ -222,7 +222,7 @@ def test_moon_of_a_date_is_the_clis(cli):
     kwargs = dict(moon_elevation_deg=moon["elevation_deg"], moon_azimuth_deg=moon["azimuth_deg"],
                   moon_phase_deg=moon["phase_angle_deg"])
     e = model.illuminance(sun["elevation_deg"], moon_distance_km=moon["distance_km"], **kwargs)
-    row = parse_csv(cli("illuminance", "--date", date, "--latitude", str(lat), "--longitude", str(lon)))[0]
+    row = parse_csv(cli("illuminance", "--model", "hillaire", "--preset", "earth", "--date", date, "--latitude", str(lat), "--longitude", str(lon)))[0]
     assert e["moon_direct_horizontal_lux"] == pytest.approx(row["moon_direct_horizontal_lux"], rel=2e-3)
     near = model.illuminance(sun["elevation_deg"], moon_distance_km=360000.0, **kwargs)
     far = model.illuminance(sun["elevation_deg"], moon_distance_km=400000.0, **kwargs)
@@ -237,7 +237,7 @@ def test_moon_position_is_the_one_render_date_uses(cli):
     from conftest import parse_csv
     date = "2026-12-24T22:00+01:00"
     moon = atmo.moon_position(date, 46.5, 7.9)
-    row = parse_csv(cli("illuminance", "--date", date, "--latitude", "46.5", "--longitude", "7.9"))[0]
+    row = parse_csv(cli("illuminance", "--model", "hillaire", "--preset", "earth", "--date", date, "--latitude", "46.5", "--longitude", "7.9"))[0]
     assert moon["elevation_deg"] == pytest.approx(row["moon_elevation_deg"], abs=1e-4)
     assert moon["phase_angle_deg"] == pytest.approx(row["moon_phase_deg"], abs=1e-4)
     assert moon["phase_angle_deg"] < 20.0  # the evening after the full moon of 2026-12-24 01:28 UTC
@@ -263,7 +263,7 @@ def test_night_sky_is_in_renders_as_in_the_clis(cli, tmp_path):
 def test_sun_position_is_where_render_date_puts_the_sun(cli, tmp_path):
     """sun_position(date, lat, lon) equals the sun `atmo render --date` records."""
     date, lat, lon = "2026-06-21T07:30:00+02:00", 48.85, 2.35
-    cli("render", "--date", date, "--latitude", str(lat), "--longitude", str(lon), "--width", "4", "--height", "4",
+    cli("render", "--model", "hillaire", "--preset", "earth", "--date", date, "--latitude", str(lat), "--longitude", str(lon), "--width", "4", "--height", "4",
         "--no-png", "--exr", str(tmp_path / "s.exr"))
     _, _, _, metadata = atmo.read_exr(tmp_path / "s.exr")
     sun = atmo.sun_position(date, lat, lon)
@@ -286,10 +286,10 @@ def test_cube_map_products_are_the_clis(cli, tmp_path):
     import json
     import struct
     flags = ["--camera", "cubemap", "--face-size", "16", "--sun-elevation", "25", "--sun-azimuth", "140"]
-    cli("render", *flags, "--exr", str(tmp_path / "c.exr"), "--png", "", "--ktx2", str(tmp_path / "c.ktx2"), "--mips",
+    cli("render", "--model", "hillaire", "--preset", "earth", *flags, "--exr", str(tmp_path / "c.exr"), "--png", "", "--ktx2", str(tmp_path / "c.ktx2"), "--mips",
         "--sh", str(tmp_path / "sh.json"), "--irradiance", str(tmp_path / "irr.exr"),
         "--specular", str(tmp_path / "spec.ktx2"), "--specular-levels", "4")
-    cube = atmo.Model("hillaire").render(16, camera="cubemap", sun_elevation_deg=25, sun_azimuth_deg=140)
+    cube = atmo.Model("hillaire", preset="earth").render(16, camera="cubemap", sun_elevation_deg=25, sun_azimuth_deg=140)
     exr, _, _, _ = atmo.read_exr(tmp_path / "c.exr")
     np.testing.assert_array_equal(cube, exr)
 
@@ -328,7 +328,7 @@ def test_cube_map_products_are_the_clis(cli, tmp_path):
 def test_export_tables_is_atmo_precompute(cli, tmp_path):
     """Model.export_tables writes the tables `atmo precompute --out` writes, byte for byte."""
     cli("precompute", "--model", "hillaire", "--sun-elevation", "15", "--out", str(tmp_path / "cli"))
-    written = atmo.Model("hillaire").export_tables(tmp_path / "py", sun_elevation_deg=15.0)
+    written = atmo.Model("hillaire", preset="earth").export_tables(tmp_path / "py", sun_elevation_deg=15.0)
     assert [p.rsplit("/", 1)[-1] for p in written][-1] == "py.json"
     raws = [p for p in written if p.endswith(".raw")]
     assert len(raws) == 6
@@ -341,9 +341,9 @@ def test_export_tables_is_atmo_precompute(cli, tmp_path):
 
 def test_write_hdr_is_the_clis_face(cli, tmp_path):
     """write_hdr writes the bytes `atmo render --hdr-faces` writes for the same face."""
-    cli("render", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--hdr-faces",
+    cli("render", "--model", "hillaire", "--preset", "earth", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--hdr-faces",
         str(tmp_path / "c"), "--exr", str(tmp_path / "c.exr"), "--png", "")
-    cube = atmo.Model("hillaire").render(8, camera="cubemap", sun_elevation_deg=30)
+    cube = atmo.Model("hillaire", preset="earth").render(8, camera="cubemap", sun_elevation_deg=30)
     exr, _, _, _ = atmo.read_exr(tmp_path / "c.exr")
     np.testing.assert_array_equal(cube, exr)
     # Face +Y of the OpenEXR layout is the view from inside; the HDR face is the GL-convention
@@ -356,9 +356,9 @@ def test_write_hdr_is_the_clis_face(cli, tmp_path):
 
 def test_cube_faces_for_three_are_the_clis(cli, tmp_path):
     """cube_faces_for_three + write_hdr give the files of --target three --hdr-faces."""
-    cli("render", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--sun-azimuth", "70",
+    cli("render", "--model", "hillaire", "--preset", "earth", "--camera", "cubemap", "--face-size", "8", "--sun-elevation", "30", "--sun-azimuth", "70",
         "--target", "three", "--hdr-faces", str(tmp_path / "c"), "--exr", "", "--png", "")
-    cube = atmo.Model("hillaire").render(8, camera="cubemap", sun_elevation_deg=30, sun_azimuth_deg=70)
+    cube = atmo.Model("hillaire", preset="earth").render(8, camera="cubemap", sun_elevation_deg=30, sun_azimuth_deg=70)
     faces = atmo.cube_faces_for_three(cube)
     assert len(faces) == 6
     for name, face in zip(("px", "nx", "py", "ny", "pz", "nz"), faces):

@@ -29,7 +29,7 @@ def module_arrays(rows):
 
 @pytest.mark.parametrize("unit", ["relative", "radiance"])
 def test_matches_atmo_sample_per_channel(earth, cli, unit):
-    printed = parse_csv(cli("sample", "--grid", "-", "--unit", unit, stdin=grid_text(GRID)))
+    printed = parse_csv(cli("sample", "--model", "hillaire", "--preset", "earth", "--grid", "-", "--unit", unit, stdin=grid_text(GRID)))
     r = earth.sample(*module_arrays(GRID), unit=unit)
     nc = earth.channel_count
     assert len(printed) == len(GRID) * nc
@@ -44,7 +44,7 @@ def test_matches_atmo_sample_per_channel(earth, cli, unit):
 
 def test_matches_atmo_sample_in_luminance_and_spectral(cli):
     model = atmo.Model("hillaire", preset="earth", spectral=8)
-    printed = parse_csv(cli("sample", "--spectral", "8", "--unit", "luminance", "--grid", "-",
+    printed = parse_csv(cli("sample", "--model", "hillaire", "--preset", "earth", "--spectral", "8", "--unit", "luminance", "--grid", "-",
                             stdin=grid_text(GRID)))
     r = model.sample(*module_arrays(GRID), unit="luminance")
     assert r.radiance.shape == (len(GRID), 1)
@@ -69,9 +69,9 @@ def test_matches_atmo_sample_for_other_models(cli, model_name, extra):
 
 def test_matches_atmo_sample_with_options(cli):
     rows = [(0.0, 30.0, 0.0, 0.0), (0.0, 80.0, 85.0, 30.0)]
-    printed = parse_csv(cli("sample", "--option", "multiple_scattering_directions=2", "--grid", "-",
+    printed = parse_csv(cli("sample", "--model", "hillaire", "--preset", "earth", "--option", "multiple_scattering_directions=2", "--grid", "-",
                             stdin=grid_text(rows)))
-    model = atmo.Model("hillaire", options={"multiple_scattering_directions": 2})
+    model = atmo.Model("hillaire", preset="earth", options={"multiple_scattering_directions": 2})
     r = model.sample(*module_arrays(rows))
     for i in range(len(rows)):
         for c in range(3):
@@ -82,9 +82,9 @@ def test_monte_carlo_reference_matches_atmo_sample_with_its_seed(cli):
     # The reference model's estimate depends only on its seed, the query and the path count, so
     # the module's parallel evaluation gives the CLI's numbers, standard errors included.
     rows = [(0.0, 40.0, 60.0, 90.0), (0.0, 70.0, 30.0, 180.0)]
-    printed = parse_csv(cli("sample", "--model", "reference", "--samples", "64", "--seed", "3", "--grid", "-",
+    printed = parse_csv(cli("sample", "--preset", "earth", "--model", "reference", "--samples", "64", "--seed", "3", "--grid", "-",
                             stdin=grid_text(rows)))
-    model = atmo.Model("reference", options={"samples": 64}, seed=3)
+    model = atmo.Model("reference", preset="earth", options={"samples": 64}, seed=3)
     r = model.sample(*module_arrays(rows))
     assert np.all(r.standard_error > 0.0)
     for i in range(len(rows)):

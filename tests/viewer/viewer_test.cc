@@ -28,6 +28,13 @@
 namespace atmo::testing {
 namespace {
 
+// The viewer's own model and preset (hillaire on earth) for `atmo render`, whose defaults are
+// source4d on us-standard: the preset only where `flags` does not name one.
+std::string ViewerDefaults(const std::string& flags) {
+  return flags.find("--preset") == std::string::npos ? "--model hillaire --preset earth" : "--model hillaire";
+}
+
+
 using viewer::ApplyScript;
 using viewer::ParseViewerScript;
 using viewer::ViewState;
@@ -197,7 +204,7 @@ TEST_F(Viewer, ScreenshotEqualsAtmoRenderGl) {
     ASSERT_EQ(v.exit_code, 0) << v.err;
     // The viewer does not draw the night sky's own light or the stars yet (docs/night.md): the
     // render leaves them out too.
-    const RunResult r = Run("render --backend gl " + flags + " --no-night-glow --no-stars --exr render.exr --no-png");
+    const RunResult r = Run("render " + ViewerDefaults(flags) + " --backend gl " + flags + " --no-night-glow --no-stars --exr render.exr --no-png");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     ImageMetadata vm;
     ImageMetadata rm;
@@ -250,7 +257,7 @@ TEST_F(Viewer, WindowShowsWhatThePngShows) {
     // At a fixed EV100 hillaire's frame pass runs in the display's fragment shader (one pass,
     // DrawFused): what is compared below is that pass's window.
     EXPECT_NE(v.out.find("frame_and_display"), std::string::npos) << v.out;
-    const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
+    const RunResult r = Run("render " + ViewerDefaults(flags) + " --backend gl " + flags + " --png render.png --no-exr");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     int vw = 0, vh = 0, rw = 0, rh = 0;
     const std::vector<unsigned char> window = ReadPngRgb(dir_ / "window.png", vw, vh);
@@ -371,7 +378,7 @@ TEST_F(Viewer, SavedConfigRendersTheSameSkyInAtmoRender) {
                                 "--screenshot viewer.exr");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   const RunResult r =
-      Run("render --backend gl --config haze.json " + std::string(kSameFlags) + " --exr render.exr --no-png");
+      Run("render --model hillaire --backend gl --config haze.json " + std::string(kSameFlags) + " --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   ImageMetadata rm;
@@ -382,7 +389,7 @@ TEST_F(Viewer, SavedConfigRendersTheSameSkyInAtmoRender) {
   // JSON keeps every double to the digit (docs/parameters.md): the same parameters, the same frame.
   EXPECT_LT(MaxRelativeDifference(viewer_image, render_image, 1.0), 1e-5);
   // And the haze shows: 4x the aerosols make the sky near the sun brighter than the preset's.
-  const RunResult plain = Run("render --backend gl " + std::string(kSameFlags) + " --exr plain.exr --no-png");
+  const RunResult plain = Run("render --model hillaire --preset earth --backend gl " + std::string(kSameFlags) + " --exr plain.exr --no-png");
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   const Image plain_image = ReadExr(dir_ / "plain.exr");
   EXPECT_GT(PatchMean(render_image, 90, 110, 30, 40).y, PatchMean(plain_image, 90, 110, 30, 40).y);
@@ -428,7 +435,7 @@ TEST_F(Viewer, SunFollowsTheDate) {
   const std::string place = "--latitude 46.5 --longitude 7.9 --width 160 --height 90 --yaw 100 --pitch 10";
   const RunResult v = RunViewer("--date 2026-06-21T06:00+02:00 " + place + " --frames 2 --script morning.txt");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  const RunResult r = Run("render --backend gl --date 2026-06-21T09:00+02:00 " + place + " --exr render.exr --no-png");
+  const RunResult r = Run("render --model hillaire --preset earth --backend gl --date 2026-06-21T09:00+02:00 " + place + " --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata six_m;
   ImageMetadata nine_m;
@@ -516,7 +523,7 @@ void Viewer::ExpectBuildWithoutFreezing(const std::string& model, const std::str
   // (docs/performance.md).
   if (worker_thread) return;
   const RunResult r =
-      Run("render --backend gl --model " + model + " " + options + " " + kSameFlags + " --exr render.exr --no-png");
+      Run("render --preset earth --backend gl --model " + model + " " + options + " " + kSameFlags + " --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   ImageMetadata rm;
@@ -688,7 +695,7 @@ TEST_F(Viewer, ReferenceAccumulatesToAtmoRendersEstimate) {
   const RunResult v = RunViewer(view + " --model reference --width 160 --height 88 --frames 2 --screenshot viewer.exr");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("32 of 32 paths per pixel"), std::string::npos) << v.out;
-  const RunResult r = Run("render --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
+  const RunResult r = Run("render --preset earth --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata vm;
   const Image viewer_image = ReadExr(dir_ / "viewer.exr", &vm);
@@ -709,7 +716,7 @@ TEST_F(Viewer, ReferenceTracesTheNightAndTheMoonAsAtmoRender) {
   const RunResult v = RunViewer(view + " --model reference --width 160 --height 88 --frames 2 --screenshot viewer.exr");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("8 of 8 paths per pixel"), std::string::npos) << v.out;
-  const RunResult r = Run("render --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
+  const RunResult r = Run("render --preset earth --model reference " + view + " --width 40 --height 22 --exr render.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Image viewer_image = ReadExr(dir_ / "viewer.exr");
   const Image render_image = ReadExr(dir_ / "render.exr");
@@ -817,9 +824,9 @@ TEST_F(Viewer, SpectralToggleSwitchesWithoutRestarting) {
             "screenshot 2 back.exr\n");
   const RunResult v = RunViewer(std::string(kSameFlags) + " --frames 3 --script toggle.txt");
   ASSERT_EQ(v.exit_code, 0) << v.err;
-  RunResult r = Run("render --backend gl " + std::string(kSameFlags) + " --exr render_rgb.exr --no-png");
+  RunResult r = Run("render --model hillaire --preset earth --backend gl " + std::string(kSameFlags) + " --exr render_rgb.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = Run("render --backend gl --spectral 15 " + std::string(kSameFlags) + " --exr render_spectral.exr --no-png");
+  r = Run("render --model hillaire --preset earth --backend gl --spectral 15 " + std::string(kSameFlags) + " --exr render_spectral.exr --no-png");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ImageMetadata sm;
   ImageMetadata rm;
@@ -917,7 +924,7 @@ TEST_F(ViewerOffscreen, FramebufferShowsWhatThePngShows) {
   const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot window.png");
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("3 frames of hillaire at 160x90"), std::string::npos) << v.out;
-  const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
+  const RunResult r = Run("render " + ViewerDefaults(flags) + " --backend gl " + flags + " --png render.png --no-exr");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CodeDifference d = ComparePngs(dir_ / "window.png", dir_ / "render.png");
   std::printf("[ figures ] offscreen framebuffer vs PNG: mean |difference| %.3f codes, max %d\n", d.mean, d.largest);
@@ -937,7 +944,7 @@ TEST_F(ViewerOffscreen, GpuAutoExposureMatchesTheRendersMeter) {
     const std::string flags = "--width 160 --height 90 --sun-azimuth 200 --yaw 185 --no-dither --no-sun-disc " + view;
     const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot window.png");
     ASSERT_EQ(v.exit_code, 0) << v.err;
-    const RunResult r = Run("render --backend gl " + flags + " --no-night-glow --no-stars --png render.png --no-exr");
+    const RunResult r = Run("render " + ViewerDefaults(flags) + " --backend gl " + flags + " --no-night-glow --no-stars --png render.png --no-exr");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const CodeDifference d = ComparePngs(dir_ / "window.png", dir_ / "render.png");
     std::printf("[ figures ] auto-exposed offscreen framebuffer vs PNG (%s): mean |difference| %.3f codes, max %d\n",
@@ -958,7 +965,7 @@ void ViewerOffscreen::ExpectWindowIsTheRender(const std::string& flags, const st
   const RunResult v = RunViewer(flags + " --frames 3 --no-panels --window-screenshot " + window);
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find(pass), std::string::npos) << v.out;
-  const RunResult r = Run("render --backend gl " + flags + " --png render.png --no-exr");
+  const RunResult r = Run("render " + ViewerDefaults(flags) + " --backend gl " + flags + " --png render.png --no-exr");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CodeDifference d = ComparePngs(dir_ / window, dir_ / "render.png");
   std::printf("[ figures ] window vs PNG (%s): mean |difference| %.5f codes, max %d\n", flags.c_str(), d.mean, d.largest);
