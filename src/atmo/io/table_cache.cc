@@ -17,7 +17,7 @@
 #include "atmo/error.h"
 #include "atmo/image.h"
 #include "atmo/memory.h"
-#include "atmo_build_id.h"  // generated: ATMO_BUILD_ID (cmake/build_id.cmake)
+#include "atmo_build_id.h"  // generated: ATMO_BUILD_ID (cmake/BuildId.cmake)
 #include "io/table_cache_file.h"
 
 namespace atmo {
