@@ -17,6 +17,8 @@
 #include "atmo/timing.h"
 #include "cli_fixture.h"
 #include "io/table_cache_file.h"
+#include "atmo/elek.h"
+#include "models/elek_model.h"
 #include "models/source4d_model.h"
 
 namespace atmo {
@@ -252,6 +254,41 @@ TEST_F(TableCacheTest, ShippedFoldersAreReadAndNeverWritten) {
   // std::nullopt: not even the shipped tables.
   SetTableCache(std::nullopt);
   EXPECT_FALSE(Ran(*CreateModel("source4d", earth, kSmall), "table_cache_read"));
+}
+
+// elek keeps its transmittance and summed tables (read back, a batch has no orders, as a loaded
+// table); an elek that loads its table from files keeps nothing (the files may change).
+TEST_F(TableCacheTest, ElekTablesReadBackGiveTheSameSky) {
+  const ModelOptions small = {{"size", "8x32x8"}, {"orders", "2"}};
+  const AtmosphereParameters p = Preset("us-standard");  // 15 channels, five batches
+  const auto computed = CreateModel("elek", p, small);
+  EXPECT_TRUE(Ran(*computed, "elek_scatter_2_lut"));
+  const auto read = CreateModel("elek", p, small);
+  EXPECT_TRUE(Ran(*read, "table_cache_read"));
+  EXPECT_FALSE(Ran(*read, "elek_single_lut"));
+  const auto& a = static_cast<const ElekModel&>(*computed).batches();
+  const auto& b = static_cast<const ElekModel&>(*read).batches();
+  ASSERT_EQ(a.size(), 5u);
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(b[i].transmittance.texels, a[i].transmittance.texels) << i;
+    EXPECT_EQ(b[i].total.rayleigh.texels, a[i].total.rayleigh.texels) << i;
+    EXPECT_EQ(b[i].total.mie.texels, a[i].total.mie.texels) << i;
+    EXPECT_TRUE(b[i].orders.empty());
+  }
+  const glm::dvec3 sun = DirectionFromZenithAzimuth(glm::radians(80.0), 0.0);
+  std::vector<double> ra(p.channel_count()), rb(p.channel_count());
+  computed->View(500.0, sun)->Radiance(DirectionFromZenithAzimuth(glm::radians(70.0), 1.0), ra);
+  read->View(500.0, sun)->Radiance(DirectionFromZenithAzimuth(glm::radians(70.0), 1.0), rb);
+  EXPECT_EQ(ra, rb);
+  EXPECT_GT(ra[7], 0.0);
+
+  const std::size_t files = CacheFiles(cache_.folder);
+  ExportElekTable(*computed, dir_ / "exported");
+  ModelOptions loading = small;
+  loading["table"] = (dir_ / "exported").string();
+  for (int k = 0; k < 2; ++k) EXPECT_FALSE(Ran(*CreateModel("elek", p, loading), "table_cache_read"));
+  EXPECT_EQ(CacheFiles(cache_.folder), files);
 }
 
 TEST_F(TableCacheTest, ModelsWithoutCostlyTablesKeepNothing) {

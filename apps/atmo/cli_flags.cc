@@ -118,7 +118,7 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
                   "refuse work whose tables and images would need more memory than SIZE (e.g. 4G, 512M; "
                   "default: half of this machine's memory; docs/reliability.md)");
   app->add_option("--table-cache", common.table_cache,
-                  "FOLDER where precomputed source4d tables are kept for later runs, or off (default: "
+                  "FOLDER where precomputed source4d and elek tables are kept for later runs, or off (default: "
                   "$ATMO_TABLE_CACHE, else $XDG_CACHE_HOME/atmo/tables, else ~/.cache/atmo/tables; docs/cli.md)");
   // Read as text: CLI11's unsigned conversion wrapped -1 to 2^64 - 1 and refused 20-digit seeds.
   app->add_option_function<std::string>(

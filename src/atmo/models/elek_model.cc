@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include <oneapi/tbb/task_arena.h>
@@ -11,6 +12,7 @@
 #include "atmo/memory.h"
 #include "cpu/hillaire_tables.h"
 #include "io/elek_table_file.h"
+#include "io/table_cache_file.h"
 #include "models/model_options.h"
 #include "physics/shared_parameters.h"
 
@@ -262,6 +264,45 @@ void ElekModel::SetComputedTables(std::size_t b, shared::Texture2D transmittance
   batch.transmittance = std::move(transmittance);
   batch.orders = std::move(orders);
   batch.total = std::move(total);
+}
+
+bool ElekModel::SaveTables(std::vector<unsigned char>& bytes) const {
+  if (!settings_.table.empty()) return false;  // the file is the table; it may change on disk
+  io::TableBytesWriter out;
+  out.Int(static_cast<std::int64_t>(batches_.size()));
+  for (const Batch& batch : batches_) {
+    out.Texture(batch.transmittance);
+    out.Texture(batch.total.rayleigh);
+    out.Texture(batch.total.mie);
+  }
+  bytes = std::move(out.bytes());
+  return true;
+}
+
+bool ElekModel::LoadTables(std::span<const unsigned char> bytes) {
+  if (!settings_.table.empty()) return false;
+  io::TableBytesReader in(bytes);
+  std::int64_t count = 0;
+  if (!in.Int(count) || count != static_cast<std::int64_t>(batches_.size())) return false;
+  const glm::ivec3 s = settings_.size;
+  const auto sized = [&](const shared::Texture3D& t) { return t.width == s.x && t.height == s.y && t.depth == s.z; };
+  std::vector<shared::Texture2D> transmittance(batches_.size());
+  std::vector<cpu::ElekScattering> total(batches_.size());
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    if (!in.Texture(transmittance[b]) || !in.Texture(total[b].rayleigh) || !in.Texture(total[b].mie) ||
+        transmittance[b].width != settings_.transmittance_lut.x ||
+        transmittance[b].height != settings_.transmittance_lut.y || !sized(total[b].rayleigh) ||
+        !sized(total[b].mie)) {
+      return false;
+    }
+  }
+  if (!in.Finished()) return false;
+  for (std::size_t b = 0; b < batches_.size(); ++b) {
+    batches_[b].transmittance = std::move(transmittance[b]);
+    batches_[b].orders.clear();
+    batches_[b].total = std::move(total[b]);
+  }
+  return true;
 }
 
 shared::vec3 ElekModel::BatchRadiance(const Batch& batch, double r, double mu, double mu_s, double nu) const {

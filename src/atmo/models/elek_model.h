@@ -98,6 +98,13 @@ class ElekModel final : public Model {
   void SetComputedTables(std::size_t batch, shared::Texture2D transmittance, std::vector<cpu::ElekScattering> orders,
                          cpu::ElekScattering total);
 
+ protected:
+  // The table cache (include/atmo/table_cache.h): each batch's transmittance table and summed
+  // table. Read back, a batch has no orders (as a loaded table); a model that loads its table
+  // (option table=NAME) keeps nothing.
+  bool SaveTables(std::vector<unsigned char>& bytes) const override;
+  bool LoadTables(std::span<const unsigned char> bytes) override;
+
  private:
   void ComputeTables(Batch& batch) const;
 
