@@ -3,7 +3,7 @@
 //
 // A source4d or elek model's tables depend on the atmosphere and the model's options, never on
 // the sun or the observer, and take seconds to compute (source4d at 15 channels: about 2 s of
-// wall time on 2 cores, docs/performance.md); read back they take milliseconds. CreateModel looks
+// wall time on 2 cores, docs/performance.md); read back, a tenth of that or less. CreateModel looks
 // a model up by a key made of the model's name, its options, the atmosphere's canonical JSON and
 // BuildId(): the tables read back are bit-identical to the ones this build would compute.
 //
@@ -12,9 +12,9 @@
 //   auto again = atmo::CreateModel("source4d", atmo::Preset("us-standard"));   // read back
 //
 // The library reads the tables shipped with atmo and keeps nothing new until SetTableCache is
-// called. Files are written whole (a temporary file,
-// then a rename), each holds its whole key and a checksum, and one that is truncated, corrupt,
-// of another key or unreadable is ignored (the tables are computed again and the file replaced).
+// called. Files are written whole (a temporary file, then a rename), each holds its whole key and
+// a checksum, and one that is truncated, corrupt, of another key or unreadable is ignored (the
+// tables are computed again and the file replaced).
 // A folder that cannot be written costs only the saving: CreateModel never fails because of the
 // cache. The least recently used files are removed when the folder grows past max_bytes.
 // docs/cli.md, "The table cache".
