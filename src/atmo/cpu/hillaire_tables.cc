@@ -9,6 +9,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "atmo/memory.h"
+#include "cpu/vector_math.h"
 
 #if defined(__GLIBC__) && defined(__x86_64__)
 // glibc's vector exp (libmvec): declaring the SIMD variants lets the compiler vectorise loops that
@@ -184,13 +185,13 @@ __attribute__((noinline)) void MultipleScatteringColumns(int n, double r_mu_s, d
   }
 }
 
-// shared::DecodeMultiScattering over `count` packed values (the components of an array of vec3),
-// in a loop the compiler vectorises (exp from libmvec).
-__attribute__((noinline)) void DecodeMultipleScattering(int count, double* __restrict values) {
+// shared::DecodeMultiScattering over `count` floats (the components of an array of texels), in
+// float like the table (ExpFloat, which the compiler vectorises on every target).
+__attribute__((noinline)) void DecodeMultipleScattering(int count, float* __restrict values) {
 #pragma omp simd
   for (int k = 0; k < count; ++k) {
-    const double psi = std::exp(values[k]);
-    values[k] = psi < 2e-30 ? 0.0 : psi;
+    const float psi = ExpFloat(values[k]);
+    values[k] = psi < 2e-30f ? 0.0f : psi;
   }
 }
 
@@ -263,10 +264,7 @@ class SunLookupsAlongRay {
       // The multiple-scattering table alone (the gathered orders): its columns only.
       MultipleScatteringColumns(n, r_ * mu_s, nu, t_.data(), inverse_r_.data(), multiple_scattering_->width - 1,
                                 multiple_scattering_column_.data());
-      for (int i = 0; i < n; ++i) {
-        multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
-      }
-      DecodeMultipleScattering(3 * n, &multiple_scattering[0].x);
+      LookUpMultipleScattering(n, multiple_scattering);
       return;
     }
     const double t_columns = transmittance_.width - 1;
@@ -274,16 +272,12 @@ class SunLookupsAlongRay {
     SunColumns(n, r_ * mu_s, nu, t_.data(), r_i_.data(), inverse_r_.data(), c_ground_.data(), c_top_.data(),
                d_min_.data(), inverse_range_.data(), t_columns, m_columns, lit_.data(), sun_column_.data(),
                multiple_scattering_column_.data());
-    for (int i = 0; i < n; ++i) {
-      if (sun_transmittance != nullptr) {
-        sun_transmittance[i] = lit_[i] * Blend(transmittance_, transmittance_rows_[i], sun_column_[i]);
-      }
-      if (multiple_scattering != nullptr) {
-        multiple_scattering[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
+    if (sun_transmittance != nullptr) {
+      for (int i = 0; i < n; ++i) {
+        sun_transmittance[i] = lit_[i] * vec3(glm::vec3(Blend(transmittance_, transmittance_rows_[i], sun_column_[i])));
       }
     }
-    static_assert(sizeof(vec3) == 3 * sizeof(double), "vec3 arrays are packed doubles");
-    if (multiple_scattering != nullptr) DecodeMultipleScattering(3 * n, &multiple_scattering[0].x);
+    if (multiple_scattering != nullptr) LookUpMultipleScattering(n, multiple_scattering);
   }
 
  private:
@@ -304,16 +298,28 @@ class SunLookupsAlongRay {
     rows.push_back(row);
   }
 
+  // The multiple-scattering table at the first n samples (their columns already found): blended
+  // and decoded in float, like the table itself.
+  void LookUpMultipleScattering(int n, vec3* values) const {
+    blended_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      blended_[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
+    }
+    static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "vec4 arrays are packed floats");
+    DecodeMultipleScattering(4 * n, &blended_[0].x);  // the padding lane decodes 0 to 1, unused
+    for (int i = 0; i < n; ++i) values[i] = vec3(glm::vec3(blended_[i]));
+  }
+
   // GL_LINEAR at texel coordinate s (texel centres at integers, s in [0, width - 1]) of `row`, in
   // float like the table itself.
-  static vec3 Blend(const PaddedTable& table, const Row& row, double s) {
+  static glm::vec4 Blend(const PaddedTable& table, const Row& row, double s) {
     // s is in [0, width - 1] (its callers clamp it, NaN included); the guard keeps the cast defined.
     const int x0 = s > 0.0 ? static_cast<int>(std::min(s, static_cast<double>(table.width - 1))) : 0;
     const int x1 = std::min(x0 + 1, table.width - 1);
     const float wx = static_cast<float>(s - x0);
     const glm::vec4 a = row.texels0[x0] + (row.texels0[x1] - row.texels0[x0]) * wx;
     const glm::vec4 b = row.texels1[x0] + (row.texels1[x1] - row.texels1[x0]) * wx;
-    return vec3(glm::vec3(a + (b - a) * row.wy));
+    return a + (b - a) * row.wy;
   }
 
   const shared::AtmosphereParameters& a_;
@@ -323,6 +329,7 @@ class SunLookupsAlongRay {
   std::vector<double> t_, r_i_, inverse_r_, c_ground_, c_top_, d_min_, inverse_range_;
   std::vector<Row> transmittance_rows_, multiple_scattering_rows_;
   mutable std::vector<double> sun_column_, multiple_scattering_column_, lit_;
+  mutable std::vector<glm::vec4> blended_;
 };
 
 // The sun-independent part of one ray of the multiple-scattering integral.

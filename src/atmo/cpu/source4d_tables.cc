@@ -1,7 +1,6 @@
 #include "cpu/source4d_tables.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -13,6 +12,7 @@
 
 #include "atmo/error.h"
 #include "cpu/hillaire_tables.h"
+#include "cpu/vector_math.h"
 #include "models/model_options.h"
 
 namespace atmo::cpu {
@@ -156,24 +156,6 @@ std::vector<Step> RaySteps(const shared::AtmosphereParameters& atmosphere, doubl
 // The lanes of one lookup in the sun loop of GatherMultipleRadiance: ln G_R (3 channels), ln G_M
 // (3), two unused (0, with weight 0), so that each texel of a slice is one 8-float vector.
 constexpr int kLanes = 8;
-
-// exp for the sun loop, in float (the tables are float): Cody-Waite reduction to
-// |r| <= ln(2) / 2 and Cephes' degree-7 polynomial, relative error < 1e-7 on [-87, 20], without
-// branches so that the compiler vectorises it. Arguments are clamped to [-87, 88] (ln G >= ln
-// 1e-30 = -69 in the tables); NaN gives exp(-87).
-inline float ExpFloat(float x) {
-  x = !(x > -87.0f) ? -87.0f : (x < 88.0f ? x : 88.0f);
-  const float n = std::floor(x * 1.44269504088896341f + 0.5f);
-  const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;
-  float p = 1.9875691500e-4f;
-  p = p * r + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
-  p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
-  p = p * r + 5.0000001201e-1f;
-  p = p * r * r + r + 1.0f;
-  return p * std::bit_cast<float>((static_cast<int>(n) + 127) << 23);
-}
 
 // shared::GetSource4dUnitSunZenith and shared::GetSource4dAzimuth (radians, 0..pi) in float, with
 // their branches as selects, for the sun loop of the orders >= 2 (twice the lanes of double per
