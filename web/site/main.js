@@ -60,6 +60,7 @@ let modelInfo = null;
 let table = null;
 let autoEv = 12;
 let building = null;  // the latest requested model key
+let lastModelRoundTripMs = 0;  // the latest model's request to its answer (tables and sky view included)
 let frameCount = 0;
 let frameClock = performance.now();
 
@@ -77,6 +78,7 @@ async function rebuildModel(interactive = false) {
   try {
     const info = await ask('model', { name: state.model, config: modelConfig(), skyView: skyViewRequest() });
     if (building !== key) return;  // a newer request superseded this one
+    lastModelRoundTripMs = performance.now() - start;
     modelInfo = info;
     if (state.error === '1') setTimeout(showErrorMap, 0);
     status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms ` +
@@ -527,13 +529,15 @@ if (test) {
   await new Promise((resolve) => requestAnimationFrame(() => setTimeout(resolve, 0)));
   renderer.gl.readPixels(0, 0, 1, 1, renderer.gl.RGBA, renderer.gl.UNSIGNED_BYTE, new Uint8Array(4));
   const hazeChangeMs = performance.now() - hazeStart;
+  const hazeModelMs = lastModelRoundTripMs;
+  const hazeTablesMs = modelInfo.precomputeMs;
   state.aod = '';
   await rebuildModel();
   await fetch('/result', {
     method: 'POST',
     headers: { 'x-width': String(width), 'x-height': String(height),
                'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs, frameMs720p,
-                                             sunChangeMs, hazeChangeMs, lookingAroundFps: looking.fps,
+                                             sunChangeMs, hazeChangeMs, hazeModelMs, hazeTablesMs, lookingAroundFps: looking.fps,
                                              lookingAroundBuffer: `${looking.width}x${looking.height}`, errorStats }) },
     body: pixels,
   });
