@@ -254,30 +254,41 @@ class SunLookupsAlongRay {
   double t(std::size_t i) const { return t_[i]; }
   double r(std::size_t i) const { return r_i_[i]; }
 
-  // For the sun at zenith cosine mu_s, nu = cos(ray direction, sun): the transmittance to the sun
-  // at every sample (0 in the planet's shadow) and, if the ray has a multiple-scattering table,
-  // its value there; either output may be null. Not thread-safe (scratch arrays); one instance
-  // per thread.
-  void Evaluate(double mu_s, double nu, vec3* sun_transmittance, vec3* multiple_scattering) const {
+  // For the gathered orders: sum_i weights[i] * (the multiple-scattering table at sample i) for the
+  // sun at zenith cosine mu_s and nu = cos(ray direction, sun), in float (weights' w is 0).
+  glm::vec4 SumMultipleScattering(double mu_s, double nu, const glm::vec4* weights) const {
     const int n = static_cast<int>(t_.size());
-    if (sun_transmittance == nullptr && multiple_scattering != nullptr) {
-      // The multiple-scattering table alone (the gathered orders): its columns only.
-      MultipleScatteringColumns(n, r_ * mu_s, nu, t_.data(), inverse_r_.data(), multiple_scattering_->width - 1,
-                                multiple_scattering_column_.data());
-      LookUpMultipleScattering(n, multiple_scattering);
-      return;
-    }
+    MultipleScatteringColumns(n, r_ * mu_s, nu, t_.data(), inverse_r_.data(), multiple_scattering_->width - 1,
+                              multiple_scattering_column_.data());
+    BlendMultipleScattering(n);
+    glm::vec4 sum(0.0f);
+    for (int i = 0; i < n; ++i) sum += blended_[i] * weights[i];
+    return sum;
+  }
+
+  // For the sun at zenith cosine mu_s and nu = cos(ray direction, sun): the sum over the samples
+  // of T_i (rayleigh[i] rayleigh_phase + mie[i] mie_phase) [+ Psi_i scattering[i]], T_i the
+  // transmittance to the sun (0 in the planet's shadow) and Psi_i the multiple-scattering table
+  // there, in float like the tables (the weights' w is 0). Without `scattering` (null) the
+  // multiple-scattering table is not read. Not thread-safe (scratch arrays); one instance per thread.
+  glm::vec4 SumSunlight(double mu_s, double nu, const glm::vec4* rayleigh, float rayleigh_phase, const glm::vec4* mie,
+                        float mie_phase, const glm::vec4* scattering) const {
+    const int n = static_cast<int>(t_.size());
     const double t_columns = transmittance_.width - 1;
     const double m_columns = multiple_scattering_ != nullptr ? multiple_scattering_->width - 1 : 0.0;
     SunColumns(n, r_ * mu_s, nu, t_.data(), r_i_.data(), inverse_r_.data(), c_ground_.data(), c_top_.data(),
                d_min_.data(), inverse_range_.data(), t_columns, m_columns, lit_.data(), sun_column_.data(),
                multiple_scattering_column_.data());
-    if (sun_transmittance != nullptr) {
-      for (int i = 0; i < n; ++i) {
-        sun_transmittance[i] = lit_[i] * vec3(glm::vec3(Blend(transmittance_, transmittance_rows_[i], sun_column_[i])));
-      }
+    glm::vec4 sum(0.0f);
+    for (int i = 0; i < n; ++i) {
+      const glm::vec4 sun = Blend(transmittance_, transmittance_rows_[i], sun_column_[i]) * static_cast<float>(lit_[i]);
+      sum += sun * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase);
     }
-    if (multiple_scattering != nullptr) LookUpMultipleScattering(n, multiple_scattering);
+    if (scattering != nullptr) {
+      BlendMultipleScattering(n);
+      for (int i = 0; i < n; ++i) sum += blended_[i] * scattering[i];
+    }
+    return sum;
   }
 
  private:
@@ -298,16 +309,15 @@ class SunLookupsAlongRay {
     rows.push_back(row);
   }
 
-  // The multiple-scattering table at the first n samples (their columns already found): blended
-  // and decoded in float, like the table itself.
-  void LookUpMultipleScattering(int n, vec3* values) const {
+  // The multiple-scattering table at the first n samples (their columns already found), blended
+  // and decoded in float like the table itself, into blended_ (the padding lane holds 1).
+  void BlendMultipleScattering(int n) const {
     blended_.resize(n);
     for (int i = 0; i < n; ++i) {
       blended_[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
     }
     static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "vec4 arrays are packed floats");
-    DecodeMultipleScattering(4 * n, &blended_[0].x);  // the padding lane decodes 0 to 1, unused
-    for (int i = 0; i < n; ++i) values[i] = vec3(glm::vec3(blended_[i]));
+    DecodeMultipleScattering(4 * n, &blended_[0].x);
   }
 
   // GL_LINEAR at texel coordinate s (texel centres at integers, s in [0, width - 1]) of `row`, in
@@ -337,9 +347,10 @@ struct MultipleScatteringRay {
   vec3 direction;
   double weight;  // how many directions of the set this one stands for (2 for a mirrored pair)
   SunLookupsAlongRay samples;
-  std::vector<vec3> rayleigh_weight;  // throughput x step integral x Rayleigh scattering
-  std::vector<vec3> mie_weight;       // throughput x step integral x Mie scattering
-  std::vector<vec3> scattering_weight;  // their sum (the gathered orders' isotropic phase)
+  // In float, w = 0:
+  std::vector<glm::vec4> rayleigh_weight;  // throughput x step integral x Rayleigh scattering
+  std::vector<glm::vec4> mie_weight;       // throughput x step integral x Mie scattering
+  std::vector<glm::vec4> scattering_weight;  // their sum (the gathered orders' isotropic phase)
   bool hits_ground;
   double t_max;
   vec3 ground_throughput;
@@ -464,9 +475,11 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
         const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
         const vec3 step_integral = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
         ray.samples.AddSample(t, r_i);
-        ray.rayleigh_weight.push_back(step_integral * medium.rayleigh_scattering);
-        ray.mie_weight.push_back(step_integral * medium.mie_scattering);
-        ray.scattering_weight.push_back(ray.rayleigh_weight.back() + ray.mie_weight.back());
+        const vec3 rayleigh_weight = step_integral * medium.rayleigh_scattering;
+        const vec3 mie_weight = step_integral * medium.mie_scattering;
+        ray.rayleigh_weight.emplace_back(glm::vec3(rayleigh_weight), 0.0f);
+        ray.mie_weight.emplace_back(glm::vec3(mie_weight), 0.0f);
+        ray.scattering_weight.emplace_back(glm::vec3(rayleigh_weight + mie_weight), 0.0f);
         transfer += step_integral * medium.scattering;
         throughput *= step_transmittance;
       }
@@ -489,7 +502,6 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
   const auto gather_row = [&](int n, int y, const std::vector<MultipleScatteringRay>& rays, int count) {
     double r, unused_mu_s;
     shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(0.5, y + 0.5) / vec2(size), r, unused_mu_s);
-    std::vector<vec3> sun_transmittance(sample_count), psi(sample_count);
     for (int x = 0; x < size.x; ++x) {
       double unused_r, mu_s;
       shared::GetRMuSFromMultiScatteringTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), unused_r, mu_s);
@@ -497,23 +509,22 @@ void ComputeMultipleScatteringTable(const shared::AtmosphereParameters& a, const
       vec3 luminance_sum(0.0), irradiance_sum(0.0);
       for (const MultipleScatteringRay& ray : rays) {
         const double nu = glm::dot(ray.direction, sun);
-        ray.samples.Evaluate(mu_s, nu, n == 1 ? sun_transmittance.data() : nullptr, n == 1 ? nullptr : psi.data());
         vec3 luminance(0.0);
         const double mu_s_g = ray.hits_ground ? shared::ClampCosine((r * mu_s + ray.t_max * nu) / a.bottom_radius) : 0.0;
         if (n == 1) {
           // The first scattering's phase, constant along the ray (as in shared::IntegrateMultiScatteringRay).
           const double rayleigh_phase = media_phase ? shared::GetRayleighPhase(a, nu) : shared::IsotropicPhaseFunction();
           const double mie_phase = media_phase ? shared::GetMiePhase(a, nu) : shared::IsotropicPhaseFunction();
-          for (std::size_t i = 0; i < ray.samples.size(); ++i) {
-            luminance += sun_transmittance[i] * (ray.rayleigh_weight[i] * rayleigh_phase + ray.mie_weight[i] * mie_phase);
-          }
+          luminance = vec3(glm::vec3(ray.samples.SumSunlight(mu_s, nu, ray.rayleigh_weight.data(),
+                                                             static_cast<float>(rayleigh_phase), ray.mie_weight.data(),
+                                                             static_cast<float>(mie_phase), nullptr)));
           if (ray.hits_ground) {
             luminance += ray.ground_throughput * shared::GetTransmittanceToSun(a, transmittance, a.bottom_radius, mu_s_g) *
                          a.ground_albedo * (std::max(mu_s_g, 0.0) / shared::kPi);
           }
         } else {
           // As shared::IntegrateMultiScatteringGatherRay.
-          for (std::size_t i = 0; i < ray.samples.size(); ++i) luminance += psi[i] * ray.scattering_weight[i];
+          luminance = vec3(glm::vec3(ray.samples.SumMultipleScattering(mu_s, nu, ray.scattering_weight.data())));
           if (ray.hits_ground) {
             luminance += ray.ground_throughput * a.ground_albedo / shared::kPi *
                          shared::GetGatheredGroundIrradiance(ground_irradiance, mu_s_g);
@@ -589,9 +600,9 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, hits_ground);
     // Steps as in shared::IntegrateScatteredRadiance.
     std::vector<double> t(sample_count), r_i(sample_count);
-    std::vector<vec3> weight(sample_count), rayleigh(sample_count), mie(sample_count), scattering(sample_count);
+    // The step weight times each medium's scattering, in float (w = 0).
+    std::vector<glm::vec4> rayleigh(sample_count), mie(sample_count), scattering(sample_count);
     SunLookupsAlongRay samples(a, padded_transmittance, &padded_multiple_scattering, r, sample_count);
-    std::vector<vec3> sun_transmittance(sample_count), multiple_scattering_at(sample_count);
     vec3 throughput(1.0);
     for (int i = 0; i < sample_count; ++i) {
       const double x_0 = double(i) / sample_count;
@@ -604,10 +615,10 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
       samples.AddSample(t[i], r_i[i]);
       const shared::MediumSample medium = shared::SampleMedium(a, r_i[i]);
       const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
-      weight[i] = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-      rayleigh[i] = medium.rayleigh_scattering;
-      mie[i] = medium.mie_scattering;
-      scattering[i] = medium.scattering;
+      const vec3 weight = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+      rayleigh[i] = glm::vec4(glm::vec3(weight * medium.rayleigh_scattering), 0.0f);
+      mie[i] = glm::vec4(glm::vec3(weight * medium.mie_scattering), 0.0f);
+      scattering[i] = glm::vec4(glm::vec3(weight * medium.scattering), 0.0f);
       throughput *= step_transmittance;
     }
     // Column x and column (width - x) see azimuths phi and 2 pi - phi: the same nu.
@@ -618,15 +629,10 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
                         mu * mu_s;
       const double rayleigh_phase = shared::GetRayleighPhase(a, nu);
       const double mie_phase = shared::GetMiePhase(a, nu);
-      samples.Evaluate(mu_s, nu, sun_transmittance.data(), multiple_scattering_at.data());
-      vec3 radiance(0.0);
-      for (int i = 0; i < sample_count; ++i) {
-        const vec3 source = sun_transmittance[i] * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase) +
-                            multiple_scattering_at[i] * scattering[i];
-        radiance += weight[i] * source;
-      }
-      table.at(x, y) = glm::vec3(radiance);
-      table.at((size.x - x) % size.x, y) = glm::vec3(radiance);
+      const glm::vec3 radiance(samples.SumSunlight(mu_s, nu, rayleigh.data(), static_cast<float>(rayleigh_phase),
+                                                   mie.data(), static_cast<float>(mie_phase), scattering.data()));
+      table.at(x, y) = radiance;
+      table.at((size.x - x) % size.x, y) = radiance;
     }
   });
 }
