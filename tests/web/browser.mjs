@@ -26,8 +26,10 @@ const kTypes = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/j
                  '.glsl': 'text/plain', '.css': 'text/css', '.json': 'application/json' };
 
 // Serves `root` (symbolic links followed, nothing above root) on 127.0.0.1; a POST to /NAME
-// calls posted(NAME, headers, body Buffer). A POST to /error is the page's uncaught error.
-export async function startServer(root, posted) {
+// calls posted(NAME, headers, body Buffer). A POST to /error is the page's uncaught error. With
+// `isolated`, every answer carries COOP and COEP, which make the page cross-origin isolated (shared
+// memory, hence the threaded module: docs/web.md).
+export async function startServer(root, posted, { isolated = false } = {}) {
   const base = fs.realpathSync(root);
   const server = http.createServer((request, response) => {
     const url = new URL(request.url, 'http://127.0.0.1');
@@ -55,6 +57,10 @@ export async function startServer(root, posted) {
     }
     response.setHeader('content-type', kTypes[path.extname(file)] ?? 'application/octet-stream');
     response.setHeader('cache-control', 'no-store');
+    if (isolated) {
+      response.setHeader('cross-origin-opener-policy', 'same-origin');
+      response.setHeader('cross-origin-embedder-policy', 'require-corp');
+    }
     fs.createReadStream(file).pipe(response);
   });
   await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));

@@ -30,6 +30,10 @@ if (!siteDir || !cli) {
   process.exit(2);
 }
 const chromium = findChromium();
+// Served cross-origin isolated, the page runs the threaded module (docs/web.md); with
+// ATMO_WEB_TEST_ISOLATED=0 the single-threaded one, as from a plain static server.
+const isolated = process.env.ATMO_WEB_TEST_ISOLATED !== '0';
+const expectedThreads = Math.min(Math.max(os.availableParallelism?.() ?? os.cpus().length, 1), 8);
 let waiting = null;  // {resolve, reject, result, name}
 const server = await startServer(siteDir, (name, headers, body) => {
   if (!waiting) return;
@@ -44,7 +48,7 @@ const server = await startServer(siteDir, (name, headers, body) => {
   } else if (name === 'error') {
     waiting.reject(new Error(`the page failed: ${body}`));
   }
-});
+}, { isolated });
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'atmo-web-page-'));
 
 // Headless Chromium's window holds 143 pixels of its own above the page: a window this much taller
@@ -88,6 +92,11 @@ for (const c of cases) {
   if (!(p99 <= c.p99)) fail(`p99 ${p99} > ${c.p99}`);
   if (!(offByOnePercent <= 0.01)) fail(`${100 * offByOnePercent} % of the values off by more than 1 %`);
   if (!(Math.abs(sunRatio - 1) <= c.sunEnergy)) fail(`sun energy ratio ${sunRatio}`);
+  // The module the page chose: the threaded one when isolated on a machine with cores to spare.
+  const threads = page.timings.threads;
+  if (isolated ? expectedThreads > 1 && !(threads > 1) : threads !== 1) {
+    fail(`the page's module runs ${threads} threads (served ${isolated ? '' : 'not '}cross-origin isolated)`);
+  }
   // The error map's statistics against the shipped reference, recomputed here from the native
   // library's samples of the same directions: the page must report the same numbers.
   const stats = page.timings.errorStats;

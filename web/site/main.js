@@ -81,7 +81,8 @@ async function rebuildModel(interactive = false) {
     lastModelRoundTripMs = performance.now() - start;
     modelInfo = info;
     if (state.error === '1') setTimeout(showErrorMap, 0);
-    status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms ` +
+    status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms on ` +
+                    `${info.threads} thread${info.threads > 1 ? 's' : ''} ` +
                     `(${(performance.now() - start).toFixed(0)} ms to the page)`);
     showError(null);
     ++skyViewSerial;
@@ -531,13 +532,14 @@ if (test) {
   const hazeChangeMs = performance.now() - hazeStart;
   const hazeModelMs = lastModelRoundTripMs;
   const hazeTablesMs = modelInfo.precomputeMs;
+  const hazePasses = modelInfo.passes;
   state.aod = '';
   await rebuildModel();
   await fetch('/result', {
     method: 'POST',
     headers: { 'x-width': String(width), 'x-height': String(height),
                'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs, frameMs720p,
-                                             sunChangeMs, hazeChangeMs, hazeModelMs, hazeTablesMs, lookingAroundFps: looking.fps,
+                                             sunChangeMs, hazeChangeMs, hazeModelMs, hazeTablesMs, hazePasses, threads: modelInfo.threads, lookingAroundFps: looking.fps,
                                              lookingAroundBuffer: `${looking.width}x${looking.height}`, errorStats }) },
     body: pixels,
   });

@@ -11,9 +11,11 @@
 //   {id, type: 'sampleMany', altitude, sunZenith, viewZenith, azimuth}   arrays of points: Model.sample
 //   {id, type: 'sun', date, latitude, longitude}   the sun from date and place (libnova)
 // Each answer is {id, ok: true, value} or {id, ok: false, error: the library's one-line message}.
-import createAtmo from './atmo.mjs';
+// The threaded module where the page is cross-origin isolated (its server sends COOP and COEP:
+// shared memory), the single-threaded one elsewhere; `threads` tells the page which.
+const threads = self.crossOriginIsolated ? Math.min(Math.max(navigator.hardwareConcurrency || 1, 1), 8) : 1;
+const atmoReady = import(threads > 1 ? './atmo_mt.mjs' : './atmo.mjs').then((module) => module.default());
 
-const atmoReady = createAtmo();
 let model = null;
 
 function transferables(value) {
@@ -36,8 +38,8 @@ self.onmessage = async (event) => {
       const next = new atmo.Model(event.data.name, event.data.config);
       if (model) model.delete();
       model = next;
-      value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, channels: model.channelCount,
-                topAltitude: model.topAltitude, parameterHash: model.parameterHash };
+      value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, threads, channels: model.channelCount,
+                topAltitude: model.topAltitude, parameterHash: model.parameterHash, passes: model.passTimes() };
       // With its first sky-view table, when asked: one round trip for a parameter change.
       if (event.data.skyView) value.table = model.skyView(event.data.skyView);
     } else if (type === 'sun') {

@@ -1,6 +1,5 @@
-// The part of oneTBB's blocked_range that atmo uses, for the single-threaded WebAssembly build
-// (web/CMakeLists.txt). A browser's main thread has no worker pool: every loop runs in order on
-// the calling thread, so a range is only its bounds.
+// The part of oneTBB's blocked_range that atmo uses, for the WebAssembly builds
+// (web/CMakeLists.txt): a range is only its bounds (parallel_for.h cuts it into chunks itself).
 #pragma once
 
 #include <cstddef>

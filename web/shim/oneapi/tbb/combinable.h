@@ -1,35 +1,44 @@
-// oneTBB's combinable for the single-threaded WebAssembly build (web/CMakeLists.txt): one
-// thread, one value.
+// oneTBB's combinable for the WebAssembly builds (web/CMakeLists.txt): one value per thread of
+// the loops (thread_pool.h; one in the single-threaded build).
 #pragma once
 
 #include <functional>
 #include <optional>
+#include <vector>
+
+#include "oneapi/tbb/thread_pool.h"
 
 namespace oneapi::tbb {
 
 template <typename T>
 class combinable {
  public:
-  combinable() = default;
+  combinable() : values_(detail::Concurrency()) {}
   template <typename Init>
-  explicit combinable(Init init) : init_(std::move(init)) {}
+  explicit combinable(Init init) : init_(std::move(init)), values_(detail::Concurrency()) {}
   T& local() {
-    if (!value_) value_.emplace(init_ ? init_() : T{});
-    return *value_;
+    std::optional<T>& value = values_[detail::ThreadIndex()];
+    if (!value) value.emplace(init_ ? init_() : T{});
+    return *value;
   }
   template <typename F>
   T combine(F f) {
-    (void)f;
-    return value_ ? *value_ : (init_ ? init_() : T{});
+    std::optional<T> result;
+    for (std::optional<T>& value : values_) {
+      if (value) result = result ? f(*result, *value) : *value;
+    }
+    return result ? *result : (init_ ? init_() : T{});
   }
   template <typename F>
   void combine_each(F f) {
-    if (value_) f(*value_);
+    for (std::optional<T>& value : values_) {
+      if (value) f(*value);
+    }
   }
 
  private:
   std::function<T()> init_;
-  std::optional<T> value_;
+  std::vector<std::optional<T>> values_;
 };
 
 }  // namespace oneapi::tbb
