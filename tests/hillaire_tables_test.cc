@@ -193,5 +193,24 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
   }
 }
 
+TEST(HillaireTables, GroundIrradianceEqualsPerTexelKernel) {
+  const shared::AtmosphereParameters a = testing::EarthLike();
+  const Texture2D transmittance = TransmittanceTable(a);
+  Texture2D multiple_scattering(8, 8);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, glm::dvec3(0.0), multiple_scattering);
+  for (int directions : {1, 7, 64}) {
+    for (int width : {9, 32}) {  // suns from -1 to 1: day, twilight and night texels
+      Texture2D table(width, 1);
+      ComputeGroundIrradianceTable(a, transmittance, multiple_scattering, directions, 12, table);
+      for (int x = 0; x < width; ++x) {
+        ExpectSameTexel(table.at(x, 0),
+                        shared::ComputeGroundIrradianceTexel(a, transmittance, multiple_scattering, width, x + 0.5,
+                                                             directions, 12),
+                        x, 0, 1e-5);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace atmo::cpu

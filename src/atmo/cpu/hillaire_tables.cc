@@ -356,6 +356,50 @@ struct MultipleScatteringRay {
   vec3 ground_throughput;
 };
 
+// The sun-independent part of shared::IntegrateScatteredRadianceInside along one ray (an observer
+// at radius r, zenith cosine mu, the ray t_max long): its samples' lookups and, per sample, the
+// step weight (throughput x step integral) times each medium's scattering, in float (w = 0).
+class ScatteringRay {
+ public:
+  ScatteringRay(const shared::AtmosphereParameters& a, const PaddedTable& transmittance,
+                const PaddedTable& multiple_scattering, double r, double mu, double t_max, int sample_count)
+      : samples_(a, transmittance, &multiple_scattering, r, sample_count) {
+    rayleigh_.reserve(sample_count);
+    mie_.reserve(sample_count);
+    scattering_.reserve(sample_count);
+    vec3 throughput(1.0);
+    for (int i = 0; i < sample_count; ++i) {
+      // Steps as in shared::IntegrateScatteredRadianceInside.
+      const double x_0 = double(i) / sample_count;
+      const double x_1 = double(i + 1) / sample_count;
+      const double t_0 = t_max * x_0 * x_0;
+      const double t_1 = t_max * x_1 * x_1;
+      const double dt = t_1 - t_0;
+      const double t = 0.5 * (t_0 + t_1);
+      const double r_i = std::sqrt(t * t + 2.0 * r * mu * t + r * r);
+      samples_.AddSample(t, r_i);
+      const shared::MediumSample medium = shared::SampleMedium(a, r_i);
+      const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
+      const vec3 weight = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
+      rayleigh_.emplace_back(glm::vec3(weight * medium.rayleigh_scattering), 0.0f);
+      mie_.emplace_back(glm::vec3(weight * medium.mie_scattering), 0.0f);
+      scattering_.emplace_back(glm::vec3(weight * medium.scattering), 0.0f);
+      throughput *= step_transmittance;
+    }
+  }
+
+  // The radiance scattered towards the observer for a sun at zenith cosine mu_s, nu = cos(ray
+  // direction, sun). Not thread-safe (SunLookupsAlongRay's scratch arrays).
+  glm::vec4 Radiance(const shared::AtmosphereParameters& a, double mu_s, double nu) const {
+    return samples_.SumSunlight(mu_s, nu, rayleigh_.data(), static_cast<float>(shared::GetRayleighPhase(a, nu)),
+                                mie_.data(), static_cast<float>(shared::GetMiePhase(a, nu)), scattering_.data());
+  }
+
+ private:
+  SunLookupsAlongRay samples_;
+  std::vector<glm::vec4> rayleigh_, mie_, scattering_;
+};
+
 }  // namespace
 
 void ComputeTransmittanceTable(const shared::AtmosphereParameters& a, int sample_count, shared::Texture2D& table) {
@@ -598,43 +642,59 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& a, const shared::Te
     // The ground half of the rows holds the rays that meet the ground (as in shared::ComputeSkyViewTexel).
     const bool hits_ground = 2 * y >= size.y;
     const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, r, mu, hits_ground);
-    // Steps as in shared::IntegrateScatteredRadiance.
-    std::vector<double> t(sample_count), r_i(sample_count);
-    // The step weight times each medium's scattering, in float (w = 0).
-    std::vector<glm::vec4> rayleigh(sample_count), mie(sample_count), scattering(sample_count);
-    SunLookupsAlongRay samples(a, padded_transmittance, &padded_multiple_scattering, r, sample_count);
-    vec3 throughput(1.0);
-    for (int i = 0; i < sample_count; ++i) {
-      const double x_0 = double(i) / sample_count;
-      const double x_1 = double(i + 1) / sample_count;
-      const double t_0 = t_max * x_0 * x_0;
-      const double t_1 = t_max * x_1 * x_1;
-      const double dt = t_1 - t_0;
-      t[i] = 0.5 * (t_0 + t_1);
-      r_i[i] = std::sqrt(t[i] * t[i] + 2.0 * r * mu * t[i] + r * r);
-      samples.AddSample(t[i], r_i[i]);
-      const shared::MediumSample medium = shared::SampleMedium(a, r_i[i]);
-      const vec3 step_transmittance = glm::exp(-medium.extinction * dt);
-      const vec3 weight = throughput * shared::IntegrateStep(medium.extinction, step_transmittance, dt);
-      rayleigh[i] = glm::vec4(glm::vec3(weight * medium.rayleigh_scattering), 0.0f);
-      mie[i] = glm::vec4(glm::vec3(weight * medium.mie_scattering), 0.0f);
-      scattering[i] = glm::vec4(glm::vec3(weight * medium.scattering), 0.0f);
-      throughput *= step_transmittance;
-    }
+    const ScatteringRay ray(a, padded_transmittance, padded_multiple_scattering, r, mu, t_max, sample_count);
     // Column x and column (width - x) see azimuths phi and 2 pi - phi: the same nu.
     for (int x = 0; 2 * x <= size.x; ++x) {
       double unused_mu, azimuth;
       shared::GetViewAnglesFromSkyViewTextureUv(a, size, r, vec2(x + 0.5, y + 0.5) / vec2(size), unused_mu, azimuth);
       const double nu = shared::SafeSqrt(1.0 - mu * mu) * shared::SafeSqrt(1.0 - mu_s * mu_s) * std::cos(azimuth) +
                         mu * mu_s;
-      const double rayleigh_phase = shared::GetRayleighPhase(a, nu);
-      const double mie_phase = shared::GetMiePhase(a, nu);
-      const glm::vec3 radiance(samples.SumSunlight(mu_s, nu, rayleigh.data(), static_cast<float>(rayleigh_phase),
-                                                   mie.data(), static_cast<float>(mie_phase), scattering.data()));
+      const glm::vec3 radiance(ray.Radiance(a, mu_s, nu));
       table.at(x, y) = radiance;
       table.at((size.x - x) % size.x, y) = radiance;
     }
   });
+}
+
+void ComputeGroundIrradianceTable(const shared::AtmosphereParameters& a, const shared::Texture2D& transmittance,
+                                  const shared::Texture2D& multiple_scattering, int direction_count, int sample_count,
+                                  shared::Texture2D& table) {
+  const PaddedTable padded_transmittance(transmittance);
+  const PaddedTable padded_multiple_scattering(multiple_scattering);
+  const int width = table.width;
+  std::vector<double> mu_s(width);
+  for (int x = 0; x < width; ++x) mu_s[x] = shared::GetGroundIrradianceTexelMuS(width, x + 0.5);
+  // The directions of shared::ComputeGroundIrradianceTerm (a Fibonacci lattice of the upper
+  // hemisphere): each one's ray from the ground, which no sun changes, is marched once and gives
+  // the term of every texel. In parallel over directions, a block at a time; the terms are then
+  // added per texel in the kernel's order.
+  constexpr int kBlock = 256;
+  const double golden_angle = shared::kPi * (3.0 - std::sqrt(5.0));
+  std::vector<vec3> sums(width, vec3(0.0)), terms;
+  for (int first = 0; first < direction_count; first += kBlock) {
+    const int count = std::min(kBlock, direction_count - first);
+    terms.assign(static_cast<std::size_t>(count) * width, vec3(0.0));
+    oneapi::tbb::parallel_for(0, count, [&](int j) {
+      const int k = first + j;
+      const double z = 1.0 - (k + 0.5) / direction_count;
+      const double phi = k * golden_angle;
+      const double s = shared::SafeSqrt(1.0 - z * z);
+      const vec3 direction(s * std::cos(phi), s * std::sin(phi), z);
+      // As shared::IntegrateScatteredRadiance from the ground: inside, a ray that never meets it.
+      const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, a.bottom_radius, z, false);
+      const ScatteringRay ray(a, padded_transmittance, padded_multiple_scattering, a.bottom_radius, z, t_max,
+                              sample_count);
+      for (int x = 0; x < width; ++x) {
+        const vec3 sun(shared::SafeSqrt(1.0 - mu_s[x] * mu_s[x]), 0.0, mu_s[x]);
+        terms[static_cast<std::size_t>(j) * width + x] =
+            z * vec3(glm::vec3(ray.Radiance(a, mu_s[x], glm::dot(direction, sun))));
+      }
+    });
+    for (int j = 0; j < count; ++j) {
+      for (int x = 0; x < width; ++x) sums[x] += terms[static_cast<std::size_t>(j) * width + x];
+    }
+  }
+  for (int x = 0; x < width; ++x) table.at(x, 0) = glm::vec3(shared::GetGroundIrradianceFromSum(sums[x], direction_count));
 }
 
 }  // namespace atmo::cpu

@@ -42,4 +42,11 @@ void ComputeSkyViewTable(const shared::AtmosphereParameters& atmosphere, const s
                          const shared::Texture2D& multiple_scattering, double r, double mu_s, int sample_count,
                          shared::Texture2D& table);
 
+// Fills `table` (already sized, one row) like shared::ComputeGroundIrradianceTexel: each ray of the
+// direction set from the ground is marched once, and each texel (a sun zenith) only sums its
+// sun-dependent part; in parallel over directions.
+void ComputeGroundIrradianceTable(const shared::AtmosphereParameters& atmosphere, const shared::Texture2D& transmittance,
+                                  const shared::Texture2D& multiple_scattering, int direction_count, int sample_count,
+                                  shared::Texture2D& table);
+
 }  // namespace atmo::cpu

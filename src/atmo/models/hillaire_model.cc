@@ -135,11 +135,9 @@ void HillaireModel::Precompute() {
 void HillaireModel::ComputeGroundIrradianceLut(Batch& batch) const {
   const int width = settings_.ground_irradiance_lut;
   batch.ground_irradiance = shared::Texture2D(width, 1);
-  oneapi::tbb::parallel_for(0, width, [&](int x) {
-    batch.ground_irradiance.at(x, 0) = glm::vec3(shared::ComputeGroundIrradianceTexel(
-        batch.atmosphere, batch.transmittance, batch.multiple_scattering, width, x + 0.5,
-        settings_.ground_irradiance_directions, settings_.ground_irradiance_samples));
-  });
+  cpu::ComputeGroundIrradianceTable(batch.atmosphere, batch.transmittance, batch.multiple_scattering,
+                                    settings_.ground_irradiance_directions, settings_.ground_irradiance_samples,
+                                    batch.ground_irradiance);
 }
 
 void HillaireModel::AddGroundView(const Batch& batch, double r, double mu_s, shared::Texture2D& table) const {
