@@ -169,11 +169,17 @@ TEST(HillaireTables, GatheredOrdersConverge) {
   EXPECT_LT(last, 0.01);
 }
 
+// The small multiple-scattering table that the sky-view and ground-irradiance tables read here.
+Texture2D SmallMultipleScatteringTable(const shared::AtmosphereParameters& a, const Texture2D& transmittance) {
+  Texture2D table(8, 8);
+  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, glm::dvec3(0.0), table);
+  return table;
+}
+
 TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
   const shared::AtmosphereParameters a = testing::EarthLike();
   const Texture2D transmittance = TransmittanceTable(a);
-  Texture2D multiple_scattering(8, 8);
-  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, glm::dvec3(0.0), multiple_scattering);
+  const Texture2D multiple_scattering = SmallMultipleScatteringTable(a, transmittance);
   for (double altitude : {0.0, 1500.0, 60e3}) {
     for (double mu_s : {0.9, 0.05, -0.2}) {
       for (int width : {12, 13}) {  // even and odd: the mirrored columns
@@ -196,8 +202,7 @@ TEST(HillaireTables, SkyViewRowsEqualPerTexelKernel) {
 TEST(HillaireTables, GroundIrradianceEqualsPerTexelKernel) {
   const shared::AtmosphereParameters a = testing::EarthLike();
   const Texture2D transmittance = TransmittanceTable(a);
-  Texture2D multiple_scattering(8, 8);
-  ComputeMultipleScatteringTable(a, transmittance, 16, 10, false, glm::dvec3(0.0), multiple_scattering);
+  const Texture2D multiple_scattering = SmallMultipleScatteringTable(a, transmittance);
   for (int directions : {1, 7, 64}) {
     for (int width : {9, 32}) {  // suns from -1 to 1: day, twilight and night texels
       Texture2D table(width, 1);

@@ -57,26 +57,32 @@ void EvaluateLayer(const Layer& layer, const double* altitude, int n, double* ou
   }
 }
 
-// Returns sum_j weight_j * density(altitude_j) for one profile, with the formula of
+// Writes density(altitude_j) for j < n, for one profile, with the formula of
 // shared::GetProfileDensity (altitudes are >= 0, so a lower layer of width 0 never applies). The
 // layers are evaluated in loops without branches, which the compiler vectorises (a select or
-// clamp there keeps it from using the vector exp); selection, clamp and sum follow.
-double IntegrateProfile(const shared::DensityProfile& profile, const double* altitude, const double* weight, int n,
-                        double* lower, double* upper) {
+// clamp there keeps it from using the vector exp); selection and clamp follow.
+void ProfileDensities(const shared::DensityProfile& profile, const double* altitude, int n, double* lower,
+                      double* __restrict density) {
   const double width = profile.layers[0].width;
-  EvaluateLayer(PrepareLayer(profile.layers[1]), altitude, n, upper);
-  double sum = 0.0;
+  EvaluateLayer(PrepareLayer(profile.layers[1]), altitude, n, density);
   if (width <= 0.0) {
-#pragma omp simd reduction(+ : sum)
-    for (int j = 0; j < n; ++j) sum += weight[j] * std::min(std::max(upper[j], 0.0), 1.0);
-    return sum;
+#pragma omp simd
+    for (int j = 0; j < n; ++j) density[j] = std::min(std::max(density[j], 0.0), 1.0);
+    return;
   }
   EvaluateLayer(PrepareLayer(profile.layers[0]), altitude, n, lower);
-#pragma omp simd reduction(+ : sum)
+#pragma omp simd
   for (int j = 0; j < n; ++j) {
-    const double d = altitude[j] < width ? lower[j] : upper[j];
-    sum += weight[j] * std::min(std::max(d, 0.0), 1.0);
+    const double d = altitude[j] < width ? lower[j] : density[j];
+    density[j] = std::min(std::max(d, 0.0), 1.0);
   }
+}
+
+// sum_j weight_j value_j for j < n.
+double WeightedSum(const double* __restrict weight, const double* __restrict value, int n) {
+  double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+  for (int j = 0; j < n; ++j) sum += weight[j] * value[j];
   return sum;
 }
 
@@ -98,13 +104,14 @@ class TabulatedDensities {
     }
   }
 
-  // sum_j weight_j * densities(altitude_j), with scratch space for n samples.
-  vec4 Integrate(const double* altitude, const double* weight, int n, std::vector<double>& fraction,
-                 std::vector<int>& index, std::vector<double>& value) const {
+  // Whether medium m (0..3) has density somewhere in the table (water vapour may not).
+  bool Present(int m) const { return present_[m]; }
+
+  // The knot interval (index) and the fraction within it of each of n altitudes, for Densities.
+  void Locate(const double* altitude, int n, std::vector<double>& fraction, std::vector<int>& index) const {
     constexpr int kLast = shared::kDensityTableSize - 1;
     fraction.resize(n);
     index.resize(n);
-    value.resize(n);
     const double inverse_top = 1.0 / a_.density_table_top;
     const double knot_scale = a_.density_table_top / double(kLast * kLast);
     double* __restrict f = fraction.data();
@@ -117,29 +124,25 @@ class TabulatedDensities {
       f[j] = std::min(std::max((altitude[j] - h_0) / (h_1 - h_0), 0.0), 1.0);
       index[j] = static_cast<int>(lower);
     }
-    vec4 sum(0.0);
-    for (int m = 0; m < 4; ++m) {
-      if (!present_[m]) continue;  // a medium absent from the table (no water vapour): 0
-      double* __restrict v = value.data();
-      for (int j = 0; j < n; ++j) {
-        const double l_0 = a_.density_table[index[j]][m];
-        v[j] = l_0 + (a_.density_table[index[j] + 1][m] - l_0) * f[j];
-      }
-#pragma omp simd
-      for (int j = 0; j < n; ++j) v[j] = exp(v[j]);
-      if (any_linear_[m]) {
-        for (int j = 0; j < n; ++j) {
-          if (!linear_[m][index[j]]) continue;
-          const double d_0 = std::exp(a_.density_table[index[j]][m]);
-          v[j] = d_0 + (std::exp(a_.density_table[index[j] + 1][m]) - d_0) * f[j];
-        }
-      }
-      double total = 0.0;
-#pragma omp simd reduction(+ : total)
-      for (int j = 0; j < n; ++j) total += weight[j] * v[j];
-      sum[m] = total;
+  }
+
+  // Writes medium m's density at the n altitudes that Locate placed into `density`.
+  void Densities(int m, const std::vector<double>& fraction, const std::vector<int>& index, int n,
+                 double* __restrict density) const {
+    const double* __restrict f = fraction.data();
+    for (int j = 0; j < n; ++j) {
+      const double l_0 = a_.density_table[index[j]][m];
+      density[j] = l_0 + (a_.density_table[index[j] + 1][m] - l_0) * f[j];
     }
-    return sum;
+#pragma omp simd
+    for (int j = 0; j < n; ++j) density[j] = exp(density[j]);
+    if (any_linear_[m]) {
+      for (int j = 0; j < n; ++j) {
+        if (!linear_[m][index[j]]) continue;
+        const double d_0 = std::exp(a_.density_table[index[j]][m]);
+        density[j] = d_0 + (std::exp(a_.density_table[index[j] + 1][m]) - d_0) * f[j];
+      }
+    }
   }
 
  private:
@@ -412,44 +415,67 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
   const shared::AtmosphereParameters& a = batches.front();  // the geometry and profiles of all
   const shared::ivec2 size(tables.front()->width, tables.front()->height);
   const TabulatedDensities tabulated(a);
+  const int n = sample_count + 1;  // samples per texel
+  // The samples of a block of texels in one array (texel k's at [k n, (k + 1) n)), so that each
+  // density profile runs in one long vectorised loop per block rather than a short one per texel;
+  // a block of 16 texels of 41 samples keeps the arrays in the core's caches.
+  constexpr int kBlockTexels = 16;
   ForEachRow(size.y, [&](int y) {
-    std::vector<double> altitude(sample_count + 1);
-    std::vector<double> weight(sample_count + 1);
-    std::vector<double> lower(sample_count + 1);
-    std::vector<double> upper(sample_count + 1);
-    std::vector<double> fraction, value;
+    const int block_samples = std::min(kBlockTexels, size.x) * n;
+    std::vector<double> altitude(block_samples), weight(block_samples), lower(block_samples), density(block_samples);
+    std::vector<double> fraction;
     std::vector<int> index;
-    for (int x = 0; x < size.x; ++x) {
-      double r, mu;
-      shared::GetRMuFromTransmittanceTextureUv(a, size, vec2(x + 0.5, y + 0.5) / vec2(size), r, mu);
-      const double d = shared::DistanceToTopAtmosphereBoundary(a, r, mu);
-      // The sample points and weights of shared::ComputeOpticalDepthToTopAtmosphereBoundary.
-      const double t_low = std::clamp(-r * mu, 0.0, d);
-      const double x_0 = -std::sqrt(t_low);
-      const double dx = (std::sqrt(d - t_low) - x_0) / sample_count;
-      const int n = sample_count + 1;
+    std::vector<vec4> integrals(kBlockTexels);
+    for (int x_0 = 0; x_0 < size.x; x_0 += kBlockTexels) {
+      const int texels = std::min(kBlockTexels, size.x - x_0);
+      const int count = texels * n;
+      for (int k = 0; k < texels; ++k) {
+        double r, mu;
+        shared::GetRMuFromTransmittanceTextureUv(a, size, vec2(x_0 + k + 0.5, y + 0.5) / vec2(size), r, mu);
+        const double d = shared::DistanceToTopAtmosphereBoundary(a, r, mu);
+        // The sample points and weights of shared::ComputeOpticalDepthToTopAtmosphereBoundary.
+        const double t_low = std::clamp(-r * mu, 0.0, d);
+        const double s_0 = -std::sqrt(t_low);
+        const double ds = (std::sqrt(d - t_low) - s_0) / sample_count;
+        double* __restrict h = altitude.data() + static_cast<std::size_t>(k) * n;
+        double* __restrict w = weight.data() + static_cast<std::size_t>(k) * n;
 #pragma omp simd
-      for (int i = 0; i < n; ++i) {
-        const double x = x_0 + i * dx;
-        const double t = t_low + x * std::abs(x);
-        const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
-        altitude[i] = std::max(r_i - a.bottom_radius, 0.0);
-        weight[i] = 2.0 * std::abs(x) * dx;
+        for (int i = 0; i < n; ++i) {
+          const double s = s_0 + i * ds;
+          const double t = t_low + s * std::abs(s);
+          const double r_i = std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+          h[i] = std::max(r_i - a.bottom_radius, 0.0);
+          w[i] = 2.0 * std::abs(s) * ds;
+        }
+        w[0] *= 0.5;
+        w[sample_count] *= 0.5;
       }
-      weight[0] *= 0.5;
-      weight[sample_count] *= 0.5;
-      auto integrate = [&](const shared::DensityProfile& profile) {
-        return IntegrateProfile(profile, altitude.data(), weight.data(), n, lower.data(), upper.data());
+      // The density integrals of each texel, which do not depend on the channels: once for every batch.
+      std::fill(integrals.begin(), integrals.end(), vec4(0.0));
+      const auto integrate = [&](int m) {
+        for (int k = 0; k < texels; ++k) {
+          const std::size_t first = static_cast<std::size_t>(k) * n;
+          integrals[k][m] = WeightedSum(weight.data() + first, density.data() + first, n);
+        }
       };
-      // The density integrals do not depend on the channels: once per texel for every batch.
-      vec4 integrals(0.0);
       if (a.density_table_enabled) {
-        integrals = tabulated.Integrate(altitude.data(), weight.data(), n, fraction, index, value);
+        tabulated.Locate(altitude.data(), count, fraction, index);
+        for (int m = 0; m < 4; ++m) {
+          if (!tabulated.Present(m)) continue;  // a medium absent from the table (no water vapour): 0
+          tabulated.Densities(m, fraction, index, count, density.data());
+          integrate(m);
+        }
       } else {
-        integrals = vec4(integrate(a.rayleigh_density), integrate(a.mie_density), integrate(a.absorption_density), 0.0);
+        const shared::DensityProfile* profiles[] = {&a.rayleigh_density, &a.mie_density, &a.absorption_density};
+        for (int m = 0; m < 3; ++m) {
+          ProfileDensities(*profiles[m], altitude.data(), count, lower.data(), density.data());
+          integrate(m);
+        }
       }
-      for (std::size_t b = 0; b < batches.size(); ++b) {
-        tables[b]->at(x, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(batches[b], integrals)));
+      for (int k = 0; k < texels; ++k) {
+        for (std::size_t b = 0; b < batches.size(); ++b) {
+          tables[b]->at(x_0 + k, y) = glm::vec3(glm::exp(-shared::GetExtinctionFromDensities(batches[b], integrals[k])));
+        }
       }
     }
   });
