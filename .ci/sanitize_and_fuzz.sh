@@ -42,6 +42,11 @@ heavy+='|Moon\.MoonlitSkyAtKrisciunasAndSchaefersSite|PhaseTable\.EveryModelAgre
 heavy+='|DocsTest\.EveryReadmeExampleRuns)$'
 ctest --test-dir build-asan --output-on-failure -j2 -LE '^(gl|web)$' -E "$heavy"
 ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --test-dir build-asan --output-on-failure -j2 -L '^gl$'
+# The threaded WebAssembly build's loops (web/shim) under ThreadSanitizer, natively on four threads,
+# repeated: a race in the pool's hand-over between loops shows within a few repeats.
+clang++ -std=c++20 -O1 -g -fsanitize=thread -Iweb/shim -DATMO_WEB_SHIM_THREADS=4 \
+  tests/web_shim/thread_pool_test.cc -o build-asan/web_shim_tsan -lgtest -lgtest_main -pthread
+TSAN_OPTIONS="halt_on_error=1" ./build-asan/web_shim_tsan --gtest_repeat=20 --gtest_brief=1
 echo "ci: sanitizer tests in $(( $(date +%s) - start )) s"
 
 start=$(date +%s)

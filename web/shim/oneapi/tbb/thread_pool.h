@@ -1,6 +1,7 @@
 // The threads behind the shim's oneTBB loops in the threaded WebAssembly build (web/CMakeLists.txt,
 // atmo_mt; Emscripten's pthreads, which need a cross-origin isolated page). In the single-threaded
 // build (no __EMSCRIPTEN_PTHREADS__) there is no pool: every loop runs on the calling thread.
+// tests/web_shim/thread_pool_test.cc builds it natively with ATMO_WEB_SHIM_THREADS=N (N threads).
 //
 // One pool of min(cores, 8) - 1 threads, made on first use from Emscripten's prewarmed workers
 // (-sPTHREAD_POOL_SIZE, the same count: a thread beyond them would start only after the caller
@@ -9,7 +10,8 @@
 // small). An exception from a chunk reaches the caller after every chunk has ended.
 #pragma once
 
-#if defined(__EMSCRIPTEN_PTHREADS__)
+#if defined(__EMSCRIPTEN_PTHREADS__) || defined(ATMO_WEB_SHIM_THREADS)
+#define ATMO_WEB_SHIM_POOL 1
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -22,7 +24,7 @@
 
 namespace oneapi::tbb::detail {
 
-#if defined(__EMSCRIPTEN_PTHREADS__)
+#if defined(ATMO_WEB_SHIM_POOL)
 
 class ThreadPool {
  public:
@@ -74,8 +76,11 @@ class ThreadPool {
 
  private:
   ThreadPool() {
-    const int cores = static_cast<int>(std::thread::hardware_concurrency());
-    const int threads = std::clamp(cores, 1, 8) - 1;
+#if defined(ATMO_WEB_SHIM_THREADS)
+    const int threads = ATMO_WEB_SHIM_THREADS - 1;
+#else
+    const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 8) - 1;
+#endif
     for (int i = 0; i < threads; ++i) workers_.emplace_back([this, i] { Serve(i + 1); });
   }
 
