@@ -15,7 +15,9 @@
 // for the Sun's 0.53 degrees that is k = 253 at 256 px across an equirect, and the error of the
 // area estimate is ~0.2 %. A disc larger than 16 pixels across is smooth inside: pixels whose
 // every point is on it take 2 x 2 strata at their centres (the midpoint rule), those on its edge
-// k x k jittered strata.
+// k x k jittered strata. A disc smaller than a pixel across is sampled instead of the pixels: 96 x
+// 96 cells of equal solid angle over the disc, each adding its L dOmega to the pixel it falls in
+// (the pixels' strata would cost up to 1024^2 samples a pixel there).
 #pragma once
 
 #include <functional>
