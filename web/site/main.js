@@ -539,7 +539,8 @@ if (test) {
     method: 'POST',
     headers: { 'x-width': String(width), 'x-height': String(height),
                'x-timings': JSON.stringify({ tablesMs: modelInfo.precomputeMs, skyViewMs: table.ms, drawMs, frameMs720p,
-                                             sunChangeMs, hazeChangeMs, hazeModelMs, hazeTablesMs, hazePasses, threads: modelInfo.threads, lookingAroundFps: looking.fps,
+                                             sunChangeMs, hazeChangeMs, hazeModelMs, hazeTablesMs, hazePasses,
+                                             threads: modelInfo.threads, lookingAroundFps: looking.fps,
                                              lookingAroundBuffer: `${looking.width}x${looking.height}`, errorStats }) },
     body: pixels,
   });

@@ -38,8 +38,9 @@ self.onmessage = async (event) => {
       const next = new atmo.Model(event.data.name, event.data.config);
       if (model) model.delete();
       model = next;
-      value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, threads, channels: model.channelCount,
-                topAltitude: model.topAltitude, parameterHash: model.parameterHash, passes: model.passTimes() };
+      value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, passes: model.passTimes(),
+                threads, channels: model.channelCount, topAltitude: model.topAltitude,
+                parameterHash: model.parameterHash };
       // With its first sky-view table, when asked: one round trip for a parameter change.
       if (event.data.skyView) value.table = model.skyView(event.data.skyView);
     } else if (type === 'sun') {

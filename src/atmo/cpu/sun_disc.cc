@@ -196,11 +196,11 @@ void AddSunDisc(const Camera& camera_settings, const glm::dvec3& sun_direction, 
   }
   const double diameter_px = density > 0.0 ? 2.0 * alpha / std::sqrt(density)
                                             : std::max(footprint.x1 - footprint.x0, footprint.y1 - footprint.y0);
-  // Clamped as a double, NaN included, so that the conversion to int is defined.
   if (density > 0.0 && diameter_px < kSmallDiscPixels) {
     AddSmallDisc(camera, sun, alpha, radiance, solar_irradiance, image);
     return;
   }
+  // Clamped as a double, NaN included, so that the conversion to int is defined.
   const int strata = static_cast<int>(std::ceil(shared::ClampToRange(
       kStrataAcrossDisc / std::max(diameter_px, 1e-6), static_cast<double>(kMinStrata), static_cast<double>(kMaxStrata))));
   const bool smooth_inside = diameter_px > kSmoothDiscPixels;
