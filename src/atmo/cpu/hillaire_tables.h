@@ -1,13 +1,14 @@
 // CPU evaluation of the hillaire tables that shares work between texels (private).
 //
-// The per-texel kernels of src/atmo/shared (ComputeMultiScatteringTexel, ComputeSkyViewTexel)
-// define the values; the GPU runs them as they are. On the CPU the same sums are evaluated in an
-// order that does the sun-independent work of a table row once (the transmittance table, which
-// has no such sharing, vectorises along each ray instead): along a ray of fixed (r, mu) the
-// positions, media, step transmittances and throughputs do not depend on the sun, only the
-// transmittance to the sun and the multiple-scattering lookups do. Mirror symmetry about the
-// sun's vertical plane halves the rest. tests/hillaire_tables_test.cc checks that every texel
-// equals its per-texel kernel.
+// The per-texel kernels of src/atmo/shared (ComputeMultiScatteringTexel, ComputeSkyViewTexel,
+// ComputeGroundIrradianceTexel) define the values; the GPU runs them as they are. On the CPU the
+// same sums are evaluated in an order that does the sun-independent work of a ray once (the
+// transmittance table, which has no such sharing, vectorises over its texels' samples instead):
+// along a ray of fixed (r, mu) the positions, media, step transmittances and throughputs do not
+// depend on the sun, only the transmittance to the sun and the multiple-scattering lookups do,
+// which are summed in float as the tables are stored. Mirror symmetry about the sun's vertical
+// plane halves the rest. tests/hillaire_tables_test.cc checks that every texel equals its
+// per-texel kernel.
 #pragma once
 
 #include <span>
@@ -17,8 +18,8 @@
 namespace atmo::cpu {
 
 // Fills `table` (already sized) like shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel: the
-// same sample points and weights, with the density profiles evaluated for all samples of a ray at
-// once in a loop that the compiler vectorises (glibc's libmvec exp).
+// same sample points and weights, with the density profiles evaluated for the samples of 16 texels
+// at once in loops that the compiler vectorises (glibc's libmvec exp).
 void ComputeTransmittanceTable(const shared::AtmosphereParameters& atmosphere, int sample_count,
                                shared::Texture2D& table);
 // The same for several channel batches of one atmosphere (same geometry and density profiles,
