@@ -10,6 +10,7 @@ headers gets the single-threaded module.
 """
 import functools
 import http.server
+import os
 import sys
 
 
@@ -29,9 +30,23 @@ def main():
         print(__doc__.strip())
         return 0
     site = sys.argv[1] if len(sys.argv) > 1 else "build-web/site"
-    port = int(sys.argv[2]) if len(sys.argv) > 2 else 8000
+    if not os.path.isfile(os.path.join(site, "index.html")):
+        print(f"serve_web: no page in '{site}' (build it with scripts/build_web.sh)", file=sys.stderr)
+        return 2
+    try:
+        port = int(sys.argv[2]) if len(sys.argv) > 2 else 8000
+        if not 0 <= port <= 65535:
+            raise ValueError
+    except ValueError:
+        print(f"serve_web: port '{sys.argv[2]}' is not a number in [0, 65535]", file=sys.stderr)
+        return 2
     handler = functools.partial(IsolatedHandler, directory=site)
-    with http.server.ThreadingHTTPServer(("127.0.0.1", port), handler) as server:
+    try:
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    except OSError as error:
+        print(f"serve_web: cannot listen on 127.0.0.1:{port}: {error.strerror}", file=sys.stderr)
+        return 1
+    with server:
         print(f"serving {site} at http://127.0.0.1:{port}/ (cross-origin isolated)", flush=True)
         try:
             server.serve_forever()
