@@ -65,7 +65,15 @@ const cases = [
               error: '1' },
     median: 2e-3, p99: 2e-2, sunEnergy: 0.02 },
 ];
-for (const c of cases) {
+// ATMO_WEB_TEST_MODELS (a comma list) keeps those cases only: the single-threaded run checks the
+// page's fallback on hillaire alone (source4d's single-threaded module is tests/web/api_test.mjs's).
+const models = process.env.ATMO_WEB_TEST_MODELS?.split(',');
+const chosen = cases.filter((c) => !models || models.includes(c.params.model));
+if (chosen.length === 0) {
+  console.error(`ATMO_WEB_TEST_MODELS=${process.env.ATMO_WEB_TEST_MODELS} names no case`);
+  process.exit(2);
+}
+for (const c of chosen) {
   const label = `${c.params.model} sun ${c.params.sunElevation} deg`;
   const url = `http://127.0.0.1:${server.port}/index.html?test=${width}x${height}#${new URLSearchParams(c.params)}`;
   const page = await runChromium(chromium, url, new Promise((resolve, reject) => {
