@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "atmo/elek.h"
 #include "atmo/error.h"
 #include "atmo/model.h"
 #include "atmo/parameters.h"
@@ -17,7 +18,6 @@
 #include "atmo/timing.h"
 #include "cli_fixture.h"
 #include "io/table_cache_file.h"
-#include "atmo/elek.h"
 #include "models/elek_model.h"
 #include "models/source4d_model.h"
 
@@ -72,7 +72,7 @@ class TableCacheTest : public testing::CliFixture {
  protected:
   void SetUp() override {
     CliFixture::SetUp();
-    cache_ = TableCache{dir_ / "cache"};
+    cache_ = TableCache{.folder = dir_ / "cache", .shipped = {}};
     SetTableCache(cache_);
   }
   void TearDown() override {
@@ -188,7 +188,7 @@ TEST_F(TableCacheTest, AFolderThatCannotBeWrittenCostsOnlyTheSaving) {
   std::vector<std::string> messages;
   SetProgressHandler([&](const std::string& m) { messages.push_back(m); });
   testing::WriteFile(dir_ / "a-file", "not a folder");
-  SetTableCache(TableCache{dir_ / "a-file" / "tables"});
+  SetTableCache(TableCache{.folder = dir_ / "a-file" / "tables", .shipped = {}});
   const auto model = CreateModel("source4d", Preset("earth"), kSmall);
   EXPECT_FALSE(Ran(*model, "table_cache_read"));
   ASSERT_EQ(messages.size(), 1u);

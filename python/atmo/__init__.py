@@ -631,8 +631,8 @@ def set_threads(threads: int) -> None:
 def set_table_cache(folder, max_bytes: int = 1 << 30) -> None:
     """Keep the tables that source4d and elek models precompute in `folder` (a str or path), and
     read them back when a later Model has the same model, options, atmosphere and build
-    (bit-identical to computing them); None keeps nothing, the module's default. The tables shipped with atmo (the
-    default sky's, made when it was built) are read either way. `atmo.default_table_cache()` is
+    (bit-identical to computing them); None keeps nothing, the module's default. The tables
+    shipped with atmo (the default sky's, made when it was built) are read either way. `atmo.default_table_cache()` is
     the folder the atmo command uses. Files are written whole, checked when read, and the least
     recently used are removed past max_bytes (docs/python.md, "The table cache")."""
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, (int, np.integer)) or max_bytes <= 0:

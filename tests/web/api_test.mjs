@@ -139,6 +139,8 @@ for (const [what, f] of [
 // The module still works after the errors.
 const after = model.sample([0], [30], [10], [0], 'luminance');
 check(after.radiance[0] > 0 && Number.isFinite(after.radiance[0]), 'the module works after errors');
+// This is the single-threaded module (atmo.wasm): its loops run on the calling thread alone.
+check(atmo.threads() === 1, `atmo.threads() is ${atmo.threads()} in the single-threaded module`);
 
 // A frame equals the native `atmo render` of the same view: both run RenderViewFolded.
 const frame = model.renderFrame({ width: 64, height: 36, fov: 90, yaw: 150, pitch: 5, sunElevation: 12, sunAzimuth: 180 });

@@ -99,6 +99,8 @@ export interface Atmo {
   presetJson(name: string): string;
   sunFromDate(isoDate: string, latitude: number, longitude: number): { elevation: number; azimuth: number };
   version(): string;
+  /** The threads the module's table loops run on: 1 in this package's single-threaded module. */
+  threads(): number;
 }
 
 export declare function loadAtmo(options?: { wasmBinary?: ArrayBuffer | Uint8Array }): Promise<Atmo>;

@@ -12,9 +12,10 @@
 //   {id, type: 'sun', date, latitude, longitude}   the sun from date and place (libnova)
 // Each answer is {id, ok: true, value} or {id, ok: false, error: the library's one-line message}.
 // The threaded module where the page is cross-origin isolated (its server sends COOP and COEP:
-// shared memory), the single-threaded one elsewhere; `threads` tells the page which.
-const threads = self.crossOriginIsolated ? Math.min(Math.max(navigator.hardwareConcurrency || 1, 1), 8) : 1;
-const atmoReady = import(threads > 1 ? './atmo_mt.mjs' : './atmo.mjs').then((module) => module.default());
+// shared memory) on more than one core, the single-threaded one elsewhere; the model's answer
+// says how many threads ran (atmo.threads()).
+const threaded = self.crossOriginIsolated && (navigator.hardwareConcurrency || 1) > 1;
+const atmoReady = import(threaded ? './atmo_mt.mjs' : './atmo.mjs').then((module) => module.default());
 
 let model = null;
 
@@ -39,7 +40,7 @@ self.onmessage = async (event) => {
       if (model) model.delete();
       model = next;
       value = { name: model.name, preset: model.preset, precomputeMs: model.precomputeMs, passes: model.passTimes(),
-                threads, channels: model.channelCount, topAltitude: model.topAltitude,
+                threads: atmo.threads(), channels: model.channelCount, topAltitude: model.topAltitude,
                 parameterHash: model.parameterHash };
       // With its first sky-view table, when asked: one round trip for a parameter change.
       if (event.data.skyView) value.table = model.skyView(event.data.skyView);

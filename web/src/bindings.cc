@@ -14,6 +14,7 @@
 // one-line message; nothing aborts the module. web/src/atmo.js wraps this in the public API.
 #include <emscripten/bind.h>
 #include <emscripten/val.h>
+#include <oneapi/tbb/task_arena.h>  // web/shim: the threads of the module's loops
 
 #include <chrono>
 #include <cmath>
@@ -472,4 +473,8 @@ EMSCRIPTEN_BINDINGS(atmo) {
   emscripten::function("presetJson", &PresetJson);
   emscripten::function("sunFromDate", &SunFromDate);
   emscripten::function("version", emscripten::optional_override([] { return std::string(ATMO_VERSION); }));
+  // The threads the module's loops run on: 1 in atmo.wasm, min(cores, 8) in atmo_mt.wasm.
+  emscripten::function("threads", emscripten::optional_override([] {
+    return oneapi::tbb::this_task_arena::max_concurrency();
+  }));
 }

@@ -690,22 +690,18 @@ void ComputeGroundIrradianceTable(const shared::AtmosphereParameters& a, const s
   const int width = table.width;
   std::vector<double> mu_s(width);
   for (int x = 0; x < width; ++x) mu_s[x] = shared::GetGroundIrradianceTexelMuS(width, x + 0.5);
-  // The directions of shared::ComputeGroundIrradianceTerm (a Fibonacci lattice of the upper
-  // hemisphere): each one's ray from the ground, which no sun changes, is marched once and gives
-  // the term of every texel. In parallel over directions, a block at a time; the terms are then
-  // added per texel in the kernel's order.
+  // The directions of shared::ComputeGroundIrradianceTerm (shared::GetGroundIrradianceDirection):
+  // each one's ray from the ground, which no sun changes, is marched once and gives the term of
+  // every texel. In parallel over directions, a block at a time; the terms are then added per
+  // texel in the kernel's order.
   constexpr int kBlock = 256;
-  const double golden_angle = shared::kPi * (3.0 - std::sqrt(5.0));
   std::vector<vec3> sums(width, vec3(0.0)), terms;
   for (int first = 0; first < direction_count; first += kBlock) {
     const int count = std::min(kBlock, direction_count - first);
     terms.assign(static_cast<std::size_t>(count) * width, vec3(0.0));
     oneapi::tbb::parallel_for(0, count, [&](int j) {
-      const int k = first + j;
-      const double z = 1.0 - (k + 0.5) / direction_count;
-      const double phi = k * golden_angle;
-      const double s = shared::SafeSqrt(1.0 - z * z);
-      const vec3 direction(s * std::cos(phi), s * std::sin(phi), z);
+      const vec3 direction = shared::GetGroundIrradianceDirection(first + j, direction_count);
+      const double z = direction.z;
       // As shared::IntegrateScatteredRadiance from the ground: inside, a ray that never meets it.
       const double t_max = shared::DistanceToNearestAtmosphereBoundary(a, a.bottom_radius, z, false);
       const ScatteringRay ray(a, padded_transmittance, padded_multiple_scattering, a.bottom_radius, z, t_max,

@@ -39,13 +39,19 @@ struct Footprint {
   bool wrap = false;
 };
 
+// Two unit vectors that make an orthonormal basis with the unit vector `sun`.
+void PerpendicularBasis(const glm::dvec3& sun, glm::dvec3& e1, glm::dvec3& e2) {
+  e1 = glm::normalize(glm::cross(sun, std::abs(sun.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+  e2 = glm::cross(sun, e1);
+}
+
 // Projects the disc's centre and a circle just outside its edge through the camera and bounds
 // them, one pixel of margin on each side. False: the camera cannot see the disc.
 bool FindFootprint(const shared::CameraParameters& camera, const glm::dvec3& sun, double alpha, Footprint& f) {
   const int w = camera.width;
   const int h = camera.height;
-  const glm::dvec3 e1 = glm::normalize(glm::cross(sun, std::abs(sun.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
-  const glm::dvec3 e2 = glm::cross(sun, e1);
+  glm::dvec3 e1, e2;
+  PerpendicularBasis(sun, e1, e2);
   const double a = std::min(alpha * 1.01 + 1e-9, 0.5 * shared::kPi);
   shared::vec2 centre;
   const bool centre_seen = shared::GetCameraFragCoordFromDirection(camera, sun, centre);
@@ -119,8 +125,8 @@ double PixelAngularRadius(const shared::CameraParameters& camera) {
 void AddSmallDisc(const shared::CameraParameters& camera, const glm::dvec3& sun, double alpha,
                   const SunDiscRadianceFunction& radiance, std::span<const double> solar_irradiance, Image& image) {
   const std::size_t nc = solar_irradiance.size();
-  const glm::dvec3 e1 = glm::normalize(glm::cross(sun, std::abs(sun.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
-  const glm::dvec3 e2 = glm::cross(sun, e1);
+  glm::dvec3 e1, e2;
+  PerpendicularBasis(sun, e1, e2);
   const int n = static_cast<int>(kStrataAcrossDisc);
   const double one_minus_cos_alpha = 2.0 * std::sin(0.5 * alpha) * std::sin(0.5 * alpha);
   const double cell_solid_angle = 2.0 * shared::kPi * one_minus_cos_alpha / (static_cast<double>(n) * n);

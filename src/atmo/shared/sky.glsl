@@ -199,19 +199,25 @@ Number GetGroundIrradianceTexelMuS(int texture_width, Number frag_x) {
   return 2.0 * GetUnitRangeFromTextureCoord(frag_x / Number(texture_width), texture_width) - 1.0;
 }
 
+// Direction k of the quadrature below: a Fibonacci lattice of `direction_count` points over the
+// upper hemisphere (z up), each standing for 2 pi / direction_count sr.
+vec3 GetGroundIrradianceDirection(int k, int direction_count) {
+  Number golden_angle = kPi * (3.0 - sqrt(5.0));
+  Number z = 1.0 - (Number(k) + 0.5) / Number(direction_count);
+  Number phi = Number(k) * golden_angle;
+  Number s = SafeSqrt(1.0 - z * z);
+  return vec3(s * cos(phi), s * sin(phi), z);
+}
+
 // Direction k's term of the quadrature below, z L(R, w_k), for a sun at zenith cosine mu_s.
 vec3 ComputeGroundIrradianceTerm(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(MultiScatteringTexture) multiple_scattering_texture, Number mu_s, int k, int direction_count,
     int sample_count) {
   vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
-  Number golden_angle = kPi * (3.0 - sqrt(5.0));
-  Number z = 1.0 - (Number(k) + 0.5) / Number(direction_count);
-  Number phi = Number(k) * golden_angle;
-  Number s = SafeSqrt(1.0 - z * z);
-  vec3 direction = vec3(s * cos(phi), s * sin(phi), z);
+  vec3 direction = GetGroundIrradianceDirection(k, direction_count);
   vec3 transmittance;
-  return z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
-      atmosphere.bottom_radius, z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
+  return direction.z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
+      atmosphere.bottom_radius, direction.z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
 }
 
 // The sum of the terms k = first, first + stride, ... < direction_count (all with (0, 1); see

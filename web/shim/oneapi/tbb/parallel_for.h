@@ -25,7 +25,7 @@ void parallel_for(const blocked_range<Value>& range, const Body& body) {
   const int chunks = static_cast<int>((size + grain - 1) / grain);
   detail::Run(chunks, [&](int k) {
     const Value begin = range.begin() + static_cast<Value>(k * grain);
-    const Value end = static_cast<Value>(std::min<long long>(size, (k + 1) * grain)) + range.begin();
+    const Value end = range.begin() + static_cast<Value>(std::min<long long>(size, (k + 1) * grain));
     body(blocked_range<Value>(begin, end));
   });
 }

@@ -150,7 +150,7 @@ class ThreadPool {
 };
 
 inline int Concurrency() { return ThreadPool::Get().size(); }
-inline int ThreadIndex() { return ThreadPool::Get().size() > 1 ? ThreadPool::ThreadIndex() : 0; }
+inline int ThreadIndex() { return ThreadPool::ThreadIndex(); }
 inline void Run(int count, const std::function<void(int)>& task) { ThreadPool::Get().Run(count, task); }
 
 #else
