@@ -7,7 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include "atmo/aerosol.h"
+#include "atmo/parameters.h"
 #include "cpu/hillaire_tables.h"
+#include "physics/shared_parameters.h"
 #include "shared/shared.h"
 #include "test_atmospheres.h"
 
@@ -51,6 +54,37 @@ TEST(HillaireTables, VectorisedTransmittanceEqualsPerTexelKernel) {
         }
       }
     }
+  }
+}
+
+// The density-table path (us-standard's air, and OPAC's layered aerosol of a haze request): the
+// table's exp is in float, so each sample's density carries a relative error of a few 1e-7 (the
+// table itself approximates a profile to 2e-4, DensityTable's tests), and a texel's transmittance
+// one of that times its optical depth.
+TEST(HillaireTables, TabulatedTransmittanceEqualsPerTexelKernel) {
+  AtmosphereParameters hazy = Preset("earth");
+  AerosolSettings haze;
+  haze.aod_550 = 0.2;
+  ApplyAerosol(hazy, haze);
+  for (const AtmosphereParameters& p : {Preset("us-standard"), hazy}) {
+    const shared::AtmosphereParameters a = ToSharedParameters(p, 0);
+    ASSERT_EQ(a.density_table_enabled, 1) << p.name;
+    Texture2D table(32, 12);
+    ComputeTransmittanceTable(a, 40, table);
+    double worst = 0.0;
+    for (int y = 0; y < table.height; ++y) {
+      for (int x = 0; x < table.width; ++x) {
+        const glm::dvec3 reference =
+            shared::ComputeTransmittanceToTopAtmosphereBoundaryTexel(a, ivec2(32, 12), vec2(x + 0.5, y + 0.5), 40);
+        for (int c = 0; c < 3; ++c) {
+          const double optical_depth = -std::log(std::max(reference[c], 1e-300));
+          const double error = std::abs(table.at(x, y)[c] - reference[c]) / reference[c];
+          EXPECT_LE(error, 2e-7 * (1.0 + optical_depth)) << p.name << " texel " << x << "," << y << " channel " << c;
+          worst = std::max(worst, error / (1.0 + optical_depth));
+        }
+      }
+    }
+    std::printf("%s: largest relative error / (1 + optical depth) %.2e\n", p.name.c_str(), worst);
   }
 }
 
