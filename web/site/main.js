@@ -80,7 +80,12 @@ async function rebuildModel(interactive = false) {
     if (building !== key) return;  // a newer request superseded this one
     lastModelRoundTripMs = performance.now() - start;
     modelInfo = info;
-    if (state.error === '1') setTimeout(showErrorMap, 0);
+    if (state.error === '1') {
+      // Where there are reference samples the map needs the worker, and is drawn when it comes;
+      // elsewhere its legend says so at once, and the new sky's frame below is the only one drawn.
+      if (referenceApplies()) setTimeout(showErrorMap, 0);
+      else clearErrorMap();
+    }
     status('model', `${info.name} (${info.preset}): tables ${info.precomputeMs.toFixed(0)} ms on ` +
                     `${info.threads} thread${info.threads > 1 ? 's' : ''} ` +
                     `(${(performance.now() - start).toFixed(0)} ms to the page)`);
@@ -418,6 +423,19 @@ function colourBar() {
   $('barHigh').textContent = `+${(100 * kErrorScale).toFixed(0)} %`;
 }
 
+// Whether the shipped reference samples apply: preset earth with its own haze, on the ground.
+function referenceApplies() {
+  return state.preset === 'earth' && state.altitude <= 1 && state.aod === '';
+}
+
+// The error map's legend without a map, where the reference does not apply (no draw of its own).
+function clearErrorMap() {
+  renderer.setErrorMap(null);
+  $('errorLegend').style.display = 'block';
+  colourBar();
+  $('errorStats').textContent = 'reference samples exist for preset earth (its own haze) on the ground only';
+}
+
 // Computes and shows the error map for the current model and sun (snapped to the nearest
 // reference elevation); returns the statistics, or null where there is no reference.
 async function showErrorMap() {
@@ -427,14 +445,13 @@ async function showErrorMap() {
     requestDraw();
     return null;
   }
-  $('errorLegend').style.display = 'block';
-  colourBar();
-  if (state.preset !== 'earth' || state.altitude > 1 || state.aod !== '') {
-    renderer.setErrorMap(null);
-    $('errorStats').textContent = 'reference samples exist for preset earth (its own haze) on the ground only';
+  if (!referenceApplies()) {
+    clearErrorMap();
     requestDraw();
     return null;
   }
+  $('errorLegend').style.display = 'block';
+  colourBar();
   const nearest = referenceElevations.reduce((a, b) => (Math.abs(b - state.sunElevation) < Math.abs(a - state.sunElevation) ? b : a));
   if (nearest !== state.sunElevation) {
     state.sunElevation = nearest;
@@ -523,7 +540,10 @@ if (test) {
   state.sunElevation -= 2.5;
   await refreshSkyView();
   const sunChangeMs = sunChange.sort((a, b) => a - b)[2];  // the median
-  // A haze change: a new model (its tables), its table, the next frame.
+  // A haze change from a page at rest (the hand is on the panel: the rest timer has drawn the
+  // full frame and the GPU has finished it): a new model (its tables), its table, the next frame.
+  await new Promise((resolve) => setTimeout(resolve, 300));
+  renderer.gl.readPixels(0, 0, 1, 1, renderer.gl.RGBA, renderer.gl.UNSIGNED_BYTE, new Uint8Array(4));
   const hazeStart = performance.now();
   state.aod = '0.2';
   await rebuildModel(true);
