@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -154,7 +155,7 @@ std::vector<Step> RaySteps(const shared::AtmosphereParameters& atmosphere, doubl
 }
 
 // The lanes of one lookup in the sun loop of GatherMultipleRadiance: ln G_R (3 channels), ln G_M
-// (3), two unused (0, with weight 0), so that each texel of a slice is one 8-float vector.
+// (3), two unused (finite, with weight 0), so that each texel of a slice is one 8-float vector.
 constexpr int kLanes = 8;
 
 // shared::GetSource4dUnitSunZenith and shared::GetSource4dAzimuth (radians, 0..pi) in float, with
@@ -208,7 +209,8 @@ inline float AzimuthFloat(float mu, float mu_s, float nu) {
 // The 2D slice of both tables at one step of a gathering ray: the step's view-zenith coordinate y
 // and r layer position are the same for every sun node, so the two r layers and two view-zenith
 // texels are blended once per step, leaving a bilinear lookup in (sun-zenith row, azimuth) per
-// sun node. slice[(row * phi_size + x) * kLanes + lane].
+// sun node. slice[(row * phi_size + x) * kLanes + lane]: lanes 0-2 ln G_R, 3-5 ln G_M, 6 a finite
+// value that the sun loop weights by 0, 7 left as it is (0).
 void Slice(const shared::Texture3D& rayleigh, const shared::Texture3D& mie, int mu_s_size, double y, double layer,
            std::vector<float>& slice) {
   int y_0, y_1;
@@ -220,26 +222,52 @@ void Slice(const shared::Texture3D& rayleigh, const shared::Texture3D& mie, int 
   const float fl = static_cast<float>(layer - layer_0);
   const int width = rayleigh.width;
   const std::size_t plane = static_cast<std::size_t>(width) * rayleigh.height;
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "vec3 arrays are packed floats");
+  // glm::mix's formula, x (1 - a) + y a, on four floats from each tap at once (one 128-bit vector
+  // on every target: the compilers' vector extension, which WebAssembly's clang does not otherwise
+  // choose here): a texel's three and its neighbour's first. The Rayleigh texel goes to lanes 0-3,
+  // then the Mie texel to lanes 3-6, replacing lane 3.
+  typedef float Float4 __attribute__((vector_size(16)));
+  const auto load = [](const float* p) {
+    Float4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  };
+  const auto blend = [fy, fl, &load](const float* a, const float* b, const float* c, const float* d, float* out) {
+    const Float4 lower = load(a) * (1.0f - fy) + load(b) * fy;
+    const Float4 upper = load(c) * (1.0f - fy) + load(d) * fy;
+    const Float4 v = lower * (1.0f - fl) + upper * fl;
+    std::memcpy(out, &v, sizeof v);
+  };
   for (int k = 0; k < mu_s_size; ++k) {
     const std::size_t z_0 = static_cast<std::size_t>(layer_0 * mu_s_size + k) * plane;
     const std::size_t z_1 = z_0 + static_cast<std::size_t>(mu_s_size) * plane;
-    for (int x = 0; x < width; ++x) {
-      const std::size_t a = z_0 + static_cast<std::size_t>(y_0) * width + x;
-      const std::size_t b = z_0 + static_cast<std::size_t>(y_1) * width + x;
-      const std::size_t c = z_1 + static_cast<std::size_t>(y_0) * width + x;
-      const std::size_t d = z_1 + static_cast<std::size_t>(y_1) * width + x;
-      float* out = slice.data() + static_cast<std::size_t>(k * width + x) * kLanes;
-      const auto blend = [&](const std::vector<glm::vec3>& t) {
-        return glm::mix(glm::mix(t[a], t[b], fy), glm::mix(t[c], t[d], fy), fl);
-      };
-      const glm::vec3 g_r = blend(rayleigh.texels);
-      const glm::vec3 g_m = blend(mie.texels);
-      for (int ch = 0; ch < 3; ++ch) {
-        out[ch] = g_r[ch];
-        out[3 + ch] = g_m[ch];
+    const std::size_t taps[] = {z_0 + static_cast<std::size_t>(y_0) * width, z_0 + static_cast<std::size_t>(y_1) * width,
+                                z_1 + static_cast<std::size_t>(y_0) * width, z_1 + static_cast<std::size_t>(y_1) * width};
+    float* out = slice.data() + static_cast<std::size_t>(k) * width * kLanes;
+    const float* r[4];
+    const float* m[4];
+    for (int tap = 0; tap < 4; ++tap) {
+      r[tap] = &rayleigh.texels[taps[tap]].x;
+      m[tap] = &mie.texels[taps[tap]].x;
+    }
+    // A row's last texel reads the next row's first float, except at a table's end, where it
+    // takes copies with a fourth float of 0 (taps[3] is the furthest tap).
+    const bool last_in_memory = (taps[3] + width) * 3 + 1 <= 3 * std::min(rayleigh.texels.size(), mie.texels.size());
+    const int vector_texels = last_in_memory ? width : width - 1;
+    for (int x = 0; x < vector_texels; ++x) {
+      blend(r[0] + 3 * x, r[1] + 3 * x, r[2] + 3 * x, r[3] + 3 * x, out + x * kLanes);
+      blend(m[0] + 3 * x, m[1] + 3 * x, m[2] + 3 * x, m[3] + 3 * x, out + x * kLanes + 3);
+    }
+    if (!last_in_memory) {
+      const int x = width - 1;
+      for (int table = 0; table < 2; ++table) {
+        float last[4][4] = {};
+        for (int tap = 0; tap < 4; ++tap) {
+          for (int ch = 0; ch < 3; ++ch) last[tap][ch] = (table == 0 ? r : m)[tap][3 * x + ch];
+        }
+        blend(last[0], last[1], last[2], last[3], out + x * kLanes + 3 * table);
       }
-      out[6] = 0.0f;
-      out[7] = 0.0f;
     }
   }
 }
