@@ -86,10 +86,19 @@ double WeightedSum(const double* __restrict weight, const double* __restrict val
   return sum;
 }
 
+// sum_j weight_j density_j for j < n, per medium: density holds four media per altitude.
+vec4 WeightedSums(const double* __restrict weight, const float* __restrict density, int n) {
+  double sum[4] = {};
+  for (int j = 0; j < n; ++j) {
+    for (int m = 0; m < 4; ++m) sum[m] += weight[j] * density[4 * j + m];
+  }
+  return vec4(sum[0], sum[1], sum[2], sum[3]);
+}
+
 // shared::GetTabulatedDensities for many altitudes, in passes the compiler vectorises: the knot
-// index and fraction, a gather of the knots' log densities, a float exp; then the linear
-// interpolation of the intervals next to a knot of density 0 (which intervals, and the knots'
-// densities, precomputed).
+// index and fraction, the four media's log densities, a float exp; then the linear interpolation
+// of the intervals next to a knot of density 0 (which intervals, and the knots' densities,
+// precomputed). A medium absent from the table (no water vapour) gets 0.
 class TabulatedDensities {
  public:
   explicit TabulatedDensities(const shared::AtmosphereParameters& a) : a_(a) {
@@ -107,9 +116,6 @@ class TabulatedDensities {
       }
     }
   }
-
-  // Whether medium m (0..3) has density somewhere in the table (water vapour may not).
-  bool Present(int m) const { return present_[m]; }
 
   // The knot interval (index) and the fraction within it of each of n altitudes, for Densities.
   void Locate(const double* altitude, int n, std::vector<double>& fraction, std::vector<int>& index) const {
@@ -130,27 +136,33 @@ class TabulatedDensities {
     }
   }
 
-  // Writes medium m's density at the n altitudes that Locate placed into `density`.
-  // The exp is in float (ExpFloat, which vectorises on every target): its error, a few 1e-7, is far
-  // below the table's own approximation of a profile (DensityTable tests: 2e-4). `log_density` is
-  // scratch space.
-  void Densities(int m, const std::vector<double>& fraction, const std::vector<int>& index, int n,
-                 std::vector<float>& log_density, double* __restrict density) const {
-    const double* __restrict f = fraction.data();
-    log_density.resize(n);
-    float* __restrict l = log_density.data();
+  // Writes the four media's densities at the n altitudes that Locate placed into
+  // density[4 j + m], m the medium; 0 for a medium absent from the table. The knots' logarithms
+  // are interpolated in double, the four media of a sample at once, and their exp taken in float
+  // (ExpFloat, which vectorises on every target): its error, a few 1e-7, is far below the table's
+  // own approximation of a profile (DensityTable tests: 2e-4).
+  void Densities(const std::vector<double>& fraction, const std::vector<int>& index, int n,
+                 std::vector<float>& density) const {
+    density.resize(4 * static_cast<std::size_t>(n));
+    float* __restrict d = density.data();
     for (int j = 0; j < n; ++j) {
-      const double l_0 = a_.density_table[index[j]][m];
-      l[j] = static_cast<float>(l_0 + (a_.density_table[index[j] + 1][m] - l_0) * f[j]);
+      const shared::vec4& l_0 = a_.density_table[index[j]];
+      const shared::vec4& l_1 = a_.density_table[index[j] + 1];
+      const double f = fraction[j];
+      for (int m = 0; m < 4; ++m) d[4 * j + m] = static_cast<float>(l_0[m] + (l_1[m] - l_0[m]) * f);
     }
 #pragma omp simd
-    for (int j = 0; j < n; ++j) density[j] = ExpFloat(l[j]);
-    if (any_linear_[m]) {
-      const double* knots = knot_density_[m];
-      for (int j = 0; j < n; ++j) {
-        if (!linear_[m][index[j]]) continue;
-        const double d_0 = knots[index[j]];
-        density[j] = d_0 + (knots[index[j] + 1] - d_0) * f[j];
+    for (int k = 0; k < 4 * n; ++k) d[k] = ExpFloat(d[k]);
+    for (int m = 0; m < 4; ++m) {
+      if (!present_[m]) {
+        for (int j = 0; j < n; ++j) d[4 * j + m] = 0.0f;
+      } else if (any_linear_[m]) {
+        const double* knots = knot_density_[m];
+        for (int j = 0; j < n; ++j) {
+          if (!linear_[m][index[j]]) continue;
+          const double d_0 = knots[index[j]];
+          d[4 * j + m] = static_cast<float>(d_0 + (knots[index[j] + 1] - d_0) * fraction[j]);
+        }
       }
     }
   }
@@ -159,7 +171,7 @@ class TabulatedDensities {
   const shared::AtmosphereParameters& a_;
   bool linear_[4][shared::kDensityTableSize] = {};
   bool any_linear_[4] = {};
-  bool present_[4] = {};  // some knot above kDensityTableLogZero
+  bool present_[4] = {};  // some knot above kDensityTableLogZero (water vapour may have none)
   double knot_density_[4][shared::kDensityTableSize] = {};  // exp of the table's knots, per medium
 };
 
@@ -436,7 +448,7 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
     std::vector<double> altitude(block_samples), weight(block_samples), lower(block_samples), density(block_samples);
     std::vector<double> fraction;
     std::vector<int> index;
-    std::vector<float> log_density;
+    std::vector<float> densities;
     std::vector<vec4> integrals(kBlockTexels);
     for (int x_0 = 0; x_0 < size.x; x_0 += kBlockTexels) {
       const int texels = std::min(kBlockTexels, size.x - x_0);
@@ -472,10 +484,10 @@ void ComputeTransmittanceTables(std::span<const shared::AtmosphereParameters> ba
       };
       if (a.density_table_enabled) {
         tabulated.Locate(altitude.data(), count, fraction, index);
-        for (int m = 0; m < 4; ++m) {
-          if (!tabulated.Present(m)) continue;  // a medium absent from the table (no water vapour): 0
-          tabulated.Densities(m, fraction, index, count, log_density, density.data());
-          integrate(m);
+        tabulated.Densities(fraction, index, count, densities);
+        for (int k = 0; k < texels; ++k) {
+          const std::size_t first = static_cast<std::size_t>(k) * n;
+          integrals[k] = WeightedSums(weight.data() + first, densities.data() + 4 * first, n);
         }
       } else {
         const shared::DensityProfile* profiles[] = {&a.rayleigh_density, &a.mie_density, &a.absorption_density};
