@@ -248,6 +248,9 @@ class SunLookupsAlongRay {
     }
     transmittance_rows_.reserve(sample_count);
     multiple_scattering_rows_.reserve(sample_count);
+    sun_column_.resize(sample_count);
+    multiple_scattering_column_.resize(sample_count);
+    lit_.resize(sample_count);
   }
 
   void AddSample(double t, double r_i) {
@@ -266,6 +269,11 @@ class SunLookupsAlongRay {
       AddRow(*multiple_scattering_, shared::GetTextureCoordFromUnitRange(x_r, multiple_scattering_->height),
              multiple_scattering_rows_);
     }
+    if (sun_column_.size() < t_.size()) {
+      sun_column_.resize(t_.size());
+      multiple_scattering_column_.resize(t_.size());
+      lit_.resize(t_.size());
+    }
   }
 
   std::size_t size() const { return t_.size(); }
@@ -276,12 +284,11 @@ class SunLookupsAlongRay {
   // sun at zenith cosine mu_s and nu = cos(ray direction, sun), in float (weights' w is 0).
   glm::vec4 SumMultipleScattering(double mu_s, double nu, const glm::vec4* weights) const {
     const int n = static_cast<int>(t_.size());
-    Scratch& s = Scratch::Of(n);
     MultipleScatteringColumns(n, r_ * mu_s, nu, t_.data(), inverse_r_.data(), multiple_scattering_->width - 1,
-                              s.multiple_scattering_column.data());
-    BlendMultipleScattering(n, s);
+                              multiple_scattering_column_.data());
+    BlendMultipleScattering(n);
     glm::vec4 sum(0.0f);
-    for (int i = 0; i < n; ++i) sum += s.blended[i] * weights[i];
+    for (int i = 0; i < n; ++i) sum += blended_[i] * weights[i];
     return sum;
   }
 
@@ -289,24 +296,23 @@ class SunLookupsAlongRay {
   // of T_i (rayleigh[i] rayleigh_phase + mie[i] mie_phase) [+ Psi_i scattering[i]], T_i the
   // transmittance to the sun (0 in the planet's shadow) and Psi_i the multiple-scattering table
   // there, in float like the tables (the weights' w is 0). Without `scattering` (null) the
-  // multiple-scattering table is not read.
+  // multiple-scattering table is not read. Not thread-safe (scratch arrays); one instance per thread.
   glm::vec4 SumSunlight(double mu_s, double nu, const glm::vec4* rayleigh, float rayleigh_phase, const glm::vec4* mie,
                         float mie_phase, const glm::vec4* scattering) const {
     const int n = static_cast<int>(t_.size());
     const double t_columns = transmittance_.width - 1;
     const double m_columns = multiple_scattering_ != nullptr ? multiple_scattering_->width - 1 : 0.0;
-    Scratch& s = Scratch::Of(n);
     SunColumns(n, r_ * mu_s, nu, t_.data(), r_i_.data(), inverse_r_.data(), c_ground_.data(), c_top_.data(),
-               d_min_.data(), inverse_range_.data(), t_columns, m_columns, s.lit.data(), s.sun_column.data(),
-               s.multiple_scattering_column.data());
+               d_min_.data(), inverse_range_.data(), t_columns, m_columns, lit_.data(), sun_column_.data(),
+               multiple_scattering_column_.data());
     glm::vec4 sum(0.0f);
     for (int i = 0; i < n; ++i) {
-      const glm::vec4 sun = Blend(transmittance_, transmittance_rows_[i], s.sun_column[i]) * static_cast<float>(s.lit[i]);
+      const glm::vec4 sun = Blend(transmittance_, transmittance_rows_[i], sun_column_[i]) * static_cast<float>(lit_[i]);
       sum += sun * (rayleigh[i] * rayleigh_phase + mie[i] * mie_phase);
     }
     if (scattering != nullptr) {
-      BlendMultipleScattering(n, s);
-      for (int i = 0; i < n; ++i) sum += s.blended[i] * scattering[i];
+      BlendMultipleScattering(n);
+      for (int i = 0; i < n; ++i) sum += blended_[i] * scattering[i];
     }
     return sum;
   }
@@ -329,31 +335,15 @@ class SunLookupsAlongRay {
     rows.push_back(row);
   }
 
-  // The per-sample arrays of one sum, for any ray: one set per thread (per ray, allocated as the
-  // rays were built, they shared cache lines between threads where the allocator has one heap, as
-  // WebAssembly's has).
-  struct Scratch {
-    std::vector<double> sun_column, multiple_scattering_column, lit;
-    std::vector<glm::vec4> blended;
-    // This thread's, with room for n samples.
-    static Scratch& Of(int n) {
-      thread_local Scratch scratch;
-      if (scratch.lit.size() < static_cast<std::size_t>(n)) {
-        for (std::vector<double>* v : {&scratch.sun_column, &scratch.multiple_scattering_column, &scratch.lit}) v->resize(n);
-        scratch.blended.resize(n);
-      }
-      return scratch;
-    }
-  };
-
-  // The multiple-scattering table at the first n samples (their columns already found in s),
-  // blended and decoded in float like the table itself, into s.blended (the padding lane holds 1).
-  void BlendMultipleScattering(int n, Scratch& s) const {
+  // The multiple-scattering table at the first n samples (their columns already found), blended
+  // and decoded in float like the table itself, into blended_ (the padding lane holds 1).
+  void BlendMultipleScattering(int n) const {
+    blended_.resize(n);
     for (int i = 0; i < n; ++i) {
-      s.blended[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], s.multiple_scattering_column[i]);
+      blended_[i] = Blend(*multiple_scattering_, multiple_scattering_rows_[i], multiple_scattering_column_[i]);
     }
     static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "vec4 arrays are packed floats");
-    DecodeMultipleScattering(4 * n, &s.blended[0].x);
+    DecodeMultipleScattering(4 * n, &blended_[0].x);
   }
 
   // GL_LINEAR at texel coordinate s (texel centres at integers, s in [0, width - 1]) of `row`, in
@@ -374,6 +364,8 @@ class SunLookupsAlongRay {
   double r_;
   std::vector<double> t_, r_i_, inverse_r_, c_ground_, c_top_, d_min_, inverse_range_;
   std::vector<Row> transmittance_rows_, multiple_scattering_rows_;
+  mutable std::vector<double> sun_column_, multiple_scattering_column_, lit_;
+  mutable std::vector<glm::vec4> blended_;
 };
 
 // The sun-independent part of one ray of the multiple-scattering integral.
@@ -423,7 +415,7 @@ class ScatteringRay {
   }
 
   // The radiance scattered towards the observer for a sun at zenith cosine mu_s, nu = cos(ray
-  // direction, sun).
+  // direction, sun). Not thread-safe (SunLookupsAlongRay's scratch arrays).
   glm::vec4 Radiance(const shared::AtmosphereParameters& a, double mu_s, double nu) const {
     return samples_.SumSunlight(mu_s, nu, rayleigh_.data(), static_cast<float>(shared::GetRayleighPhase(a, nu)),
                                 mie_.data(), static_cast<float>(shared::GetMiePhase(a, nu)), scattering_.data());
