@@ -96,7 +96,7 @@ TEST(GlDensityTable, HillaireElekAndSource4dMatchTheCpuOnUsStandard) {
   const double other = MeanRelative(RenderHillaire(context, layers, kHillaire, render),
                                     Render(*CreateModel("hillaire", p, kHillaire), render));
   std::printf("with the aerosol on an exponential profile instead: %.3g\n", other);
-  EXPECT_GT(other, 10.0 * std::max({d.hillaire, d.elek, d.source4d}));
+  EXPECT_GT(other, 10.0 * d.hillaire);  // hillaire's frames both: its own difference is the yardstick
 }
 
 // The tabulated Mie phase function (OPAC's, the presets' default) reaches the shaders as its 32
@@ -117,7 +117,9 @@ TEST(GlDensityTable, TheTabulatedPhaseFunctionMatchesTheCpu) {
   const double other = MeanRelative(RenderHillaire(context, analytic, kHillaire, render),
                                     Render(*CreateModel("hillaire", p, kHillaire), render));
   std::printf("with Henyey-Greenstein on the GPU instead: %.3g\n", other);
-  EXPECT_GT(other, 10.0 * std::max({d.hillaire, d.elek, d.source4d}));
+  // Both frames are hillaire's, so its own GL-vs-CPU difference is the yardstick. (On an H100,
+  // elek's, 4.3e-3 from its hardware sampler, was more than a tenth of this 2.8e-2.)
+  EXPECT_GT(other, 10.0 * d.hillaire);
 }
 
 }  // namespace

@@ -602,6 +602,52 @@ TEST(GlHillaireSpectral, TablesMatchCpuInEveryBatch) {
   EXPECT_THROW(sky.ReadTransmittance(3), std::out_of_range);
 }
 
+// The GPU's form of the table passes (Context::work_group_forms: each ray's march split into
+// segments over a run of invocations, weighed by the throughputs before them, the texel's rays
+// summed over the work group) against a texel per invocation, the form of llvmpipe and of the
+// comparisons with the CPU above, on whatever context runs the tests: the same sums, added in
+// another order. For the Hillaire 2020 table (1 order) and the gathered one (4, the default).
+TEST(GlHillaire, WorkGroupFormsMatchATexelPerInvocation) {
+  ATMO_REQUIRE_GL_CONTEXT(context);
+  const AtmosphereParameters earth = Preset("earth");
+  struct Tables {
+    Texture2D transmittance, multiple_scattering, ground_irradiance, view;
+  };
+  const auto decoded = [](Texture2D t) {
+    for (glm::vec3& v : t.texels) v = glm::vec3(shared::DecodeMultiScattering(shared::vec3(v)));
+    return t;
+  };
+  for (const int orders : {1, 4}) {
+    HillaireSettings settings;
+    settings.multiple_scattering_orders = orders;
+    const auto build = [&](bool work_group_forms) {
+      const testing::ScopedWorkGroupForms forms(work_group_forms);
+      HillaireGl sky(context, earth, settings);
+      sky.Precompute(nullptr);
+      sky.SetView(1000.0, SunDirection(15.0, 180.0), /*ground=*/true, nullptr);
+      return Tables{sky.ReadTransmittance(0), decoded(sky.ReadMultipleScattering(0)), sky.ReadGroundIrradiance(0),
+                    sky.ReadSkyAndGroundView(0)};
+    };
+    const Tables per_texel = build(false);
+    const Tables grouped = build(true);
+    const Difference t = Compare(grouped.transmittance, per_texel.transmittance);
+    const Difference m = Compare(grouped.multiple_scattering, per_texel.multiple_scattering);
+    const Difference g = Compare(grouped.ground_irradiance, per_texel.ground_irradiance);
+    const Difference v = Compare(grouped.view, per_texel.view);
+    std::printf("%d order(s): work-group forms vs a texel per invocation, max rel: transmittance %.3g, multiple "
+                "scattering %.3g, ground irradiance %.3g, sky + ground view %.3g\n",
+                orders, t.max_rel, m.max_rel, g.max_rel, v.max_rel);
+    // Float sums of 5 to 41 terms per invocation and of up to 256 partial sums, in another
+    // order: a few float ulp per addition, and each table inherits the differences of the tables
+    // it reads. Measured on llvmpipe (Mesa 22.3.6): transmittance 2.6e-6, multiple scattering 1.1e-6,
+    // ground irradiance 3.7e-7, sky and ground view 6.3e-7 (either order count).
+    EXPECT_LT(t.max_rel, 1e-5);
+    EXPECT_LT(m.max_rel, 1e-4);
+    EXPECT_LT(g.max_rel, 1e-4);
+    EXPECT_LT(v.max_rel, 1e-4);
+  }
+}
+
 // The frame, one channel per wavelength, against the CPU's N-channel render, for each camera;
 // the perspective camera's centre pixel looks at the sun, whose disc the host adds per channel.
 // The cameras are GlHillaire.FrameMatchesCpuForEachCamera's (65 x 33), whose pixel centres keep

@@ -35,6 +35,24 @@ inline SharedContext& GetSharedContext() {
   return shared;
 }
 
+// Switches the shared context's work-group forms (Context::work_group_forms: hillaire's passes
+// split over a GPU's work groups, or a texel per invocation) for a scope, so that a test checks
+// both on any context; restores them at the end.
+class ScopedWorkGroupForms {
+ public:
+  explicit ScopedWorkGroupForms(bool on)
+      : context_(*GetSharedContext().context), saved_(context_.work_group_forms()) {
+    context_.set_work_group_forms(on);
+  }
+  ~ScopedWorkGroupForms() { context_.set_work_group_forms(saved_); }
+  ScopedWorkGroupForms(const ScopedWorkGroupForms&) = delete;
+  ScopedWorkGroupForms& operator=(const ScopedWorkGroupForms&) = delete;
+
+ private:
+  Context& context_;
+  bool saved_;
+};
+
 // The bounds of the GL tests are measured on llvmpipe, whose sampler blends texels with float
 // weights. A hardware sampler blends with fixed-point weights (8 bits of fraction on NVIDIA and
 // AMD): up to 1/512 of the difference of neighbouring texels per lookup, which the passes that

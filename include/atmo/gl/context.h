@@ -64,6 +64,12 @@ class Context {
   const std::string& version() const { return version_; }    // GL_VERSION, e.g. "4.5 (Core Profile) Mesa 22.3.6"
   // Whether renderer() is a software rasteriser (IsSoftwareRenderer): the "GPU" is the CPU.
   bool software_renderer() const { return IsSoftwareRenderer(renderer_); }
+  // Whether the passes that split a texel's work over a work group (hillaire's tables: a ray's
+  // march in segments, a texel's rays over lanes) take that form, or one texel per invocation.
+  // Defaults to !software_renderer(): on llvmpipe the work groups' barriers cost more than their
+  // lanes win. The tests switch it on to check the GPU's form on llvmpipe.
+  bool work_group_forms() const { return work_group_forms_; }
+  void set_work_group_forms(bool on) { work_group_forms_ = on; }
 
   // For the backend's passes (src/atmo/gl/program.h, private; callers outside atmo do not need it).
   // The compute program of the shared files (in shared.h's order) and `main_source`
@@ -88,6 +94,7 @@ class Context {
   void EndTimerQueries();     // reads the GPU times still unread (while current)
   std::string renderer_;
   std::string version_;
+  bool work_group_forms_ = false;
   // By the shared files' names and the main source.
   mutable std::unordered_map<std::string, std::unique_ptr<ComputeProgram>> programs_;
   // The GPU timer queries of the passes run in this context (src/atmo/gl/timer_queries.h).

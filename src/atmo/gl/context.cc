@@ -146,6 +146,7 @@ void Context::FinishConstruction() {
   const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
   renderer_ = renderer != nullptr ? renderer : "";
   version_ = version != nullptr ? version : "";
+  work_group_forms_ = !software_renderer();
   timer_queries_ = std::make_shared<TimerQueries>();
   SetCurrentTimerQueries(timer_queries_.get());
 }

@@ -74,61 +74,233 @@ std::string SkyRadianceSource(bool use_sky_view) {
 
 }  // namespace
 
+namespace {
+
+// How a pass lays its texels out over work groups. Each texel's work is split over `ray_slots`
+// runs of `segments` invocations: a run marches one ray, each invocation a segment of it (the
+// shared files' *Steps functions), and the texel's sums gather over its runs. A work group holds texels_x x texels_y
+// texels. A GPU gets many invocations per texel: every pass here is a few thousand texels or
+// fewer, each a serial march of 16 to 41 steps, too few threads to hide a step's latency on a
+// large chip. On a software rasteriser (Context::work_group_forms() false) a texel per
+// invocation: there the barriers cost more than the lanes win (docs/performance.md).
+struct TexelLayout {
+  int segments = 1;
+  int ray_slots = 1;
+  int texels_x = 8;
+  int texels_y = 8;
+};
+
+constexpr TexelLayout kTexelPerInvocation{};
+
+// The GLSL of a layout: the work group's size, GroupTexel(), Segment(), RaySlot(), the steps of
+// this invocation's segment (SegmentFirstStep, SegmentEndStep), ThroughputBefore (the product of
+// the throughputs of the segments before this one in its run), SumOverTexel (the sums over the
+// texel's invocations, in its TexelLead() invocation). Every invocation of a group must call
+// ThroughputBefore and SumOverTexel alike (barriers): texels outside the table are computed
+// clamped and not stored, never returned from early.
+std::string TexelLayoutSource(const TexelLayout& layout) {
+  const int lanes_per_texel = layout.segments * layout.ray_slots;
+  std::string source = "layout(local_size_x = " + std::to_string(lanes_per_texel * layout.texels_x) +
+                       ", local_size_y = " + std::to_string(layout.texels_y) + ") in;\n" +
+                       "const int kSegments = " + std::to_string(layout.segments) + ";\n" +
+                       "const int kRaySlots = " + std::to_string(layout.ray_slots) + ";\n" +
+                       "const int kTexelLanes = " + std::to_string(lanes_per_texel) + ";\n" +
+                       "const ivec2 kGroupTexels = ivec2(" + std::to_string(layout.texels_x) + ", " +
+                       std::to_string(layout.texels_y) + ");\n";
+  source += R"glsl(
+int Lane() { return int(gl_LocalInvocationIndex); }
+int Segment() { return int(gl_LocalInvocationID.x) % kSegments; }
+int RaySlot() { return (int(gl_LocalInvocationID.x) / kSegments) % kRaySlots; }
+bool TexelLead() { return int(gl_LocalInvocationID.x) % kTexelLanes == 0; }
+ivec2 GroupTexel() {
+  return ivec2(gl_WorkGroupID.xy) * kGroupTexels +
+      ivec2(int(gl_LocalInvocationID.x) / kTexelLanes, int(gl_LocalInvocationID.y));
+}
+// Segment s of a march of n steps: steps s n / S ... (s + 1) n / S - 1.
+int SegmentFirstStep(int step_count) { return Segment() * step_count / kSegments; }
+int SegmentEndStep(int step_count) { return (Segment() + 1) * step_count / kSegments; }
+)glsl";
+  if (lanes_per_texel == 1) {
+    return source + R"glsl(
+vec3 ThroughputBefore(vec3 throughput) { return vec3(1.0); }
+void SumOverTexel(inout vec3 a, inout vec3 b, inout vec3 c) {}
+)glsl";
+  }
+  return source + R"glsl(
+shared vec3 lane_a[gl_WorkGroupSize.x * gl_WorkGroupSize.y];
+shared vec3 lane_b[gl_WorkGroupSize.x * gl_WorkGroupSize.y];
+shared vec3 lane_c[gl_WorkGroupSize.x * gl_WorkGroupSize.y];
+
+vec3 ThroughputBefore(vec3 throughput) {
+  int lane = Lane();
+  lane_a[lane] = throughput;
+  memoryBarrierShared();
+  barrier();
+  vec3 product = vec3(1.0);
+  for (int j = lane - Segment(); j < lane; ++j) product *= lane_a[j];
+  barrier();  // every invocation has read before the array is written again
+  return product;
+}
+
+// A tree over the texel's kTexelLanes (a power of two) adjacent invocations.
+void SumOverTexel(inout vec3 a, inout vec3 b, inout vec3 c) {
+  int lane = Lane();
+  lane_a[lane] = a;
+  lane_b[lane] = b;
+  lane_c[lane] = c;
+  memoryBarrierShared();
+  barrier();
+  for (int stride = kTexelLanes / 2; stride > 0; stride /= 2) {
+    if (lane % kTexelLanes < stride) {
+      lane_a[lane] += lane_a[lane + stride];
+      lane_b[lane] += lane_b[lane + stride];
+      lane_c[lane] += lane_c[lane + stride];
+    }
+    memoryBarrierShared();
+    barrier();
+  }
+  a = lane_a[lane];
+  b = lane_b[lane];
+  c = lane_c[lane];
+  barrier();
+}
+)glsl";
+}
+
+void DispatchTexels(const ComputeProgram& program, const TexelLayout& layout, shared::ivec2 texels) {
+  DispatchWorkGroups(program, {(texels.x + layout.texels_x - 1) / layout.texels_x,
+                               (texels.y + layout.texels_y - 1) / layout.texels_y, 1});
+}
+
+// The layouts of the passes on a GPU: a march of 16 to 41 steps in segments of 4 to 8 steps, at
+// least 64 invocations per work group. Chosen from the passes' sizes, not yet timed on a GPU
+// (docs/performance.md, "On an NVIDIA GPU", has the times of the form before).
+TexelLayout TransmittanceLayout(const Context& context) {
+  return context.work_group_forms() ? TexelLayout{8, 1, 8, 1} : kTexelPerInvocation;
+}
+TexelLayout MultipleScatteringLayout(const Context& context) {
+  return context.work_group_forms() ? TexelLayout{4, 32, 1, 1} : kTexelPerInvocation;
+}
+TexelLayout GroundIrradianceLayout(const Context& context) {
+  return context.work_group_forms() ? TexelLayout{4, 64, 1, 1} : TexelLayout{1, 1, 8, 1};
+}
+TexelLayout SkyViewLayout(const Context& context) {
+  return context.work_group_forms() ? TexelLayout{4, 1, 8, 8} : kTexelPerInvocation;
+}
+
+// SumMultiScatteringRays and SumMultiScatteringGatherRays (multiple_scattering.glsl) over a texel's
+// invocations: each ray's segments on a run, each run's rays kRaySlots apart, the sums in the
+// texel's lead invocation. With one invocation per texel the same sums in the same order.
+constexpr std::string_view kMultipleScatteringSumsSource = R"glsl(
+void SumFirstOrderRays(AtmosphereParameters atmosphere, sampler2D transmittance_texture, float r,
+    vec3 sun_direction, int direction_count, int sample_count, bool media_phase, vec3 ground_transfer,
+    out vec3 luminance_sum, out vec3 transfer_sum, out vec3 irradiance_sum) {
+  luminance_sum = vec3(0.0);
+  transfer_sum = vec3(0.0);
+  irradiance_sum = vec3(0.0);
+  bool mirrored = direction_count != 2;
+  int marched = mirrored ? direction_count / 2 : direction_count;
+  int first_step = SegmentFirstStep(sample_count);
+  int end_step = SegmentEndStep(sample_count);
+  for (int base = 0; base < marched; base += kRaySlots) {
+    int k = base + RaySlot();
+    vec3 luminance = vec3(0.0);
+    vec3 transfer = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    float z = 0.0;
+    if (k < marched) {
+      vec3 direction = GetMultiScatteringDirection(k, direction_count);
+      z = direction.z;
+      IntegrateMultiScatteringRaySteps(atmosphere, transmittance_texture, r, direction, sun_direction, sample_count,
+          first_step, end_step, media_phase, ground_transfer, luminance, transfer, throughput);
+    }
+    vec3 before = ThroughputBefore(throughput);
+    luminance *= before;
+    luminance_sum += luminance;
+    transfer_sum += transfer * before;
+    irradiance_sum += z > 0.0 ? luminance * z : vec3(0.0);
+  }
+  if (mirrored) {
+    luminance_sum *= 2.0;
+    transfer_sum *= 2.0;
+    irradiance_sum *= 2.0;
+  }
+  SumOverTexel(luminance_sum, transfer_sum, irradiance_sum);
+}
+
+void SumGatherRays(AtmosphereParameters atmosphere, sampler2D previous_order_texture,
+    sampler2D ground_irradiance_texture, float r, vec3 sun_direction, int direction_count, int sample_count,
+    out vec3 luminance_sum, out vec3 irradiance_sum) {
+  luminance_sum = vec3(0.0);
+  irradiance_sum = vec3(0.0);
+  bool mirrored = direction_count != 2;
+  int marched = mirrored ? direction_count / 2 : direction_count;
+  int first_step = SegmentFirstStep(sample_count);
+  int end_step = SegmentEndStep(sample_count);
+  for (int base = 0; base < marched; base += kRaySlots) {
+    int k = base + RaySlot();
+    vec3 luminance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    float z = 0.0;
+    if (k < marched) {
+      vec3 direction = GetMultiScatteringDirection(k, direction_count);
+      z = direction.z;
+      luminance = IntegrateMultiScatteringGatherRaySteps(atmosphere, previous_order_texture,
+          ground_irradiance_texture, r, direction, sun_direction, sample_count, first_step, end_step, throughput);
+    }
+    luminance *= ThroughputBefore(throughput);
+    luminance_sum += luminance;
+    irradiance_sum += z > 0.0 ? luminance * z : vec3(0.0);
+  }
+  if (mirrored) {
+    luminance_sum *= 2.0;
+    irradiance_sum *= 2.0;
+  }
+  vec3 unused = vec3(0.0);
+  SumOverTexel(luminance_sum, irradiance_sum, unused);
+}
+)glsl";
+
+}  // namespace
+
 void RunTransmittancePass(const Context& context, const shared::AtmosphereParameters& km, int sample_count,
                           const GpuTexture& out) {
-  const ComputeProgram& program = context.Program(kTransmittanceFiles, TablePass(R"glsl(
+  const TexelLayout layout = TransmittanceLayout(context);
+  // The samples of a texel's quadrature are dealt to its invocations in turn (no march: the sum
+  // needs no throughput).
+  const ComputeProgram& program = context.Program(kTransmittanceFiles, TexelLayoutSource(layout) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
+uniform AtmosphereParameters atmosphere;
 uniform int sample_count;
 
 void main() {
   ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 transmittance =
-      ComputeTransmittanceToTopAtmosphereBoundaryTexel(atmosphere, size, vec2(texel) + vec2(0.5), sample_count);
-  imageStore(output_table, texel, vec4(transmittance, 1.0));
+  ivec2 texel = GroupTexel();
+  bool inside = texel.x < size.x && texel.y < size.y;
+  texel = min(texel, size - 1);
+  float r;
+  float mu;
+  GetRMuFromTransmittanceTextureUv(atmosphere, size, (vec2(texel) + vec2(0.5)) / vec2(size), r, mu);
+  vec3 optical_depth = SumOpticalDepthSamplesToTopAtmosphereBoundary(atmosphere, r, mu, sample_count, Segment(),
+      kSegments);
+  vec3 unused_b = vec3(0.0);
+  vec3 unused_c = vec3(0.0);
+  SumOverTexel(optical_depth, unused_b, unused_c);
+  if (inside && TexelLead()) imageStore(output_table, texel, vec4(exp(-optical_depth), 1.0));
 }
-)glsl"), "transmittance table");
+)glsl", "transmittance table");
   SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetInt("sample_count", sample_count);
   out.BindImage(0);
-  DispatchCompute2D(program, out.size2());
+  DispatchTexels(program, layout, out.size2());
 }
 
 void RunMultipleScatteringPass(const Context& context, const shared::AtmosphereParameters& km,
                                const GpuTexture& transmittance, int direction_count, int sample_count,
                                bool media_phase, const shared::vec3& ground_transfer, const GpuTexture& out) {
-  // On llvmpipe (the CPU), a texel per invocation with the CPU's own kernel: its work-group
-  // barriers cost more than the lanes win there (1280x720 viewer benchmark: 28.7 ms for the
-  // work-group form, see docs/performance.md); a GPU gets the 64 lanes per texel.
-  if (context.renderer().find("llvmpipe") != std::string::npos) {
-    const ComputeProgram& program = context.Program(kMultipleScatteringFiles, TablePass(R"glsl(
-uniform sampler2D transmittance_texture;
-uniform int direction_count;
-uniform int sample_count;
-uniform bool media_phase;
-uniform vec3 ground_transfer;
-
-void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 psi = ComputeMultiScatteringTexel(atmosphere, transmittance_texture, size, vec2(texel) + vec2(0.5),
-      direction_count, sample_count, media_phase, ground_transfer);
-  imageStore(output_table, texel, vec4(psi, 1.0));
-}
-)glsl"), "multiple-scattering table, a texel per invocation");
-    SetAtmosphereUniforms(program, "atmosphere", km);
-    program.SetInt("direction_count", direction_count);
-    program.SetInt("sample_count", sample_count);
-    program.SetInt("media_phase", media_phase ? 1 : 0);
-    program.SetVec3("ground_transfer", ground_transfer);
-    BindSamplers(program, {{"transmittance_texture", &transmittance}});
-    out.BindImage(0);
-    DispatchCompute2D(program, out.size2());
-    return;
-  }
-  // One work group per texel (kWorkGroupSumSource), then the texel kernel's last step.
-  const ComputeProgram& program = context.Program(kMultipleScatteringFiles, std::string(kWorkGroupSumSource) + R"glsl(
+  const TexelLayout layout = MultipleScatteringLayout(context);
+  const ComputeProgram& program = context.Program(kMultipleScatteringFiles, TexelLayoutSource(layout) +
+      std::string(kMultipleScatteringSumsSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
@@ -138,18 +310,19 @@ uniform bool media_phase;
 uniform vec3 ground_transfer;
 
 void main() {
-  ivec2 texel = ivec2(gl_WorkGroupID.xy);
-  int lane = int(gl_LocalInvocationID.x);
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = GroupTexel();
+  bool inside = texel.x < size.x && texel.y < size.y;
+  texel = min(texel, size - 1);
   float r;
   vec3 sun_direction;
-  GetMultiScatteringTexelPoint(atmosphere, imageSize(output_table), vec2(texel) + vec2(0.5), r, sun_direction);
+  GetMultiScatteringTexelPoint(atmosphere, size, vec2(texel) + vec2(0.5), r, sun_direction);
   vec3 luminance_sum;
   vec3 transfer_sum;
   vec3 unused_irradiance_sum;
-  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, lane, 64, direction_count,
-      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum, unused_irradiance_sum);
-  SumOverWorkGroup(lane, luminance_sum, transfer_sum);
-  if (lane == 0) {
+  SumFirstOrderRays(atmosphere, transmittance_texture, r, sun_direction, direction_count, sample_count, media_phase,
+      ground_transfer, luminance_sum, transfer_sum, unused_irradiance_sum);
+  if (inside && TexelLead()) {
     vec3 psi_ms = GetMultiScatteringFromMeans(luminance_sum / float(direction_count),
         transfer_sum / float(direction_count));
     imageStore(output_table, texel, vec4(EncodeMultiScattering(psi_ms), 1.0));
@@ -163,52 +336,14 @@ void main() {
   program.SetVec3("ground_transfer", ground_transfer);
   BindSamplers(program, {{"transmittance_texture", &transmittance}});
   out.BindImage(0);
-  DispatchWorkGroups(program, {out.size().x, out.size().y, 1});
+  DispatchTexels(program, layout, out.size2());
 }
-
-namespace {
-
-// The gathered orders' passes share their form with RunMultipleScatteringPass: on a GPU one work
-// group of 64 lanes per texel (GatherSum adds three sums over the group), on llvmpipe one texel
-// per invocation.
-std::string GatherForm(bool llvmpipe) {
-  if (llvmpipe) {
-    return R"glsl(
-layout(local_size_x = 8, local_size_y = 8) in;
-const int kGatherStride = 1;
-ivec2 GatherTexel() { return ivec2(gl_GlobalInvocationID.xy); }
-int GatherLane() { return 0; }
-void GatherSum(int lane, inout vec3 a, inout vec3 b, inout vec3 c) {}
-)glsl";
-  }
-  return std::string(kWorkGroupSumSource) + R"glsl(
-const int kGatherStride = 64;
-ivec2 GatherTexel() { return ivec2(gl_WorkGroupID.xy); }
-int GatherLane() { return int(gl_LocalInvocationID.x); }
-void GatherSum(int lane, inout vec3 a, inout vec3 b, inout vec3 c) {
-  SumOverWorkGroup(lane, a, b);
-  barrier();  // every lane has read the first sums before the shared arrays are reused
-  vec3 unused = vec3(0.0);
-  SumOverWorkGroup(lane, c, unused);
-}
-)glsl";
-}
-
-void DispatchGather(const ComputeProgram& program, bool llvmpipe, shared::ivec2 size) {
-  if (llvmpipe) {
-    DispatchCompute2D(program, size);
-  } else {
-    DispatchWorkGroups(program, {size.x, size.y, 1});
-  }
-}
-
-}  // namespace
 
 void RunGatheredMultipleScatteringPasses(const Context& context, const shared::AtmosphereParameters& km,
                                          const GpuTexture& transmittance, int direction_count, int sample_count,
                                          bool media_phase, const shared::vec3& ground_transfer, int orders,
                                          int gather_direction_count, const GpuTexture& out) {
-  const bool llvmpipe = context.renderer().find("llvmpipe") != std::string::npos;
+  const TexelLayout layout = MultipleScatteringLayout(context);
   const shared::ivec2 size = out.size2();
   GpuTexture order[2] = {GpuTexture::Make2D(size), GpuTexture::Make2D(size)};
   GpuTexture sum[2] = {GpuTexture::Make2D(size), GpuTexture::Make2D(size)};
@@ -216,7 +351,8 @@ void RunGatheredMultipleScatteringPasses(const Context& context, const shared::A
   GpuTexture f_ms = GpuTexture::Make2D(size);
 
   // Order 1: Psi_1 (encoded, and plain as the first sum), f_ms, E_1.
-  const ComputeProgram& first = context.Program(kMultipleScatteringFiles, GatherForm(llvmpipe) + R"glsl(
+  const ComputeProgram& first = context.Program(kMultipleScatteringFiles, TexelLayoutSource(layout) +
+      std::string(kMultipleScatteringSumsSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D order_image;
 layout(rgba32f, binding = 1) uniform writeonly image2D sum_image;
 layout(rgba32f, binding = 2) uniform writeonly image2D f_image;
@@ -230,19 +366,18 @@ uniform vec3 ground_transfer;
 
 void main() {
   ivec2 size = imageSize(order_image);
-  ivec2 texel = GatherTexel();
-  int lane = GatherLane();
-  if (texel.x >= size.x || texel.y >= size.y) return;  // never within a work group of one texel
+  ivec2 texel = GroupTexel();
+  bool inside = texel.x < size.x && texel.y < size.y;
+  texel = min(texel, size - 1);
   float r;
   vec3 sun_direction;
   GetMultiScatteringTexelPoint(atmosphere, size, vec2(texel) + vec2(0.5), r, sun_direction);
   vec3 luminance_sum;
   vec3 transfer_sum;
   vec3 irradiance_sum;
-  SumMultiScatteringRays(atmosphere, transmittance_texture, r, sun_direction, lane, kGatherStride, direction_count,
-      sample_count, media_phase, ground_transfer, luminance_sum, transfer_sum, irradiance_sum);
-  GatherSum(lane, luminance_sum, transfer_sum, irradiance_sum);
-  if (lane == 0) {
+  SumFirstOrderRays(atmosphere, transmittance_texture, r, sun_direction, direction_count, sample_count, media_phase,
+      ground_transfer, luminance_sum, transfer_sum, irradiance_sum);
+  if (inside && TexelLead()) {
     vec3 psi = luminance_sum / float(direction_count);
     imageStore(order_image, texel, vec4(EncodeMultiScattering(psi), 1.0));
     imageStore(sum_image, texel, vec4(psi, 1.0));
@@ -264,41 +399,51 @@ void main() {
   sum[0].BindImage(1);
   f_ms.BindImage(2);
   ground[0].BindImage(3);
-  DispatchGather(first, llvmpipe, size);
+  DispatchTexels(first, layout, size);
 
-  // Orders 2 ... K, each from the previous one's tables.
-  const ComputeProgram& gather = context.Program(kMultipleScatteringFiles, GatherForm(llvmpipe) + R"glsl(
+  // Orders 2 ... K, each from the previous one's tables. The last also writes the table: the sum,
+  // and the series after it (GetMultiScatteringFromOrders), in the same pass.
+  const ComputeProgram& gather = context.Program(kMultipleScatteringFiles, TexelLayoutSource(layout) +
+      std::string(kMultipleScatteringSumsSource) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D order_image;
 layout(rgba32f, binding = 1) uniform writeonly image2D sum_image;
 layout(rgba32f, binding = 2) uniform writeonly image2D ground_image;
+layout(rgba32f, binding = 3) uniform writeonly image2D table_image;
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D previous_order_texture;
 uniform sampler2D ground_irradiance_texture;
 uniform sampler2D sum_texture;
+uniform sampler2D f_texture;
 uniform int direction_count;
 uniform int sample_count;
+uniform bool last_order;
 
 void main() {
   ivec2 size = imageSize(order_image);
-  ivec2 texel = GatherTexel();
-  int lane = GatherLane();
-  if (texel.x >= size.x || texel.y >= size.y) return;
+  ivec2 texel = GroupTexel();
+  bool inside = texel.x < size.x && texel.y < size.y;
+  texel = min(texel, size - 1);
   float r;
   vec3 sun_direction;
   GetMultiScatteringTexelPoint(atmosphere, size, vec2(texel) + vec2(0.5), r, sun_direction);
   vec3 luminance_sum;
   vec3 irradiance_sum;
-  SumMultiScatteringGatherRays(atmosphere, previous_order_texture, ground_irradiance_texture, r, sun_direction, lane,
-      kGatherStride, direction_count, sample_count, luminance_sum, irradiance_sum);
-  vec3 unused = vec3(0.0);
-  GatherSum(lane, luminance_sum, irradiance_sum, unused);
-  if (lane == 0) {
+  SumGatherRays(atmosphere, previous_order_texture, ground_irradiance_texture, r, sun_direction, direction_count,
+      sample_count, luminance_sum, irradiance_sum);
+  if (inside && TexelLead()) {
     vec3 psi = luminance_sum / float(direction_count);
-    imageStore(order_image, texel, vec4(EncodeMultiScattering(psi), 1.0));
-    imageStore(sum_image, texel, vec4(texelFetch(sum_texture, texel, 0).rgb + psi, 1.0));
-    if (texel.y == 0) {
-      vec3 irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
-      imageStore(ground_image, ivec2(texel.x, 0), vec4(EncodeMultiScattering(irradiance), 1.0));
+    vec3 order_sum = texelFetch(sum_texture, texel, 0).rgb + psi;
+    if (last_order) {
+      vec3 psi_ms = GetMultiScatteringFromOrders(order_sum, DecodeMultiScattering(EncodeMultiScattering(psi)),
+          texelFetch(f_texture, texel, 0).rgb);
+      imageStore(table_image, texel, vec4(EncodeMultiScattering(psi_ms), 1.0));
+    } else {
+      imageStore(order_image, texel, vec4(EncodeMultiScattering(psi), 1.0));
+      imageStore(sum_image, texel, vec4(order_sum, 1.0));
+      if (texel.y == 0) {
+        vec3 irradiance = GetGatheredGroundIrradianceFromSum(irradiance_sum, direction_count);
+        imageStore(ground_image, ivec2(texel.x, 0), vec4(EncodeMultiScattering(irradiance), 1.0));
+      }
     }
   }
 }
@@ -309,43 +454,26 @@ void main() {
     SetAtmosphereUniforms(gather, "atmosphere", km);
     gather.SetInt("direction_count", gather_direction_count);
     gather.SetInt("sample_count", sample_count);
+    gather.SetInt("last_order", n == orders ? 1 : 0);
     BindSamplers(gather, {{"previous_order_texture", &order[current]},
                           {"ground_irradiance_texture", &ground[current]},
-                          {"sum_texture", &sum[current]}});
+                          {"sum_texture", &sum[current]},
+                          {"f_texture", &f_ms}});
     order[next].BindImage(0);
     sum[next].BindImage(1);
     ground[next].BindImage(2);
-    DispatchGather(gather, llvmpipe, size);
+    out.BindImage(3);
+    DispatchTexels(gather, layout, size);
     current = next;
   }
-
-  // The table: the sum, and the series after the last order.
-  const ComputeProgram& finish = context.Program(kMultipleScatteringFiles, TablePass(R"glsl(
-uniform sampler2D sum_texture;
-uniform sampler2D last_order_texture;
-uniform sampler2D f_texture;
-
-void main() {
-  ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (texel.x >= size.x || texel.y >= size.y) return;
-  vec3 last_order = DecodeMultiScattering(texelFetch(last_order_texture, texel, 0).rgb);
-  vec3 psi_ms = GetMultiScatteringFromOrders(texelFetch(sum_texture, texel, 0).rgb, last_order,
-      texelFetch(f_texture, texel, 0).rgb);
-  imageStore(output_table, texel, vec4(EncodeMultiScattering(psi_ms), 1.0));
-}
-)glsl"), "multiple-scattering table, the gathered orders' sum");
-  SetAtmosphereUniforms(finish, "atmosphere", km);
-  BindSamplers(finish, {{"sum_texture", &sum[current]}, {"last_order_texture", &order[current]}, {"f_texture", &f_ms}});
-  out.BindImage(0);
-  DispatchCompute2D(finish, size);
 }
 
 void RunGroundIrradiancePass(const Context& context, const shared::AtmosphereParameters& km,
                              const GpuTexture& transmittance, const GpuTexture& multiple_scattering,
                              int direction_count, int sample_count, const GpuTexture& out) {
-  // One work group per texel (kWorkGroupSumSource), as ComputeGroundIrradianceTexel sums.
-  const ComputeProgram& program = context.Program(kSkyFiles, std::string(kWorkGroupSumSource) + R"glsl(
+  const TexelLayout layout = GroundIrradianceLayout(context);
+  // SumGroundIrradianceTerms (sky.glsl) over the texel's invocations, as the rays above.
+  const ComputeProgram& program = context.Program(kSkyFiles, TexelLayoutSource(layout) + R"glsl(
 layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
 uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
@@ -354,14 +482,28 @@ uniform int direction_count;
 uniform int sample_count;
 
 void main() {
-  ivec2 texel = ivec2(gl_WorkGroupID.xy);
-  int lane = int(gl_LocalInvocationID.x);
-  float mu_s = GetGroundIrradianceTexelMuS(imageSize(output_table).x, float(texel.x) + 0.5);
-  vec3 sum = SumGroundIrradianceTerms(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, lane, 64,
-      direction_count, sample_count);
-  vec3 unused = vec3(0.0);
-  SumOverWorkGroup(lane, sum, unused);
-  if (lane == 0) imageStore(output_table, texel, vec4(GetGroundIrradianceFromSum(sum, direction_count), 1.0));
+  ivec2 size = imageSize(output_table);
+  ivec2 texel = GroupTexel();
+  bool inside = texel.x < size.x && texel.y < size.y;
+  texel = min(texel, size - 1);
+  float mu_s = GetGroundIrradianceTexelMuS(size.x, float(texel.x) + 0.5);
+  int first_step = SegmentFirstStep(sample_count);
+  int end_step = SegmentEndStep(sample_count);
+  vec3 sum = vec3(0.0);
+  for (int base = 0; base < direction_count; base += kRaySlots) {
+    int k = base + RaySlot();
+    vec3 term = vec3(0.0);
+    vec3 transmittance = vec3(1.0);
+    if (k < direction_count) {
+      term = ComputeGroundIrradianceTermSteps(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
+          direction_count, sample_count, first_step, end_step, transmittance);
+    }
+    sum += term * ThroughputBefore(transmittance);
+  }
+  vec3 unused_b = vec3(0.0);
+  vec3 unused_c = vec3(0.0);
+  SumOverTexel(sum, unused_b, unused_c);
+  if (inside && TexelLead()) imageStore(output_table, texel, vec4(GetGroundIrradianceFromSum(sum, direction_count), 1.0));
 }
 )glsl", "ground-irradiance table");
   SetAtmosphereUniforms(program, "atmosphere", km);
@@ -370,32 +512,44 @@ void main() {
   BindSamplers(program,
                {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   out.BindImage(0);
-  DispatchWorkGroups(program, {out.size().x, out.size().y, 1});
+  DispatchTexels(program, layout, out.size2());
 }
 
 void RunSkyViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,
                     const GpuTexture& multiple_scattering, double r_km, double mu_s, int sample_count,
                     const GpuTexture& out) {
   if (out.size().y < 4 || out.size().y % 2 != 0) throw Error("GL sky-view table: the height must be even and >= 4");
-  const ComputeProgram& program = context.Program(kSkyFiles, TablePass(R"glsl(
+  const TexelLayout layout = SkyViewLayout(context);
+  const ComputeProgram& program = context.Program(kSkyFiles, TexelLayoutSource(layout) + R"glsl(
+layout(rgba32f, binding = 0) uniform writeonly image2D output_table;
+uniform AtmosphereParameters atmosphere;
 uniform sampler2D transmittance_texture;
 uniform sampler2D multiple_scattering_texture;
 uniform float r;     // km
 uniform float mu_s;
 uniform int sample_count;
 
-// Column x and column width - x see azimuths phi and 2 pi - phi, the same nu: the invocations
-// march columns 0 .. width / 2 and write both (as cpu::ComputeSkyViewTable).
+// Column x and column width - x see azimuths phi and 2 pi - phi, the same nu: the texels of
+// columns 0 .. width / 2 are marched, and each is written to both (as cpu::ComputeSkyViewTable).
 void main() {
   ivec2 size = imageSize(output_table);
-  ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-  if (2 * texel.x > size.x || texel.y >= size.y) return;
-  vec3 radiance = ComputeSkyViewTexel(atmosphere, transmittance_texture, multiple_scattering_texture, size,
-      vec2(texel) + vec2(0.5), r, mu_s, sample_count);
-  imageStore(output_table, texel, vec4(radiance, 1.0));
-  imageStore(output_table, ivec2((size.x - texel.x) % size.x, texel.y), vec4(radiance, 1.0));
+  ivec2 texel = GroupTexel();
+  bool inside = 2 * texel.x <= size.x && texel.y < size.y;
+  texel = min(texel, ivec2(size.x / 2, size.y - 1));
+  vec3 transmittance;
+  vec3 radiance = ComputeSkyViewTexelSteps(atmosphere, transmittance_texture, multiple_scattering_texture, size,
+      vec2(texel) + vec2(0.5), r, mu_s, sample_count, SegmentFirstStep(sample_count), SegmentEndStep(sample_count),
+      transmittance);
+  radiance *= ThroughputBefore(transmittance);
+  vec3 unused_b = vec3(0.0);
+  vec3 unused_c = vec3(0.0);
+  SumOverTexel(radiance, unused_b, unused_c);
+  if (inside && TexelLead()) {
+    imageStore(output_table, texel, vec4(radiance, 1.0));
+    imageStore(output_table, ivec2((size.x - texel.x) % size.x, texel.y), vec4(radiance, 1.0));
+  }
 }
-)glsl"), "sky-view table");
+)glsl", "sky-view table");
   SetAtmosphereUniforms(program, "atmosphere", km);
   program.SetFloat("r", r_km);
   program.SetFloat("mu_s", mu_s);
@@ -403,7 +557,7 @@ void main() {
   BindSamplers(program,
                {{"transmittance_texture", &transmittance}, {"multiple_scattering_texture", &multiple_scattering}});
   out.BindImage(0);
-  DispatchCompute2D(program, {out.size().x / 2 + 1, out.size().y});
+  DispatchTexels(program, layout, {out.size().x / 2 + 1, out.size().y});
 }
 
 void RunGroundViewPass(const Context& context, const shared::AtmosphereParameters& km, const GpuTexture& transmittance,

@@ -99,9 +99,14 @@ vec3 GetMultiScatteringDirection(int k, int count) {
 // instead of Hillaire's isotropic one; the orders after it stay isotropic. `ground_transfer`
 // (GetGroundTransfer, or 0 for Hillaire 2020's series) adds the ground's reflection of the
 // orders >= 2 to f.
-void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
-    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, bool media_phase,
-    IN(vec3) ground_transfer, OUT(vec3) luminance, OUT(vec3) transfer) {
+// The Steps form marches the steps first_step ... end_step - 1 only, from a throughput of 1, and
+// gives the throughput over them; the ground is counted by the segment that ends the ray. A GPU
+// work group splits a ray into segments, one per invocation, and weighs each segment by the
+// throughputs of the segments before it.
+void IntegrateMultiScatteringRaySteps(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, Number r, IN(vec3) direction, IN(vec3) sun_direction,
+    int sample_count, int first_step, int end_step, bool media_phase, IN(vec3) ground_transfer, OUT(vec3) luminance,
+    OUT(vec3) transfer, OUT(vec3) throughput) {
   Number mu = direction.z;
   Number mu_s = sun_direction.z;
   Number nu = dot(direction, sun_direction);
@@ -109,10 +114,10 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
   Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
   Number rayleigh_phase = media_phase ? GetRayleighPhase(atmosphere, nu) : IsotropicPhaseFunction();
   Number mie_phase = media_phase ? GetMiePhase(atmosphere, nu) : IsotropicPhaseFunction();
-  vec3 throughput = vec3(1.0);
+  throughput = vec3(1.0);
   luminance = vec3(0.0);
   transfer = vec3(0.0);
-  for (int i = 0; i < sample_count; ++i) {
+  for (int i = first_step; i < end_step; ++i) {
     // Quadratic steps, as in IntegrateScatteredRadiance: short near the point, long far away.
     Number x_0 = Number(i) / Number(sample_count);
     Number x_1 = Number(i + 1) / Number(sample_count);
@@ -129,7 +134,7 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
     transfer += step_integral * medium.scattering;
     throughput *= step_transmittance;
   }
-  if (ray_r_mu_intersects_ground) {
+  if (ray_r_mu_intersects_ground && end_step == sample_count) {
     // Sunlight reflected by the Lambertian ground at the end of the ray: albedo / pi * E * cos.
     Number r_g = atmosphere.bottom_radius;
     Number mu_s_g = ClampCosine((r * mu_s + t_max * nu) / r_g);
@@ -137,6 +142,14 @@ void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(Transmi
     luminance += throughput * sun_transmittance * atmosphere.ground_albedo * (max(mu_s_g, 0.0) / kPi);
     transfer += throughput * atmosphere.ground_albedo * ground_transfer;
   }
+}
+
+void IntegrateMultiScatteringRay(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, bool media_phase,
+    IN(vec3) ground_transfer, OUT(vec3) luminance, OUT(vec3) transfer) {
+  vec3 throughput;
+  IntegrateMultiScatteringRaySteps(atmosphere, transmittance_texture, r, direction, sun_direction, sample_count, 0,
+      sample_count, media_phase, ground_transfer, luminance, transfer, throughput);
 }
 
 // The ground's share of the series 1/(1 - f_ms). Under the isotropic unit field of one order, a
@@ -252,17 +265,19 @@ vec3 GetGatheredGroundIrradiance(IN(MultiScatteringTexture) ground_irradiance_te
 // L_n(x, w) for n > 1 along the ray from radius r in `direction`: the air lit by the previous
 // order's isotropic light Psi_{n-1} (its table, at each sample's own radius and sun), and the ground
 // lit by that order's irradiance E_{n-1}. The steps are IntegrateMultiScatteringRay's.
-vec3 IntegrateMultiScatteringGatherRay(IN(AtmosphereParameters) atmosphere,
+// The Steps form marches a segment, as IntegrateMultiScatteringRaySteps.
+vec3 IntegrateMultiScatteringGatherRaySteps(IN(AtmosphereParameters) atmosphere,
     IN(MultiScatteringTexture) previous_order_texture, IN(MultiScatteringTexture) ground_irradiance_texture,
-    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count) {
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count, int first_step, int end_step,
+    OUT(vec3) throughput) {
   Number mu = direction.z;
   Number mu_s = sun_direction.z;
   Number nu = dot(direction, sun_direction);
   bool ray_r_mu_intersects_ground = RayIntersectsGround(atmosphere, r, mu);
   Number t_max = DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
-  vec3 throughput = vec3(1.0);
+  throughput = vec3(1.0);
   vec3 luminance = vec3(0.0);
-  for (int i = 0; i < sample_count; ++i) {
+  for (int i = first_step; i < end_step; ++i) {
     Number x_0 = Number(i) / Number(sample_count);
     Number x_1 = Number(i + 1) / Number(sample_count);
     Number dt = t_max * (x_1 * x_1 - x_0 * x_0);
@@ -276,12 +291,20 @@ vec3 IntegrateMultiScatteringGatherRay(IN(AtmosphereParameters) atmosphere,
         GetMultiScattering(atmosphere, previous_order_texture, r_i, mu_s_i);
     throughput *= step_transmittance;
   }
-  if (ray_r_mu_intersects_ground) {
+  if (ray_r_mu_intersects_ground && end_step == sample_count) {
     Number mu_s_g = ClampCosine((r * mu_s + t_max * nu) / atmosphere.bottom_radius);
     luminance += throughput * atmosphere.ground_albedo / kPi *
         GetGatheredGroundIrradiance(ground_irradiance_texture, mu_s_g);
   }
   return luminance;
+}
+
+vec3 IntegrateMultiScatteringGatherRay(IN(AtmosphereParameters) atmosphere,
+    IN(MultiScatteringTexture) previous_order_texture, IN(MultiScatteringTexture) ground_irradiance_texture,
+    Number r, IN(vec3) direction, IN(vec3) sun_direction, int sample_count) {
+  vec3 throughput;
+  return IntegrateMultiScatteringGatherRaySteps(atmosphere, previous_order_texture, ground_irradiance_texture, r,
+      direction, sun_direction, sample_count, 0, sample_count, throughput);
 }
 
 // SumMultiScatteringRays for order n > 1: the sums of IntegrateMultiScatteringGatherRay's

@@ -34,16 +34,20 @@ bool MoveToAtmosphereEntry(IN(AtmosphereParameters) atmosphere, INOUT(Number) r,
 // For an observer inside the atmosphere, with whether the ray meets the ground given: a table
 // whose rows are split into sky and ground halves decides it by the half, not by the sign of a
 // rounded mu at the horizon (in float the last sky row's mu can round below the horizon).
-vec3 IntegrateScatteredRadianceInside(IN(AtmosphereParameters) atmosphere,
+// IntegrateScatteredRadianceInsideSteps marches only the steps first_step ... end_step - 1 of the
+// `sample_count`, from a transmittance of 1 at the first: a GPU work group splits a ray into
+// segments, one per invocation, and weighs each segment's radiance by the transmittances of the
+// segments before it.
+vec3 IntegrateScatteredRadianceInsideSteps(IN(AtmosphereParameters) atmosphere,
     IN(TransmittanceTexture) transmittance_texture, IN(MultiScatteringTexture) multiple_scattering_texture, Number r,
     Number mu, Number mu_s, Number nu, bool ray_r_mu_intersects_ground, Number t_limit, int sample_count,
-    OUT(vec3) transmittance) {
+    int first_step, int end_step, OUT(vec3) transmittance) {
   transmittance = vec3(1.0);
   Number t_max = min(DistanceToNearestAtmosphereBoundary(atmosphere, r, mu, ray_r_mu_intersects_ground), t_limit);
   Number rayleigh_phase = GetRayleighPhase(atmosphere, nu);
   Number mie_phase = GetMiePhase(atmosphere, nu);
   vec3 radiance = vec3(0.0);
-  for (int i = 0; i < sample_count; ++i) {
+  for (int i = first_step; i < end_step; ++i) {
     // Step i spans [t_max x_i^2, t_max x_{i+1}^2] with x uniform: short steps near the observer,
     // where the density is highest for rays that rise and the transmittance weighs most for all.
     Number x_0 = Number(i) / Number(sample_count);
@@ -64,6 +68,14 @@ vec3 IntegrateScatteredRadianceInside(IN(AtmosphereParameters) atmosphere,
     transmittance *= step_transmittance;
   }
   return radiance;
+}
+
+vec3 IntegrateScatteredRadianceInside(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, IN(MultiScatteringTexture) multiple_scattering_texture, Number r,
+    Number mu, Number mu_s, Number nu, bool ray_r_mu_intersects_ground, Number t_limit, int sample_count,
+    OUT(vec3) transmittance) {
+  return IntegrateScatteredRadianceInsideSteps(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu,
+      mu_s, nu, ray_r_mu_intersects_ground, t_limit, sample_count, 0, sample_count, transmittance);
 }
 
 vec3 IntegrateScatteredRadiance(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
@@ -167,16 +179,26 @@ void GetViewAnglesFromSkyViewTextureUv(IN(AtmosphereParameters) atmosphere, IN(i
 
 // The per-texel kernel of the sky-view table for an observer at radius r and a sun at zenith
 // cosine mu_s (azimuth 0).
-vec3 ComputeSkyViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+// ComputeSkyViewTexelSteps marches the steps first_step ... end_step - 1 only (as
+// IntegrateScatteredRadianceInsideSteps), with the transmittance over them.
+vec3 ComputeSkyViewTexelSteps(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(MultiScatteringTexture) multiple_scattering_texture, IN(ivec2) texture_size, IN(vec2) frag_coord, Number r,
-    Number mu_s, int sample_count) {
+    Number mu_s, int sample_count, int first_step, int end_step, OUT(vec3) transmittance) {
   Number mu;
   Number azimuth;
   GetViewAnglesFromSkyViewTextureUv(atmosphere, texture_size, r, frag_coord / vec2(texture_size), mu, azimuth);
   Number nu = SafeSqrt(1.0 - mu * mu) * SafeSqrt(1.0 - mu_s * mu_s) * cos(azimuth) + mu * mu_s;
+  return IntegrateScatteredRadianceInsideSteps(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu,
+      mu_s, nu, frag_coord.y >= 0.5 * Number(texture_size.y), 1e30, sample_count, first_step, end_step,
+      transmittance);
+}
+
+vec3 ComputeSkyViewTexel(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
+    IN(MultiScatteringTexture) multiple_scattering_texture, IN(ivec2) texture_size, IN(vec2) frag_coord, Number r,
+    Number mu_s, int sample_count) {
   vec3 transmittance;
-  return IntegrateScatteredRadianceInside(atmosphere, transmittance_texture, multiple_scattering_texture, r, mu, mu_s,
-      nu, frag_coord.y >= 0.5 * Number(texture_size.y), 1e30, sample_count, transmittance);
+  return ComputeSkyViewTexelSteps(atmosphere, transmittance_texture, multiple_scattering_texture, texture_size,
+      frag_coord, r, mu_s, sample_count, 0, sample_count, transmittance);
 }
 
 vec3 GetSkyRadianceFromSkyView(IN(AtmosphereParameters) atmosphere, IN(SkyViewTexture) sky_view_texture, Number r,
@@ -209,15 +231,26 @@ vec3 GetGroundIrradianceDirection(int k, int direction_count) {
   return vec3(s * cos(phi), s * sin(phi), z);
 }
 
-// Direction k's term of the quadrature below, z L(R, w_k), for a sun at zenith cosine mu_s.
+// Direction k's term of the quadrature below, z L(R, w_k), for a sun at zenith cosine mu_s; the
+// Steps form marches the steps first_step ... end_step - 1 only (IntegrateScatteredRadianceInsideSteps).
+// The ground point is inside the atmosphere, and the upward rays miss the ground.
+vec3 ComputeGroundIrradianceTermSteps(IN(AtmosphereParameters) atmosphere,
+    IN(TransmittanceTexture) transmittance_texture, IN(MultiScatteringTexture) multiple_scattering_texture, Number mu_s,
+    int k, int direction_count, int sample_count, int first_step, int end_step, OUT(vec3) transmittance) {
+  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
+  vec3 direction = GetGroundIrradianceDirection(k, direction_count);
+  Number r = atmosphere.bottom_radius;
+  return direction.z * IntegrateScatteredRadianceInsideSteps(atmosphere, transmittance_texture,
+      multiple_scattering_texture, r, direction.z, mu_s, dot(direction, sun_direction),
+      RayIntersectsGround(atmosphere, r, direction.z), 1e30, sample_count, first_step, end_step, transmittance);
+}
+
 vec3 ComputeGroundIrradianceTerm(IN(AtmosphereParameters) atmosphere, IN(TransmittanceTexture) transmittance_texture,
     IN(MultiScatteringTexture) multiple_scattering_texture, Number mu_s, int k, int direction_count,
     int sample_count) {
-  vec3 sun_direction = vec3(SafeSqrt(1.0 - mu_s * mu_s), 0.0, mu_s);
-  vec3 direction = GetGroundIrradianceDirection(k, direction_count);
   vec3 transmittance;
-  return direction.z * IntegrateScatteredRadiance(atmosphere, transmittance_texture, multiple_scattering_texture,
-      atmosphere.bottom_radius, direction.z, mu_s, dot(direction, sun_direction), 1e30, sample_count, transmittance);
+  return ComputeGroundIrradianceTermSteps(atmosphere, transmittance_texture, multiple_scattering_texture, mu_s, k,
+      direction_count, sample_count, 0, sample_count, transmittance);
 }
 
 // The sum of the terms k = first, first + stride, ... < direction_count (all with (0, 1); see
