@@ -130,14 +130,18 @@ float Curve(float v) {
   return clamp(t, 0.0, 1.0);
 }
 float Encode(float v) { return texture(encode_table, sqrt(clamp(v, 0.0, 1.0))).r; }
-// AgX as AgxDisplay of src/atmo/io/display.cc (its numbers and sources are there), decoded from its
-// 2.2 display encoding to linear for Encode.
+// AgX as AgxDisplay of src/atmo/io/display.cc (its numbers and sources are there): AgxEncoded is
+// its 2.2-encoded display value, Agx that value decoded to linear for Encode.
+// The sigmoid's two sides differ in constants only: chosen by the sign of d, so that a GPU (or
+// SwiftShader, four pixels at a time) evaluates two pows per channel, not both sides' four.
 float AgxSigmoid(float x) {
   float d = x - 20.0 / 33.0;
-  return d <= 0.0 ? 0.5 + 2.0 * d * pow(1.0 + 59.507875 * pow(-d, 3.0), -1.0 / 3.0)
-                  : 0.5 + 2.0 * d * pow(1.0 + 69.86278913545539 * pow(d, 3.25), -4.0 / 13.0);
+  bool low = d <= 0.0;
+  float s = pow(1.0 + (low ? 59.507875 : 69.86278913545539) * pow(abs(d), low ? 3.0 : 3.25),
+                low ? -1.0 / 3.0 : -4.0 / 13.0);
+  return 0.5 + 2.0 * d * s;
 }
-vec3 Agx(vec3 v) {
+vec3 AgxEncoded(vec3 v) {
   // Columns of the inset matrix (rows of display.cc's kAgxInset, transposed).
   const mat3 inset = mat3(0.8424010709504686, 0.04240107095046854, 0.04240107095046854,
                           0.07843650156180276, 0.8784365015618028, 0.07843650156180276,
@@ -151,7 +155,10 @@ vec3 Agx(vec3 v) {
   const mat3 outset = mat3(1.1969986613119143, -0.053001338688085674, -0.05300133868808568,
                            -0.09804562695225347, 1.1519543730477466, -0.09804562695225344,
                            -0.09895303435966087, -0.09895303435966087, 1.151046965640339);
-  return pow(clamp(outset * f, 0.0, 1.0), vec3(2.2));
+  return clamp(outset * f, 0.0, 1.0);
+}
+vec3 Agx(vec3 v) {
+  return pow(AgxEncoded(v), vec3(2.2));
 }
 // The frame's texel under the pixel (the identity where the sizes are equal), row 0 at the top.
 ivec2 Texel(ivec2 size) {

@@ -97,8 +97,8 @@ void main() {
     }
     return;
   }
-  vec3 display = atmo_Agx(max(radiance, vec3(0.0)) * exposure);  // linear display light
-  colour = vec4(pow(display, vec3(1.0 / 2.2)), 1.0);
+  // AgX's display value, encoded with the 2.2 power that the canvas expects.
+  colour = vec4(atmo_AgxEncoded(max(radiance, vec3(0.0)) * exposure), 1.0);
 }
 `;
 
