@@ -505,23 +505,33 @@ using ::atmo::testing::WriteFile;
 class GlSource4dCli : public ::atmo::testing::CliFixture {};
 
 // `atmo render --model source4d --backend gl` writes the image the CPU backend writes, within the
-// bounds of the frame (above); precompute, which has no tables to export for the model, fails
-// with one line.
+// bounds of the frame (above), with the tables built on the GPU (--source4d-tables gpu) or the
+// CPU's uploaded (cpu); auto is cpu on a software GL and gpu on a hardware one. precompute, which
+// has no tables to export for the model, fails with one line.
 TEST_F(GlSource4dCli, RenderMatchesCpuBackend) {
   ATMO_REQUIRE_GL_CONTEXT(context);
   const std::string args =
       "render --model source4d --preset earth --option table=8x16x16x6 --option gather=17x5 --option orders=3 "
       "--option samples=32 --width 48 --height 24 --fov 100 --sun-elevation 12 --unit relative --no-png";
-  const auto gl = Run(args + " --backend gl --exr gl.exr");
-  ASSERT_EQ(gl.exit_code, 0) << gl.err;
   const auto cpu = Run(args + " --exr cpu.exr");
   ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
-  const Difference d = CompareImages(ReadExr(dir_ / "gl.exr"), ReadExr(dir_ / "cpu.exr"));
-  std::printf("atmo render source4d gl vs cpu: rel_mae %.2g p99 %.2g max %.2g over %zu values\n", d.rel_mae, d.p99,
-              d.max, d.count);
-  EXPECT_GT(d.count, 48u * 24u);
-  ExpectWithinSkyViewBounds(context, d);  // the defaults: the sky-view tables on both
+  const Image cpu_image = ReadExr(dir_ / "cpu.exr");
+  for (const std::string tables : {"gpu", "cpu", "auto"}) {
+    const auto gl = Run(args + " --backend gl --source4d-tables " + tables + " --exr gl_" + tables + ".exr");
+    ASSERT_EQ(gl.exit_code, 0) << gl.err;
+    const Difference d = CompareImages(ReadExr(dir_ / ("gl_" + tables + ".exr")), cpu_image);
+    std::printf("atmo render source4d gl (%s tables) vs cpu: rel_mae %.2g p99 %.2g max %.2g over %zu values\n",
+                tables.c_str(), d.rel_mae, d.p99, d.max, d.count);
+    EXPECT_GT(d.count, 48u * 24u);
+    ExpectWithinSkyViewBounds(context, d);  // the defaults: the sky-view tables on both
+  }
+  // auto chose by the renderer: its image is that choice's, to the bit.
+  const Image automatic = ReadExr(dir_ / "gl_auto.exr");
+  const Image chosen = ReadExr(dir_ / (context.software_renderer() ? "gl_cpu.exr" : "gl_gpu.exr"));
+  EXPECT_EQ(automatic.pixels, chosen.pixels);
   ExpectFailureKeepingOutputs("precompute --model source4d --backend gl --out engine", "source4d", {});
+  ExpectFailureKeepingOutputs(args + " --backend gl --source4d-tables fast --exr bad.exr", "--source4d-tables",
+                              {});
 }
 
 // `atmo sample --model source4d --backend gl` answers from the tables computed on the GPU and read
@@ -535,10 +545,14 @@ TEST_F(GlSource4dCli, SampleMatchesCpuBackend) {
   const std::string args =
       "sample --model source4d --preset earth --option table=8x16x16x6 --option gather=17x5 --option orders=3 "
       "--grid points.csv";
-  const auto gl = Run(args + " --backend gl --out gl.csv");
+  const auto gl = Run(args + " --backend gl --source4d-tables gpu --out gl.csv");
   ASSERT_EQ(gl.exit_code, 0) << gl.err;
   const auto cpu = Run(args + " --out cpu.csv");
   ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+  // With the CPU's tables the points are the CPU backend's, to the digit.
+  const auto cpu_tables = Run(args + " --backend gl --source4d-tables cpu --out gl_cpu_tables.csv");
+  ASSERT_EQ(cpu_tables.exit_code, 0) << cpu_tables.err;
+  EXPECT_EQ(ReadFile(dir_ / "gl_cpu_tables.csv"), ReadFile(dir_ / "cpu.csv"));
   const std::vector<std::string> gl_rows = Lines(ReadFile(dir_ / "gl.csv"));
   const std::vector<std::string> cpu_rows = Lines(ReadFile(dir_ / "cpu.csv"));
   ASSERT_EQ(gl_rows.size(), cpu_rows.size());

@@ -105,7 +105,10 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     std::unique_ptr<gl::HillaireGl> sky;
     if (common.model == "elek" || common.model == "source4d") {
       // The table's passes then the frame; the textures are made anew each repeat.
-      run = [&](PassTimings* timings) { RenderOnGl(context, common, parameters, settings, timings); };
+      // source4d's tables built on the GPU whatever --source4d-tables says: this times the GL path.
+      run = [&](PassTimings* timings) {
+        RenderOnGl(context, common, parameters, settings, timings, /*gpu_tables=*/true);
+      };
     } else {
       sky = std::make_unique<gl::HillaireGl>(context, parameters, GlHillaireSettings(common));
       run = [&](PassTimings* timings) {

@@ -117,6 +117,12 @@ void AddCommonOptions(CLI::App* app, CommonOptions& common) {
   app->add_option("--max-memory", common.max_memory,
                   "refuse work whose tables and images would need more memory than SIZE (e.g. 4G, 512M; "
                   "default: half of this machine's memory; docs/reliability.md)");
+  app->add_option("--source4d-tables", common.source4d_tables,
+                  "with --backend gl, where source4d's tables come from: gpu (built there), cpu (the CPU's, from the "
+                  "table cache or the shipped tables where they are, uploaded) or auto (cpu on a software GL such as "
+                  "llvmpipe, gpu on a hardware GPU); bench always times the GPU's")
+      ->check(CLI::IsMember({"gpu", "cpu", "auto"}))
+      ->capture_default_str();
   app->add_option("--table-cache", common.table_cache,
                   "FOLDER where precomputed source4d and elek tables are kept for later runs, or off (default: "
                   "$ATMO_TABLE_CACHE, else $XDG_CACHE_HOME/atmo/tables, else ~/.cache/atmo/tables; docs/cli.md)");

@@ -45,6 +45,9 @@ struct CommonOptions {
   int threads = 0;  // 0: oneTBB's default
   std::string max_memory;  // --max-memory SIZE (atmo::ParseByteSize); empty: half the machine's memory
   std::string table_cache;  // --table-cache FOLDER|off; empty: atmo::DefaultTableCache()
+  // --source4d-tables gpu|cpu|auto: on --backend gl, where source4d's tables come from
+  // (Source4dTablesFromCpu); `atmo bench` always times the GPU's build.
+  std::string source4d_tables = "auto";
   // Accepted for every model. Deterministic models ignore it; a Monte Carlo model will receive it
   // (see CreateModelFor).
   std::uint64_t seed = 0;
@@ -73,15 +76,22 @@ void CheckBackend(const CommonOptions& common, bool command_has_gl = false);
 HillaireSettings GlHillaireSettings(const CommonOptions& common);
 ElekSettings GlElekSettings(const CommonOptions& common);
 Source4dModelSettings GlSource4dSettings(const CommonOptions& common);
+// Whether source4d's tables on the gl backend are the CPU's (computed on the CPU or read from the
+// table cache or the shipped tables, then uploaded): --source4d-tables cpu, or auto on a software
+// GL such as llvmpipe, where the GPU's passes run on the same cores ~30x slower than the CPU's
+// build and the cache cannot serve them. gpu, or auto on a hardware GPU: built there.
+bool Source4dTablesFromCpu(const CommonOptions& common, const gl::Context& context);
 // Renders model hillaire, elek or source4d on the gl backend (--option settings as for the CPU
 // model), each pass's GPU time into `timings`: every table and the frame are GPU passes, except
-// source4d's transmittance table and quadrature matrices, computed on the CPU (times as cpu_NAME).
+// source4d's where Source4dTablesFromCpu (then its tables' upload, source4d_gl_upload, and the
+// frame). With `gpu_tables`, source4d's tables are built on the GPU whatever the flag says (bench).
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
-                 const RenderSettings& settings, PassTimings* timings = nullptr);
+                 const RenderSettings& settings, PassTimings* timings = nullptr, bool gpu_tables = false);
 #endif
 // Creates (and so precomputes) the model named by --model with the --option settings. With
 // --backend gl, models elek and source4d compute their tables on the GPU (gl::PrecomputeElekGl,
-// gl::PrecomputeSource4dGl) and answer from them; other models throw atmo::Error there.
+// gl::PrecomputeSource4dGl) and answer from them (source4d: unless Source4dTablesFromCpu, then
+// the CPU's model as on --backend cpu); other models throw atmo::Error there.
 std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const AtmosphereParameters& parameters);
 // atmo::DefaultTableCache(), its folder replaced by --table-cache's (a folder; off: none, the
 // shipped tables are still read). Throws atmo::Error for a path that exists and is not a folder.

@@ -6,6 +6,8 @@
 #include <cstdarg>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <string>
 #include <system_error>
 
 #include "atmo/error.h"
@@ -88,12 +90,40 @@ Source4dModelSettings GlSource4dSettings(const CommonOptions& common) {
   return Source4dModelSettings::FromOptions(DeterministicModelOptions(common));
 }
 
+bool Source4dTablesFromCpu(const CommonOptions& common, const gl::Context& context) {
+  if (common.source4d_tables == "auto") return context.software_renderer();
+  return common.source4d_tables == "cpu";
+}
+
+namespace {
+
+// source4d with the CPU's tables (Precompute: computed, or read from the table cache or the shipped
+// tables), kept while the atmosphere and options stay the same: a time-lapse's frames and a
+// moonlit frame reuse it.
+const Source4dModel& CpuSource4dModel(const CommonOptions& common, const AtmosphereParameters& parameters) {
+  static std::string key;
+  static std::unique_ptr<Source4dModel> model;
+  std::string next = ToJson(parameters);
+  for (const std::string& option : common.options) next += '\n' + option;
+  if (model == nullptr || next != key) {
+    model = std::make_unique<Source4dModel>(parameters, GlSource4dSettings(common));
+    model->Precompute();
+    key = std::move(next);
+  }
+  return *model;
+}
+
+}  // namespace
+
 Image RenderOnGl(const gl::Context& context, const CommonOptions& common, const AtmosphereParameters& parameters,
-                 const RenderSettings& settings, PassTimings* timings) {
+                 const RenderSettings& settings, PassTimings* timings, bool gpu_tables) {
   if (common.model == "elek") return gl::RenderElekGl(context, parameters, GlElekSettings(common), settings, timings);
   if (common.model == "source4d") {
-    // The tables and the frame on the GPU; the transmittance table and the quadrature matrices on
-    // the CPU (their times as cpu_NAME).
+    if (!gpu_tables && Source4dTablesFromCpu(common, context)) {
+      return gl::RenderSource4dGl(context, CpuSource4dModel(common, parameters), settings, timings);
+    }
+    // The tables and the frame on the GPU (on a software GL the quadrature matrices on the CPU,
+    // their time as cpu_NAME).
     return gl::RenderSource4dGl(context, parameters, GlSource4dSettings(common), settings, timings);
   }
   return gl::RenderHillaireGl(context, parameters, GlHillaireSettings(common), settings, timings);
@@ -124,11 +154,15 @@ std::unique_ptr<Model> CreateModelFor(const CommonOptions& common, const Atmosph
     return model;
   }
   if (common.backend == "gl" && common.model == "source4d") {
-    // The tables computed on the GPU and read back, as for elek.
+    // The tables computed on the GPU and read back, as for elek; or the CPU's.
     auto model = std::make_unique<Source4dModel>(
         parameters, Source4dModelSettings::FromOptions(DeterministicModelOptions(common)));
     const gl::Context context;
-    gl::PrecomputeSource4dGl(context, *model);
+    if (Source4dTablesFromCpu(common, context)) {
+      model->Precompute();
+    } else {
+      gl::PrecomputeSource4dGl(context, *model);
+    }
     return model;
   }
   if (common.backend == "gl") throw Error("model " + common.model + " has no CPU model with GL tables; use --backend cpu");

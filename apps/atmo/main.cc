@@ -87,7 +87,7 @@ void GroupFlags(CLI::App* app) {
       {"--aerosol", "Model and atmosphere"}, {"--aod", "Model and atmosphere"}, {"--angstrom", "Model and atmosphere"},
       {"--visibility", "Model and atmosphere"}, {"--turbidity", "Model and atmosphere"},
       {"--aerosol-phase", "Model and atmosphere"},
-      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--table-cache", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
+      {"--backend", "Execution"}, {"--threads", "Execution"}, {"--max-memory", "Execution"}, {"--table-cache", "Execution"}, {"--source4d-tables", "Execution"}, {"--seed", "Execution"}, {"--spp", "Execution"},
       {"--samples", "Execution"}, {"--target-rel-error", "Execution"},
       {"--camera", "Camera"}, {"--width", "Camera"}, {"--height", "Camera"}, {"--fov", "Camera"},
       {"--yaw", "Camera"}, {"--target", "Camera"}, {"--pitch", "Camera"}, {"--altitude", "Observer and sun"},
