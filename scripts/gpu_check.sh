@@ -6,7 +6,8 @@
 #
 #   scripts/gpu_check.sh [BUILD] [--quick]      BUILD: the build folder (default build)
 #
-# Figures: hillaire's tables (all_tables) and a 3840x2160 frame; elek's 32x256x32 table (K = 4);
+# Figures: hillaire's tables (all_tables; also with a texel per invocation, for comparison) and a
+# 3840x2160 frame; elek's 32x256x32 table (K = 4);
 # source4d's GPU tables and a 1280x720 frame; the viewer's frame rate at 1280x720 (atmo-viewer
 # --offscreen: no display needed); then every pass of the three benches. A full run takes under 5 minutes on an H200 and
 # about a minute on 2 llvmpipe cores with --quick. Exits non-zero only when a command fails; the
@@ -36,6 +37,9 @@ grep '^gl device' <<<"$hillaire"
 echo "figure                                         median      target"
 row "hillaire: all tables" "$(bench_median "$hillaire" all_tables)" "<= 0.05 ms (H100/H200)"
 row "hillaire: 3840x2160 frame" "$(bench_median "$hillaire" frame_3840x2160)" "<= 0.1 ms (H100/H200)"
+# The same tables with a texel per invocation (llvmpipe's form): what the work-group forms gain here.
+per_texel=$("$atmo" bench --backend gl --work-group-forms off --repeat "$repeat" --width 64 --height 64)
+row "hillaire: all tables, a texel per invocation" "$(bench_median "$per_texel" all_tables)" "- (comparison)"
 
 elek=$("$atmo" bench --backend gl --model elek --preset atmosphere-plus --repeat "$([ "$quick" = 1 ] && echo 1 || echo 5)" \
   --width 1280 --height 720)
@@ -56,5 +60,5 @@ else
 fi
 echo
 echo "every pass (atmo bench medians, ms):"
-for bench in "$hillaire" "$elek" "$source4d"; do grep -v "^gl device" <<<"$bench"; done
+for bench in "$hillaire" "$per_texel" "$elek" "$source4d"; do grep -v "^gl device" <<<"$bench"; done
 echo "gpu_check: $(( $(date +%s) - start )) s"

@@ -98,7 +98,8 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
     // One context and one set of GPU tables for all repeats. A first, unreported run compiles the
     // programs (and lets the driver finish compiling them at their first dispatch); each repeat
     // then runs every pass, and each pass's time is the GPU's (GpuPassTimer), without read-backs.
-    const gl::Context context;
+    gl::Context context;
+    if (command.work_group_forms != "auto") context.set_work_group_forms(command.work_group_forms == "on");
     const shared::CameraParameters camera = ToSharedCamera(settings.camera);
     const glm::dvec3 sun = SunDirection(settings.sun_elevation_deg, settings.sun_azimuth_deg);
     std::function<void(PassTimings*)> run;
@@ -157,7 +158,8 @@ int RunBench(const CommonOptions& common, const BenchCommand& command) {
       samples.Add("all_luts", all_luts_ms);
       samples.Add("all_tables", all_tables_ms);
     }
-    device = context.renderer() + ", " + context.version();
+    device = context.renderer() + ", " + context.version() +
+             (context.work_group_forms() ? ", work-group forms" : ", a texel per invocation");
 #endif
   } else {
     const std::unique_ptr<Model> model = CreateModelFor(common, parameters);

@@ -284,6 +284,8 @@ struct BenchCommand {
   int width = 1920;
   int height = 1080;
   SunOptions sun;  // --date: the frame's sun from a date and place (default: 30 degrees high, south)
+  // --work-group-forms on|off|auto: GL's gl::Context::work_group_forms (auto: the context's own).
+  std::string work_group_forms = "auto";
 };
 int RunBench(const CommonOptions& common, const BenchCommand& command);
 

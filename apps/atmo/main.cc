@@ -300,6 +300,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, atmo::kMaxImageSide))
       ->capture_default_str();
   AddSunOptions(bench_app, bench.sun);  // the frame's sun from a date (sun_options.h)
+  bench_app->add_option("--work-group-forms", bench.work_group_forms,
+                        "with --backend gl: hillaire's table passes split a texel's work over a work group (on) or "
+                        "run a texel per invocation (off); auto: on for a hardware GPU, off on a software GL")
+      ->check(CLI::IsMember({"on", "off", "auto"}))
+      ->capture_default_str();
 
   atmo::cli::PrecomputeCommand precompute;
   CLI::App* precompute_app = app.add_subcommand(

@@ -56,9 +56,11 @@ int main(int argc, char** argv) {
                  "milliseconds of elek's and source4d's table steps per frame while they build: GPU time (and the "
                  "CPU's time issuing them) on a GPU, the wall clock on a software GL (default 25)")
       ->check(CLI::Range(1.0, 1000.0));
-  app.add_option("--source4d-tables", options.source4d_tables,
-                 "where source4d's tables are built: gpu, cpu (a worker thread) or auto (cpu on a software GL "
-                 "such as llvmpipe, else gpu; default)");
+  // A common flag (AddCommonOptions, as `atmo render --backend gl`); here the CPU's build runs on a
+  // worker thread while the window stays live.
+  app.get_option("--source4d-tables")
+      ->description("where source4d's tables are built: gpu, cpu (a worker thread) or auto (cpu on a software GL "
+                    "such as llvmpipe, else gpu; default)");
   app.add_option("--frame-log", options.frame_log,
                  "write one line per frame: number, ms, model shown, model being built, its progress");
   app.add_option("--reference-divisor", options.reference_divisor,

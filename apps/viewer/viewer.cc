@@ -846,7 +846,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     throw Error("--false-colour takes luminance (got " + options_.false_colour + ")");
   }
   false_colour_ = options_.false_colour == "luminance";
-  const std::string& tables = options_.source4d_tables;
+  const std::string& tables = options_.common.source4d_tables;
   if (tables != "gpu" && tables != "cpu" && tables != "auto") {
     throw Error("--source4d-tables takes gpu, cpu or auto (got '" + tables + "')");
   }

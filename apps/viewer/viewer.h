@@ -20,15 +20,15 @@
 namespace atmo::viewer {
 
 struct ViewerOptions {
-  cli::CommonOptions common;           // --model, --preset, --config, --option, --spectral (as `atmo render`)
+  // --model, --preset, --config, --option, --spectral (as `atmo render`), and --source4d-tables:
+  // where source4d's tables are built, gpu (GL passes, a few steps per frame), cpu (the CPU
+  // backend on a worker thread) or auto (cpu on a software GL, gl::IsSoftwareRenderer; else gpu).
+  cli::CommonOptions common;
   cli::RenderCommand render;           // camera, observer, sun, display flags (as `atmo render`); the EXR
                                        // and PNG paths are the screenshot of the last frame (empty: none)
   int frames = 0;                      // stop after this many frames (0: when the window is closed)
   double build_budget_ms = 25.0;       // per frame, of elek's and source4d's table steps while they build
                                        // (GPU time and the CPU's issuing time on a GPU, wall clock on a software GL)
-  // Where source4d's tables are built: gpu (GL passes, a few steps per frame), cpu (the CPU
-  // backend on a worker thread) or auto (cpu on a software GL, gl::IsSoftwareRenderer; else gpu).
-  std::string source4d_tables = "auto";
   std::string script_path;             // timed moves (script.h); empty: none
   std::string save_config;             // write the atmosphere as JSON (`atmo render --config`) at the end
   bool recompute_every_frame = false;  // every table every frame (the benchmark of docs/performance.md)
