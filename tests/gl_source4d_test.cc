@@ -525,10 +525,28 @@ TEST_F(GlSource4dCli, RenderMatchesCpuBackend) {
     EXPECT_GT(d.count, 48u * 24u);
     ExpectWithinSkyViewBounds(context, d);  // the defaults: the sky-view tables on both
   }
-  // auto chose by the renderer: its image is that choice's, to the bit.
-  const Image automatic = ReadExr(dir_ / "gl_auto.exr");
-  const Image chosen = ReadExr(dir_ / (context.software_renderer() ? "gl_cpu.exr" : "gl_gpu.exr"));
+  // auto chose by the renderer: its image is that choice's, to the bit, and each file says where
+  // its tables came from.
+  ImageMetadata metadata;
+  const Image automatic = ReadExr(dir_ / "gl_auto.exr", &metadata);
+  const std::string choice = context.software_renderer() ? "cpu" : "gpu";
+  const Image chosen = ReadExr(dir_ / ("gl_" + choice + ".exr"));
   EXPECT_EQ(automatic.pixels, chosen.pixels);
+  const auto tables_attribute = [](const ImageMetadata& m) {
+    for (const auto& [key, value] : m) {
+      if (key == "atmo:source4dTables") return value;
+    }
+    return std::string("(none)");
+  };
+  EXPECT_EQ(tables_attribute(metadata), choice);
+  for (const std::string tables : {"gpu", "cpu"}) {
+    ImageMetadata m;
+    ReadExr(dir_ / ("gl_" + tables + ".exr"), &m);
+    EXPECT_EQ(tables_attribute(m), tables);
+  }
+  ImageMetadata cpu_backend;
+  ReadExr(dir_ / "cpu.exr", &cpu_backend);
+  EXPECT_EQ(tables_attribute(cpu_backend), "(none)");
   ExpectFailureKeepingOutputs("precompute --model source4d --backend gl --out engine", "source4d", {});
   ExpectFailureKeepingOutputs(args + " --backend gl --source4d-tables fast --exr bad.exr", "--source4d-tables",
                               {});

@@ -464,6 +464,9 @@ int RunRender(const CommonOptions& common, const RenderCommand& command) {
   // moon's disc (AddMoonLight), as the night sky is (AddNightSky).
   const auto render_gl = [&](const gl::Context& context, const RenderSettings& frame,
                              const std::optional<SunAtInstant>& dated) {
+    if (common.model == "source4d") {
+      set_metadata("atmo:source4dTables", Source4dTablesFromCpu(common, context) ? "cpu" : "gpu");
+    }
     Image image = RenderOnGl(context, common, model_parameters, frame);
     const NightSky night = night_sky_for(frame, dated);
     AddNightSky(night.Scaled(model_parameters.solar_irradiance), frame.camera, image);
